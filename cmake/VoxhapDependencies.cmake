@@ -1,0 +1,23 @@
+# SPDX-License-Identifier: Apache-2.0
+# Every dependency comes from Debian 12 packages (docs: toolchain.md).
+
+# TBB first: otherwise OpenVDB's FindTBB defines TBB::* and VTK's config fails.
+find_package(TBB 2021 CONFIG REQUIRED)
+list(APPEND CMAKE_MODULE_PATH "/usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/OpenVDB")
+# Its find module prints a stray "COMPONENT = openvdb" and status blocks about
+# Imath's Python bindings (not installed, not needed): keep the log readable.
+set(CMAKE_MESSAGE_LOG_LEVEL WARNING)
+find_package(OpenVDB REQUIRED)                 # OpenVDB::openvdb
+unset(CMAKE_MESSAGE_LOG_LEVEL)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)    # Eigen3::Eigen
+find_package(nlohmann_json CONFIG REQUIRED)    # nlohmann_json::nlohmann_json
+find_package(CLI11 CONFIG REQUIRED)            # CLI11::CLI11
+find_package(Threads REQUIRED)
+
+if(VOXHAP_BUILD_TESTS)
+  find_package(GTest REQUIRED)                 # GTest::gtest_main
+  include(GoogleTest)
+endif()
+if(VOXHAP_BUILD_BENCH)
+  find_package(benchmark REQUIRED)             # benchmark::benchmark
+endif()

@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Cli.h
+/// @brief What the voxhap subcommands share: argument parsing helpers, the
+/// tissue table option and the exit-code convention.
+///
+/// Exit codes: 0 success, 1 the work failed (bad file, bad data), 2 bad
+/// command-line arguments. Every failure prints exactly one line on stderr.
+#pragma once
+
+#include "volume/Math.h"
+#include "volume/TissueTable.h"
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace voxhap::tools {
+
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitUsage = 2;
+
+/// @brief A command-line value that parsed but makes no sense (exit 2).
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// @brief Options every subcommand accepts.
+struct CommonOptions {
+    std::string tissues;  ///< tissue table file; empty: the built-in table
+    bool json = false;    ///< machine-readable output on stdout
+};
+
+/// @brief Add --tissues and --json to a subcommand.
+void addCommonOptions(CLI::App& cmd, CommonOptions& opts);
+
+/// @brief The tissue table the options name.
+const volume::TissueTable& tissueTable(const CommonOptions& opts);
+
+/// @brief Parse "x,y,z" (three finite numbers). @throw UsageError naming @p option
+Vec3d parseVec3(const std::string& text, const std::string& option);
+
+/// @brief Parse "s" or "sx,sy,sz", each positive. @throw UsageError naming @p option
+Vec3d parseSpacing(const std::string& text, const std::string& option);
+
+/// @brief Rotation from Euler angles in degrees (about x, then y, then z).
+Mat3d rotationFromDegrees(const Vec3d& degrees);
+
+/// @brief True when stderr is a terminal (progress output is shown only then).
+bool stderrIsTerminal();
+
+/// @brief A subcommand: registers its options and returns the action to run.
+using Action = std::function<int()>;
+Action registerPhantom(CLI::App& app);
+Action registerInfo(CLI::App& app);
+Action registerDemo(CLI::App& app);
+
+} // namespace voxhap::tools

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file main.cpp
+/// @brief The `voxhap` command: subcommand dispatch and the one-line error convention.
+
+#include "tools/Cli.h"
+
+#include <iostream>
+#include <map>
+
+int main(int argc, char** argv)
+{
+    using namespace voxhap::tools;
+    CLI::App app{"voxhap: needle-insertion force rendering from patient volumes.\n"
+                 "World space is patient LPS in millimetres. Run `voxhap <command> --help` for details."};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "voxhap 0.1.0");
+    std::map<std::string, Action> actions{
+        {"demo", registerDemo(app)},
+        {"phantom", registerPhantom(app)},
+        {"info", registerInfo(app)},
+    };
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::cerr << "voxhap: error: " << e.what() << " (see --help)\n";
+        return kExitUsage;
+    }
+
+    const std::string name = app.get_subcommands().front()->get_name();
+    try {
+        return actions.at(name)();
+    } catch (const UsageError& e) {
+        std::cerr << "voxhap " << name << ": error: " << e.what() << " (see --help)\n";
+        return kExitUsage;
+    } catch (const std::exception& e) {
+        std::cerr << "voxhap " << name << ": error: " << e.what() << '\n';
+        return kExitFailure;
+    }
+}
