@@ -20,6 +20,12 @@ int main(int argc, char** argv)
         {"info", registerInfo(app)},
     };
 
+    if (argc > 1 && argv[1][0] != '-' && !actions.count(argv[1])) {
+        std::string known;
+        for (const auto& [name, action] : actions) known += (known.empty() ? "" : ", ") + name;
+        std::cerr << "voxhap: error: unknown command '" << argv[1] << "' (expected one of: " << known << ")\n";
+        return kExitUsage;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

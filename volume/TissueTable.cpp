@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -233,6 +234,32 @@ Tissue parseTissue(const Json& obj, std::size_t index, Context& ctx)
     return t;
 }
 
+std::size_t lineOf(std::string_view text, std::size_t byte)
+{
+    byte = std::min(byte, text.size());
+    return 1 + std::size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(byte), '\n'));
+}
+
+/// "<file>:<line>: tissue '<name>': value <literal> is not finite", from nlohmann's
+/// "number overflow parsing '<literal>'" message and the text around the literal.
+std::string describeOverflow(std::string_view text, const std::string& what, const std::string& origin)
+{
+    const auto open = what.find('\''), close = what.rfind('\'');
+    if (open == std::string::npos || close <= open) return origin + ": a number is not finite (" + what + ")";
+    const std::string literal = what.substr(open + 1, close - open - 1);
+    const std::size_t at = text.find(literal);
+    if (at == std::string_view::npos) return origin + ": value " + literal + " is not finite";
+    std::string out = origin + ":" + std::to_string(lineOf(text, at)) + ": ";
+    // The entry is named by the last "name" key before the literal.
+    const std::size_t key = text.rfind("\"name\"", at);
+    if (key != std::string_view::npos) {
+        const std::size_t q1 = text.find('"', text.find(':', key));
+        const std::size_t q2 = q1 == std::string_view::npos ? q1 : text.find('"', q1 + 1);
+        if (q2 != std::string_view::npos) out += "tissue '" + std::string(text.substr(q1 + 1, q2 - q1 - 1)) + "': ";
+    }
+    return out + "value " + literal + " is not finite";
+}
+
 } // namespace
 
 std::string_view fieldStrengthName(FieldStrength f)
@@ -246,7 +273,11 @@ TissueTable TissueTable::parse(std::string_view text, const std::string& origin)
     try {
         root = Json::parse(text);
     } catch (const Json::parse_error& e) {
-        throw IoError(origin + ": not valid JSON (byte " + std::to_string(e.byte) + ")");
+        throw IoError(origin + ":" + std::to_string(lineOf(text, e.byte)) + ": not valid JSON");
+    } catch (const Json::out_of_range& e) {
+        // A literal beyond double range (e.g. 1e999) is the one way a non-finite
+        // number reaches us; nlohmann reports it without a position, so find it.
+        throw ValueError(describeOverflow(text, e.what(), origin));
     }
     Context ctx(origin);
     if (!root.is_object()) ctx.fail("", "expected a JSON object at the top level");

@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestCli.cpp
+/// @brief The voxhap command line: exit codes, one-line errors, no partial
+/// output, and the issue's acceptance check (overweight lumbar phantom layers).
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+    int exitCode = -1;
+    std::string out, err;
+    std::size_t errLines() const { return std::size_t(std::count(err.begin(), err.end(), '\n')); }
+};
+
+class Cli : public testing::Test {
+protected:
+    void SetUp() override
+    {
+        mDir = fs::temp_directory_path() /
+               ("voxhap-cli-" + std::to_string(::getpid()) + "-" +
+                testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(mDir);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    /// Run `voxhap <args>` in the test's directory.
+    Result run(const std::string& args) const
+    {
+        const fs::path out = mDir / "stdout.txt", err = mDir / "stderr.txt";
+        const std::string cmd = "cd '" + mDir.string() + "' && '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args + " >'" +
+                                out.string() + "' 2>'" + err.string() + "'";
+        const int status = std::system(cmd.c_str());
+        Result r;
+        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        r.out = slurp(out);
+        r.err = slurp(err);
+        fs::remove(out);
+        fs::remove(err);
+        return r;
+    }
+    static std::string slurp(const fs::path& p)
+    {
+        std::ifstream in(p);
+        std::ostringstream s;
+        s << in.rdbuf();
+        return s.str();
+    }
+    fs::path mDir;
+};
+
+/// A usage error: exit 2 and exactly one line on stderr that contains @p fragment.
+void expectUsageError(const Result& r, const std::string& fragment)
+{
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
+    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
+}
+
+/// A failure of the work: exit 1 and one line on stderr naming @p fragment.
+void expectFailure(const Result& r, const std::string& fragment)
+{
+    EXPECT_EQ(r.exitCode, 1) << r.err;
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
+    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, HelpExplainsTheCommands)
+{
+    const Result top = run("--help");
+    EXPECT_EQ(top.exitCode, 0);
+    for (const char* cmd : {"phantom", "info", "demo"}) EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
+    const Result phantom = run("phantom --help");
+    EXPECT_EQ(phantom.exitCode, 0);
+    for (const char* word : {"lumbar", "torso", "--preset", "--bmi", "--spacing", "--out"}) {
+        EXPECT_NE(phantom.out.find(word), std::string::npos) << word;
+    }
+}
+
+TEST_F(Cli, BadArgumentsExitTwoWithOneLine)
+{
+    expectUsageError(run(""), "subcommand");
+    expectUsageError(run("frobnicate"), "frobnicate");
+    expectUsageError(run("phantom"), "kind");
+    expectUsageError(run("phantom blob"), "blob");
+    expectUsageError(run("phantom slab --preset overweight"), "--preset");
+    expectUsageError(run("phantom lumbar --bmi 5"), "bmi");
+    expectUsageError(run("phantom lumbar --spacing 0,1,1"), "--spacing");
+    expectUsageError(run("phantom lumbar --spacing abc"), "--spacing");
+    expectUsageError(run("phantom lumbar --rotate 1,2"), "--rotate");
+    expectUsageError(run("phantom slab --layers skin:2,fat:x"), "fat");
+    expectUsageError(run("phantom lumbar --field 7"), "--field");
+    expectUsageError(run("info"), "file");
+    EXPECT_TRUE(fs::is_empty(mDir)) << "a failed command left files behind";
+}
+
+TEST_F(Cli, BadFilesExitOneNamingTheFile)
+{
+    expectFailure(run("info missing.vdb"), "missing.vdb");
+    std::ofstream(mDir / "garbage.vdb") << "garbage";
+    expectFailure(run("info garbage.vdb"), "garbage.vdb");
+    std::ofstream(mDir / "bad-tissues.json") << R"({"tissues": [{"id": 0, "name": "air", "colour": [0,0,0], "hu": {}}]})";
+    expectFailure(run("phantom slab --tissues bad-tissues.json"), "bad-tissues.json");
+    EXPECT_FALSE(fs::exists(mDir / "slab.vdb"));
+    expectFailure(run("phantom slab --layers skin:2,nothing:3"), "nothing");
+}
+
+TEST_F(Cli, FailedWriteLeavesNoPartialOutput)
+{
+    expectFailure(run("phantom slab --out no-such-dir/slab.vdb"), "no-such-dir/slab.vdb");
+    EXPECT_FALSE(fs::exists(mDir / "no-such-dir"));
+}
+
+TEST_F(Cli, OverweightLumbarLayersMatchPhysics)
+{
+    // The issue's acceptance check: phantom, then info, layer depths from physics.md:
+    // [S19] Table I overweight: derma 3.0 cm (skin 2 mm [LP] + fat), epidural space 4 mm;
+    // supraspinous 3 + interspinous 15 = [C-ui] 18 mm; flavum 7.4 mm [C-ui]; CSF 13 mm [LP].
+    const Result made = run("phantom lumbar --preset overweight --spacing 1 --out x.vdb");
+    ASSERT_EQ(made.exitCode, 0) << made.err;
+    const Result info = run("info x.vdb --json");
+    ASSERT_EQ(info.exitCode, 0) << info.err;
+    const auto j = nlohmann::json::parse(info.out);
+    const std::vector<std::tuple<std::string, double, double>> expected{
+        {"skin", 0.0, 2.0},
+        {"fat", 2.0, 30.0},
+        {"supraspinous_ligament", 30.0, 33.0},
+        {"interspinous_ligament", 33.0, 48.0},
+        {"ligamentum_flavum", 48.0, 55.4},
+        {"epidural_space", 55.4, 59.4},
+        {"dura", 59.4, 60.4},
+        {"csf", 60.4, 73.4},
+    };
+    ASSERT_TRUE(j.contains("layers"));
+    ASSERT_GE(j["layers"].size(), expected.size());
+    for (std::size_t n = 0; n < expected.size(); ++n) {
+        const auto& [name, start, end] = expected[n];
+        EXPECT_EQ(j["layers"][n]["tissue"], name);
+        EXPECT_NEAR(j["layers"][n]["start_mm"].get<double>(), start, 1e-6); // analytic layers, bisection to 1e-9 mm
+        EXPECT_NEAR(j["layers"][n]["end_mm"].get<double>(), end, 1e-6);
+    }
+    EXPECT_EQ(j["spacing_mm"][0], 1.0);
+    EXPECT_GT(j["active_voxels"].get<double>(), 0.0);
+    EXPECT_LT(j["active_voxels"].get<double>(), j["dense_voxels"].get<double>()); // air above the skin is inactive
+
+    // The text form prints the same table.
+    const Result text = run("info x.vdb");
+    EXPECT_NE(text.out.find("ligamentum_flavum"), std::string::npos);
+    EXPECT_NE(text.out.find("55.40"), std::string::npos);
+}
+
+TEST_F(Cli, DemoWritesItsOutputsAndSaysWhere)
+{
+    const Result r = run("demo --out demo-out");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(fs::exists(mDir / "demo-out" / "lumbar.vdb"));
+    EXPECT_NE(r.out.find("demo-out/lumbar.vdb"), std::string::npos);
+}
+
+} // namespace
