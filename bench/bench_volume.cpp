@@ -18,37 +18,31 @@ namespace {
 using namespace voxhap;
 using namespace voxhap::volume;
 
-void BM_LumbarPhantom(benchmark::State& state)
+/// Rasterise @p model at a spacing of range(0)/100 mm, reporting dense voxels per second.
+void rasteriseModel(benchmark::State& state, const PhantomModel& model)
 {
     const TissueTable& table = TissueTable::builtin();
-    LumbarParams p;
-    p.grid.spacing = Vec3d::Constant(double(state.range(0)) / 100.0);
-    const PhantomModel model = lumbarModel(p, table);
+    GridSpec grid;
+    grid.spacing = Vec3d::Constant(double(state.range(0)) / 100.0);
     std::int64_t voxels = 0;
     for (auto _ : state) {
-        Volume v = makePhantom(model, p.grid, table);
+        Volume v = makePhantom(model, grid, table);
         voxels = v.indexBox().voxelCount();
         benchmark::DoNotOptimize(v);
     }
     state.counters["voxels"] = double(voxels);
     state.counters["voxels/s"] = benchmark::Counter(double(voxels), benchmark::Counter::kIsIterationInvariantRate);
 }
+
+void BM_LumbarPhantom(benchmark::State& state)
+{
+    rasteriseModel(state, lumbarModel(LumbarParams{}, TissueTable::builtin()));
+}
 BENCHMARK(BM_LumbarPhantom)->Arg(100)->Arg(50)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_TorsoPhantom(benchmark::State& state)
 {
-    const TissueTable& table = TissueTable::builtin();
-    TorsoParams p;
-    p.grid.spacing = Vec3d::Constant(double(state.range(0)) / 100.0);
-    const PhantomModel model = torsoModel(p, table);
-    std::int64_t voxels = 0;
-    for (auto _ : state) {
-        Volume v = makePhantom(model, p.grid, table);
-        voxels = v.indexBox().voxelCount();
-        benchmark::DoNotOptimize(v);
-    }
-    state.counters["voxels"] = double(voxels);
-    state.counters["voxels/s"] = benchmark::Counter(double(voxels), benchmark::Counter::kIsIterationInvariantRate);
+    rasteriseModel(state, torsoModel(TorsoParams{}, TissueTable::builtin()));
 }
 BENCHMARK(BM_TorsoPhantom)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -60,21 +60,17 @@ protected:
     fs::path mDir;
 };
 
-/// A usage error: exit 2 and exactly one line on stderr that contains @p fragment.
-void expectUsageError(const Result& r, const std::string& fragment)
+/// Exit @p code with exactly one line on stderr that contains @p fragment.
+void expectError(const Result& r, int code, const std::string& fragment)
 {
-    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_EQ(r.exitCode, code) << r.err;
     EXPECT_EQ(r.errLines(), 1u) << r.err;
     EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
 }
-
-/// A failure of the work: exit 1 and one line on stderr naming @p fragment.
-void expectFailure(const Result& r, const std::string& fragment)
-{
-    EXPECT_EQ(r.exitCode, 1) << r.err;
-    EXPECT_EQ(r.errLines(), 1u) << r.err;
-    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
-}
+/// A usage error (exit 2).
+void expectUsageError(const Result& r, const std::string& fragment) { expectError(r, 2, fragment); }
+/// A failure of the work, such as a bad file (exit 1).
+void expectFailure(const Result& r, const std::string& fragment) { expectError(r, 1, fragment); }
 
 TEST_F(Cli, HelpExplainsTheCommands)
 {
@@ -90,18 +86,24 @@ TEST_F(Cli, HelpExplainsTheCommands)
 
 TEST_F(Cli, BadArgumentsExitTwoWithOneLine)
 {
-    expectUsageError(run(""), "subcommand");
-    expectUsageError(run("frobnicate"), "frobnicate");
-    expectUsageError(run("phantom"), "kind");
-    expectUsageError(run("phantom blob"), "blob");
-    expectUsageError(run("phantom slab --preset overweight"), "--preset");
-    expectUsageError(run("phantom lumbar --bmi 5"), "bmi");
-    expectUsageError(run("phantom lumbar --spacing 0,1,1"), "--spacing");
-    expectUsageError(run("phantom lumbar --spacing abc"), "--spacing");
-    expectUsageError(run("phantom lumbar --rotate 1,2"), "--rotate");
-    expectUsageError(run("phantom slab --layers skin:2,fat:x"), "fat");
-    expectUsageError(run("phantom lumbar --field 7"), "--field");
-    expectUsageError(run("info"), "file");
+    const std::vector<std::pair<std::string, std::string>> cases{
+        {"", "subcommand"},
+        {"frobnicate", "frobnicate"},
+        {"phantom", "kind"},
+        {"phantom blob", "blob"},
+        {"phantom slab --preset overweight", "--preset"},
+        {"phantom lumbar --bmi 5", "bmi"},
+        {"phantom lumbar --spacing 0,1,1", "--spacing"},
+        {"phantom lumbar --spacing abc", "--spacing"},
+        {"phantom lumbar --rotate 1,2", "--rotate"},
+        {"phantom slab --layers skin:2,fat:x", "fat"},
+        {"phantom lumbar --field 7", "--field"},
+        {"info", "file"},
+    };
+    for (const auto& [args, fragment] : cases) {
+        SCOPED_TRACE(args);
+        expectUsageError(run(args), fragment);
+    }
     EXPECT_TRUE(fs::is_empty(mDir)) << "a failed command left files behind";
 }
 
