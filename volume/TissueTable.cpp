@@ -79,7 +79,7 @@ const std::vector<MechanicalField>& mechanicalFields()
 
 const std::set<std::string, std::less<>> kTopKeys{"schema", "description", "tissues"};
 const std::set<std::string, std::less<>> kTissueKeys{
-    "id", "name", "colour", "critical", "description", "hu", "t1_1.5T", "t1_3T",
+    "id", "name", "colour", "critical", "rigid", "description", "hu", "t1_1.5T", "t1_3T",
     "thickness", "puncture_force", "cutting_force", "elasticity", "friction_viscous",
     "friction_coulomb", "damping"};
 const std::set<std::string, std::less<>> kQuantityKeys{"value", "unit", "source", "chosen", "note"};
@@ -215,6 +215,10 @@ Tissue parseTissue(const Json& obj, std::size_t index, Context& ctx)
     if (obj.contains("critical")) {
         if (!obj.at("critical").is_boolean()) ctx.fail("critical", "not true or false");
         t.critical = obj.at("critical").get<bool>();
+    }
+    if (obj.contains("rigid")) {
+        if (!obj.at("rigid").is_boolean()) ctx.fail("rigid", "not true or false");
+        t.rigid = obj.at("rigid").get<bool>();
     }
     if (obj.contains("description")) {
         if (!obj.at("description").is_string()) ctx.fail("description", "not a string");

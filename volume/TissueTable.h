@@ -38,6 +38,7 @@ struct Tissue {
     std::string description;
     std::array<std::uint8_t, 3> colour{};     ///< display colour, sRGB 0..255
     bool critical = false;                    ///< default: must not be touched (physics.md §1.1)
+    bool rigid = false;                       ///< bone: rendered as contact, not cut (physics.md §1.3)
 
     double huMin = 0, huTypical = 0, huMax = 0; ///< CT numbers [HU]
     std::string huSource;

@@ -1,0 +1,163 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ExactTraversal.cpp
+/// @brief The exact strategies: chord-weighted voxel traversal (physics.md §1.2
+/// [chosen], exact for a piecewise-constant field) and its trilinear twin.
+
+#include "haptic/ExactTraversal.h"
+
+#include "haptic/detail/FieldGrids.h"
+#include "haptic/detail/LeafReader.h"
+#include "haptic/detail/Traversal.h"
+#include "volume/Errors.h"
+
+#include <optional>
+
+namespace voxhap::haptic {
+
+namespace {
+
+using detail::FloatGrid;
+using detail::IndexSegment;
+using detail::LabelGrid;
+using FloatReader = detail::LeafReader<FloatGrid::TreeType>;
+using LabelReader = detail::LeafReader<LabelGrid::TreeType>;
+
+/// Grids, readers and boxes shared by both exact strategies.
+struct Sources {
+    Sources(const MaterialField& field, bool trackLabels)
+        : beta(detail::dampingGrid(field)), labels(trackLabels ? detail::labelGrid(field) : nullptr)
+    {
+        if (!beta && !labels) throw ValueError("shaft integration: the material field has neither damping nor labels");
+        const openvdb::GridBase& ref = beta ? static_cast<const openvdb::GridBase&>(*beta) : *labels;
+        xform = ref.transformPtr();
+        if (beta) {
+            betaReader.emplace(beta->tree());
+            detail::activeBox(*beta, 0.0, voxelLo, voxelHi);
+            detail::activeBox(*beta, 0.5, cellLo, cellHi); // the trilinear field reaches one voxel further
+            cellLo -= openvdb::Vec3d(0.5); // back to the unshifted frame of trilinear cells
+            cellHi -= openvdb::Vec3d(0.5);
+        }
+        if (labels) {
+            labelReader.emplace(labels->tree());
+            openvdb::Vec3d lo, hi;
+            detail::activeBox(*labels, 0.0, lo, hi);
+            voxelLo = beta ? openvdb::math::minComponent(voxelLo, lo) : lo;
+            voxelHi = beta ? openvdb::math::maxComponent(voxelHi, hi) : hi;
+        }
+    }
+    Sources(const Sources& o)
+        : beta(o.beta), labels(o.labels), xform(o.xform), voxelLo(o.voxelLo), voxelHi(o.voxelHi), cellLo(o.cellLo),
+          cellHi(o.cellHi)
+    {
+        if (o.betaReader) betaReader.emplace(*o.betaReader);
+        if (o.labelReader) labelReader.emplace(*o.labelReader);
+    }
+
+    FloatGrid::ConstPtr beta;
+    LabelGrid::ConstPtr labels;
+    openvdb::math::Transform::ConstPtr xform;
+    openvdb::Vec3d voxelLo{1.0}, voxelHi{-1.0}; // voxel cells, shifted (+0.5) frame
+    openvdb::Vec3d cellLo{1.0}, cellHi{-1.0};   // trilinear cells, unshifted frame
+    std::optional<FloatReader> betaReader;
+    std::optional<LabelReader> labelReader;
+};
+
+/// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally.
+void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out) noexcept
+{
+    double t0 = 0.0, t1 = 0.0;
+    const bool inside = detail::clip(s, src.voxelLo, src.voxelHi, t0, t1);
+    const bool labels = src.labelReader.has_value();
+    detail::LabelTally tally(out, s.lengthMm);
+    if (!inside) {
+        if (labels) tally.add(0, 0.0, 1.0); // all air
+        return;
+    }
+    if (labels && t0 > 0.0) tally.add(0, 0.0, t0);
+    double sum = 0.0;
+    const bool beta = wantBeta && src.betaReader.has_value();
+    detail::walkCells(s, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
+        if (beta) {
+            const float b = src.betaReader->get(c);
+            if (std::isfinite(b)) sum += double(b) * (tb - ta); // a NaN voxel contributes nothing
+        }
+        if (labels) tally.add(src.labelReader->get(c), ta, tb);
+    });
+    if (labels && t1 < 1.0) tally.add(0, t1, 1.0);
+    if (beta) out.dampingIntegral = sum * s.lengthMm;
+}
+
+class ExactVoxel final : public ShaftIntegrator {
+public:
+    ExactVoxel(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels) {}
+
+    void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
+    {
+        out.reset();
+        const IndexSegment s = detail::toIndex(*mSrc.xform, seg, 0.5);
+        out.lengthMm = s.lengthMm;
+        out.labelsValid = mSrc.labelReader.has_value();
+        if (!s.valid) return;
+        voxelPass(mSrc, s, true, out);
+    }
+    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactVoxel>(*this); }
+    std::string name() const override { return "exact-voxel"; }
+
+private:
+    Sources mSrc;
+};
+
+class ExactTrilinear final : public ShaftIntegrator {
+public:
+    ExactTrilinear(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels)
+    {
+        if (!mSrc.beta) throw ValueError("shaft integration: the trilinear strategy needs a damping grid");
+    }
+
+    void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
+    {
+        out.reset();
+        const IndexSegment cells = detail::toIndex(*mSrc.xform, seg, 0.0);
+        out.lengthMm = cells.lengthMm;
+        out.labelsValid = mSrc.labelReader.has_value();
+        if (!cells.valid) return;
+        if (mSrc.labelReader) voxelPass(mSrc, detail::toIndex(*mSrc.xform, seg, 0.5), false, out);
+
+        double t0 = 0.0, t1 = 0.0;
+        if (!detail::clip(cells, mSrc.cellLo, mSrc.cellHi, t0, t1)) return;
+        // Along a chord the trilinear field is a cubic in t; two-point Gauss–Legendre
+        // quadrature is exact for cubics, so each cell's integral is exact.
+        constexpr double kGauss = 0.57735026918962576451; // 1/sqrt(3)
+        FloatReader& r = *mSrc.betaReader;
+        double sum = 0.0;
+        detail::walkCells(cells, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
+            double corner[8];
+            detail::loadCorners(r, c, corner);
+            const double mid = 0.5 * (ta + tb), half = 0.5 * (tb - ta) * kGauss;
+            const openvdb::Vec3d origin = c.asVec3d();
+            const openvdb::Vec3d p = cells.a + cells.d * (mid - half) - origin;
+            const openvdb::Vec3d q = cells.a + cells.d * (mid + half) - origin;
+            sum += 0.5 * (tb - ta) * (detail::trilinear(corner, p[0], p[1], p[2]) + detail::trilinear(corner, q[0], q[1], q[2]));
+        });
+        out.dampingIntegral = sum * cells.lengthMm;
+    }
+    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactTrilinear>(*this); }
+    std::string name() const override { return "exact-trilinear"; }
+
+private:
+    Sources mSrc;
+};
+
+} // namespace
+
+std::unique_ptr<ShaftIntegrator> makeExactVoxel(const MaterialField& field, bool trackLabels)
+{
+    return std::make_unique<ExactVoxel>(field, trackLabels);
+}
+
+std::unique_ptr<ShaftIntegrator> makeExactTrilinear(const MaterialField& field, bool trackLabels)
+{
+    return std::make_unique<ExactTrilinear>(field, trackLabels);
+}
+
+} // namespace voxhap::haptic
