@@ -65,26 +65,9 @@ struct Sources {
 /// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally.
 void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out) noexcept
 {
-    double t0 = 0.0, t1 = 0.0;
-    const bool inside = detail::clip(s, src.voxelLo, src.voxelHi, t0, t1);
-    const bool labels = src.labelReader.has_value();
-    detail::LabelTally tally(out, s.lengthMm);
-    if (!inside) {
-        if (labels) tally.add(0, 0.0, 1.0); // all air
-        return;
-    }
-    if (labels && t0 > 0.0) tally.add(0, 0.0, t0);
-    double sum = 0.0;
-    const bool beta = wantBeta && src.betaReader.has_value();
-    detail::walkCells(s, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
-        if (beta) {
-            const float b = src.betaReader->get(c);
-            if (std::isfinite(b)) sum += double(b) * (tb - ta); // a NaN voxel contributes nothing
-        }
-        if (labels) tally.add(src.labelReader->get(c), ta, tb);
-    });
-    if (labels && t1 < 1.0) tally.add(0, t1, 1.0);
-    if (beta) out.dampingIntegral = sum * s.lengthMm;
+    FloatReader* beta = wantBeta && src.betaReader ? &*src.betaReader : nullptr;
+    LabelReader* labels = src.labelReader ? &*src.labelReader : nullptr;
+    detail::chordPass(s, src.voxelLo, src.voxelHi, beta, labels, out);
 }
 
 class ExactVoxel final : public ShaftIntegrator {

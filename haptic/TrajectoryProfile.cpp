@@ -292,8 +292,15 @@ void TrajectoryProfile::integrate(const Segment& s, ShaftIntegral& out) noexcept
     if (!std::isfinite(length) || !s.entry.allFinite()) return;
     out.lengthMm = length;
     if (!(length > 0.0)) return;
+    Impl& m = *mImpl;
+    if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
+        const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
+        auto* labels = m.labelReader ? &*m.labelReader : nullptr;
+        out.labelsValid = labels != nullptr;
+        detail::chordPass(direct, m.lo, m.hi, &*m.betaReader, labels, out);
+        return;
+    }
     if (!covers(s) && !lock(s.entry, s.tip - s.entry)) return;
-    const Impl& m = *mImpl;
     const double se = std::clamp((s.entry - m.origin).dot(m.u), 0.0, mMaxLength);
     const double st = std::clamp((s.tip - m.origin).dot(m.u), se, mMaxLength);
     const double projected = st - se;

@@ -19,7 +19,8 @@
 ///   line, where a sideways displacement of at most δ can carry the shaft).
 ///   The shaft and the line sample different voxels only there. Inside uniform
 ///   tissue span_v = 0 and the bound vanishes; it grows only near interfaces.
-/// A shaft farther than δ from the line triggers a rebuild along the new line.
+/// A shaft farther than δ from the line triggers a rebuild along the new line;
+/// a shaft longer than the profile's reach is integrated directly (exact voxel).
 #pragma once
 
 #include "haptic/ShaftIntegration.h"

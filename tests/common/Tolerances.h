@@ -45,3 +45,15 @@ inline testing::AssertionResult nearVec(const Vec3d& a, const Vec3d& b, double t
 }
 
 } // namespace voxhap::test
+
+namespace voxhap::test {
+
+/// Exact traversal of a piecewise-constant field: the only error is round-off
+/// in the chord arithmetic, ~1e-15 relative per voxel over a few hundred
+/// voxels; physics.md §7 R1 asks for 1e-9 relative.
+inline constexpr double kExactRelative = 1e-9;
+
+/// Chord lengths summed over a shaft equal its length to this (physics.md §6.4).
+inline constexpr double kChordSumRelative = 1e-12;
+
+} // namespace voxhap::test

@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestMaterialField.cpp
+/// @brief The mapping layer against physics.md §1.3, §5.3 and §5.4.
+
+#include "common/Tolerances.h"
+
+#include "haptic/detail/FieldGrids.h"
+#include "haptic/MaterialField.h"
+#include "volume/Errors.h"
+#include "volume/Phantoms.h"
+
+#include <cmath>
+
+namespace voxhap::haptic {
+namespace {
+
+using volume::FieldStrength;
+
+/// C1 and C2 are printed to four significant digits in physics.md §5.4; the fitted
+/// β they reproduce is off by up to 856 ms·0.0005e-3/ms + 0.5/2058 ≈ 7e-4 relative.
+constexpr double kFitRounding = 1e-3;
+
+const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+
+TEST(T1DampingLaw, ReproducesTheFittedFatAndMuscleValues)
+{
+    for (FieldStrength f : {FieldStrength::T1_5, FieldStrength::T3}) {
+        const T1DampingLaw law = t1DampingLaw(f);
+        const double fatT1 = f == FieldStrength::T3 ? 382.0 : 290.0;   // §5.1
+        const double muscleT1 = f == FieldStrength::T3 ? 898.0 : 856.0;
+        // §5.4: beta_fat = 3696, beta_muscle = 8152 N·s/m² = 3696e-6, 8152e-6 N·s/mm².
+        EXPECT_NEAR(law.dampingNsPerMm2(fatT1), 3696e-6, kFitRounding * 3696e-6);
+        EXPECT_NEAR(law.dampingNsPerMm2(muscleT1), 8152e-6, kFitRounding * 8152e-6);
+        // Ratio 4.354/1.974 = 2.206, the [C-ui] puncture-force ratio the fit targets.
+        EXPECT_NEAR(law.dampingNsPerMm2(muscleT1) / law.dampingNsPerMm2(fatT1), 4.354 / 1.974, 2e-3);
+    }
+}
+
+TEST(T1DampingLaw, ClampsBeforeTheExponential)
+{
+    const T1DampingLaw law = t1DampingLaw(FieldStrength::T1_5);
+    // T1 = 65535 would give exp(91.6) ≈ 6e39 (§5.4): clamped to the muscle value instead.
+    EXPECT_EQ(law.dampingNsPerMm2(65535.0), law.dampingNsPerMm2(856.0));
+    EXPECT_EQ(law.dampingNsPerMm2(-5.0), law.dampingNsPerMm2(290.0));
+    EXPECT_EQ(law.dampingNsPerMm2(std::nan("")), law.dampingNsPerMm2(290.0));
+    EXPECT_TRUE(std::isfinite(law.dampingNsPerMm2(std::numeric_limits<double>::infinity())));
+}
+
+TEST(ModulusLaws, MatchThePhysicsExamples)
+{
+    // §1.3: HU 125 -> 0.125 g/cm³ -> E ≈ 369 MPa (Kopperdahl 2002: -34.7 + 3230·0.125 = 369.05).
+    const double e = youngsModulusMPa(ModulusLaw::Kopperdahl2002, densityFromHu(125.0));
+    EXPECT_NEAR(e, 369.05, 1e-9);
+    // §1.3: 18 G tip (1.27 mm²), L_c = 1 mm -> k ≈ 4.7e5 N/m = 470 N/mm (two digits in the text).
+    EXPECT_NEAR(contactStiffnessNPerMm(e, 1.27, 1.0), 470.0, 5.0);
+    // §5.3: rho_app = 0.2 -> 384 MPa (Morgan); rho_ash ≈ 0.12 -> 32 MPa (Keller), three and two digits.
+    EXPECT_NEAR(youngsModulusMPa(ModulusLaw::Morgan2003, 0.2), 384.0, 0.5);
+    EXPECT_NEAR(youngsModulusMPa(ModulusLaw::Keller1994, 0.6 * 0.2), 32.0, 0.5);
+    // Linear laws never go negative below their intercept; bad input gives 0.
+    EXPECT_EQ(youngsModulusMPa(ModulusLaw::Keaveny1997, 0.01), 0.0);
+    EXPECT_EQ(youngsModulusMPa(ModulusLaw::Morgan2003, std::nan("")), 0.0);
+    EXPECT_EQ(densityFromHu(-500.0), 0.0);
+    EXPECT_EQ(parseModulusLaw("morgan2003"), ModulusLaw::Morgan2003);
+    EXPECT_THROW(parseModulusLaw("hooke"), ValueError);
+}
+
+/// The value of a grid at a world point (its nearest voxel).
+template <typename GridT>
+double at(const GridT& g, const Vec3d& world)
+{
+    const auto ijk = g.transform().worldToIndex(volume::toVdb(world));
+    return double(g.getConstAccessor().getValue(openvdb::Coord::round(ijk)));
+}
+
+class LumbarField : public testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        volume::LumbarParams p;
+        p.grid.spacing = Vec3d::Constant(1.0);
+        vol = std::make_unique<volume::Volume>(volume::makePhantom(volume::lumbarModel(p, table()), p.grid, table()));
+    }
+    static void TearDownTestSuite() { vol.reset(); }
+    static inline std::unique_ptr<volume::Volume> vol;
+};
+
+TEST_F(LumbarField, DampingFromT1ForFatAndMuscleAndPerLabelOtherwise)
+{
+    const MaterialField f(*vol, table(), MaterialOptions{});
+    const auto beta = detail::dampingGrid(f);
+    ASSERT_TRUE(beta);
+    const T1DampingLaw law = t1DampingLaw(FieldStrength::T1_5);
+    // Midline depths (average preset): skin 0-2, fat 2-10, supraspinous 10-13, ... epidural 35.4-41.4.
+    EXPECT_NEAR(at(*beta, {0.5, -5.5, 0.5}), law.dampingNsPerMm2(290.0), 1e-9);   // fat: Eq. 4
+    EXPECT_NEAR(at(*beta, {0.5, -1.5, 0.5}), 8152e-6, 1e-9);                      // skin: table β
+    EXPECT_NEAR(at(*beta, {0.5, -20.5, 0.5}), 16304e-6, 1e-9);                    // interspinous: table β
+    EXPECT_NEAR(at(*beta, {30.5, -20.5, 0.5}), law.dampingNsPerMm2(856.0), 1e-9); // paraspinal muscle: Eq. 4
+    EXPECT_EQ(at(*beta, {0.5, 2.5, 0.5}), 0.0);                                   // air
+    // Air stays inactive: the β grid has exactly the labelled voxels.
+    EXPECT_EQ(beta->activeVoxelCount(), volume::labelGrid(*vol)->activeVoxelCount());
+    EXPECT_NEAR(f.maxDamping(), 16304e-6, 1e-9);
+    EXPECT_EQ(f.perLabel()[std::size_t(table().at("lung").id)].critical, true);
+    EXPECT_EQ(f.perLabel()[std::size_t(table().at("cortical_bone").id)].rigid, true);
+}
+
+TEST_F(LumbarField, OnlyTheNeededGridsAreBuilt)
+{
+    MaterialOptions o;
+    o.needs.damping = false;
+    o.needs.boneStiffness = false;
+    const MaterialField none(*vol, table(), o);
+    EXPECT_FALSE(none.damping());
+    EXPECT_FALSE(none.boneStiffness());
+    EXPECT_TRUE(none.labels()); // the labels are the volume's own grid, shared, not rebuilt
+    EXPECT_EQ(none.labels().get(), vol->grid(volume::Channel::Label).get());
+    o.needs.boneStiffness = true;
+    const MaterialField bone(*vol, table(), o);
+    EXPECT_FALSE(bone.damping());
+    EXPECT_TRUE(bone.boneStiffness());
+}
+
+TEST_F(LumbarField, CorruptT1StaysFinite)
+{
+    volume::Volume copy = *vol;
+    auto t1 = openvdb::gridPtrCast<volume::FloatGrid>(vol->grid(volume::Channel::T1)->deepCopyGrid());
+    const auto fatVoxel = openvdb::Coord::round(t1->transform().worldToIndex({0.5, -5.5, 0.5}));
+    const auto fatVoxel2 = fatVoxel.offsetBy(0, 1, 0);
+    t1->tree().setValueOn(fatVoxel, 65535.0f);
+    t1->tree().setValueOn(fatVoxel2, std::numeric_limits<float>::quiet_NaN());
+    copy.setGrid(volume::Channel::T1, t1);
+    const MaterialField f(copy, table(), MaterialOptions{});
+    const auto beta = detail::dampingGrid(f);
+    const T1DampingLaw law = t1DampingLaw(FieldStrength::T1_5);
+    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel), law.dampingNsPerMm2(856.0), 1e-9);
+    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel2), law.dampingNsPerMm2(290.0), 1e-9);
+    for (auto it = beta->cbeginValueOn(); it; ++it) ASSERT_TRUE(std::isfinite(*it));
+}
+
+TEST(MaterialField, BoneStiffnessIsComputedThenLimitedToTheDevice)
+{
+    volume::TorsoParams p;
+    p.grid.spacing = Vec3d::Constant(2.0);
+    const volume::Volume v = volume::makePhantom(volume::torsoModel(p, table()), p.grid, table());
+    MaterialOptions o;
+    o.needs = {false, true};
+    o.device = deviceLimits("touch");
+    const MaterialField f(v, table(), o);
+    const auto& r = f.stiffnessReport();
+    // Cortical bone 1850 HU -> 1.85 g/cm³ -> Kopperdahl E = -34.7 + 3230·1.85 MPa; k = E·1.27 mm²/2 mm.
+    EXPECT_NEAR(r.computedMaxNPerMm, (-34.7 + 3230.0 * 1.85) * 1.27 / 2.0, 1e-6);
+    EXPECT_EQ(r.renderedMaxNPerMm, 0.5); // physics.md §6.3: Touch-class 0.5 N/mm
+    std::int64_t bone = 0;
+    for (auto it = volume::labelGrid(v)->cbeginValueOn(); it; ++it) {
+        if (table().at(*it).rigid) bone += std::int64_t(it.getVoxelCount());
+    }
+    EXPECT_EQ(r.boneVoxels, bone);
+    const auto k = detail::stiffnessGrid(f);
+    EXPECT_EQ(std::int64_t(k->activeVoxelCount()), bone);
+    for (auto it = k->cbeginValueOn(); it; ++it) ASSERT_LE(*it, 0.5f);
+}
+
+TEST(MaterialField, RejectsLabelsBeyondTheForcePathRange)
+{
+    volume::initializeOpenVdb();
+    auto labels = volume::LabelGrid::create(0);
+    labels->tree().setValueOn(openvdb::Coord(0, 0, 0), 100);
+    EXPECT_THROW(MaterialField(nullptr, labels, table()), ValueError);
+}
+
+} // namespace
+} // namespace voxhap::haptic

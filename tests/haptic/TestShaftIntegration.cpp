@@ -1,0 +1,313 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestShaftIntegration.cpp
+/// @brief Shaft integrals against the closed forms of physics.md §7: R1
+/// (layered slab, any angle, anisotropic voxels) and R5 (sphere in slab).
+
+#include "common/Phantom.h"
+#include "common/Tolerances.h"
+
+#include "haptic/ShaftIntegration.h"
+#include "haptic/TrajectoryProfile.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <numeric>
+#include <random>
+
+namespace voxhap::haptic {
+namespace {
+
+using test::kChordSumRelative;
+using test::kExactRelative;
+using test::testBeta;
+
+/// R1 layers, each a multiple of 0.4 and 0.5 mm so that they sit on voxel faces.
+const std::vector<volume::SlabLayer> kR1Layers{
+    {"skin", 2.0}, {"fat", 8.0}, {"muscle", 10.0}, {"interspinous_ligament", 6.0}, {"fat", 4.0}};
+
+/// β of a layer as the grid stores it (float): the closed form uses the field's own values.
+double storedBeta(const std::string& tissue) { return double(float(testBeta().at(tissue))); }
+
+/// physics.md §7 R1: ∫β ds to arc length s at angle θ from the normal,
+/// Σ_j β_j · clip(s·cosθ − z_j, 0, t_j)/cosθ.
+double r1Exact(double s, double cosTheta)
+{
+    double z = 0.0, sum = 0.0;
+    for (const auto& l : kR1Layers) {
+        sum += storedBeta(l.tissue) * std::clamp(s * cosTheta - z, 0.0, l.thicknessMm) / cosTheta;
+        z += l.thicknessMm;
+    }
+    return sum;
+}
+
+/// Σ|Δβ| over the boundaries met by depth s·cosθ (the entry surface included), and max|Δβ|.
+std::pair<double, double> r1Jumps(double depth)
+{
+    double prev = 0.0, z = 0.0, sum = 0.0, max = 0.0;
+    for (const auto& l : kR1Layers) {
+        if (depth + 1e-12 < z) break;
+        const double jump = std::abs(storedBeta(l.tissue) - prev);
+        sum += jump;
+        max = std::max(max, jump);
+        prev = storedBeta(l.tissue);
+        z += l.thicknessMm;
+    }
+    if (depth + 1e-12 >= z) { // the bottom: tissue -> air
+        sum += prev;
+        max = std::max(max, prev);
+    }
+    return {sum, max};
+}
+
+struct Direction {
+    double thetaDeg;
+    Vec3d u;
+};
+
+Direction direction(double thetaDeg)
+{
+    const double t = degToRad(thetaDeg), phi = degToRad(37.0); // azimuth off the grid axes
+    return {thetaDeg, Vec3d(std::sin(t) * std::cos(phi), -std::cos(t), std::sin(t) * std::sin(phi))};
+}
+
+class R1 : public testing::TestWithParam<Vec3d> {
+protected:
+    static std::map<std::tuple<double, double, double>, test::FieldFixture>& cache()
+    {
+        static std::map<std::tuple<double, double, double>, test::FieldFixture> c;
+        return c;
+    }
+    const test::FieldFixture& fixture() const
+    {
+        const Vec3d h = GetParam();
+        auto& c = cache();
+        const auto key = std::make_tuple(h.x(), h.y(), h.z());
+        if (!c.count(key)) {
+            volume::SlabParams p;
+            p.layers = kR1Layers;
+            p.halfWidthMm = 60.0; // a 60° shaft through 30 mm drifts 52 mm sideways
+            p.grid.spacing = h;
+            c.emplace(key, test::makeFieldFixture(volume::slabModel(p, volume::TissueTable::builtin()), p.grid));
+        }
+        return c.at(key);
+    }
+    const Vec3d kEntry{0.123, 0.0, -0.377};
+    static constexpr double kTotal = 30.0;
+};
+
+TEST_P(R1, ExactVoxelMatchesClosedFormAtEveryAngle)
+{
+    auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
+    ShaftIntegral out;
+    for (double theta : {0.0, 30.0, 60.0}) {
+        const Direction d = direction(theta);
+        const double cosT = std::cos(degToRad(theta)), sMax = 1.1 * kTotal / cosT;
+        for (int i = 0; i <= 97; ++i) {
+            const double s = sMax * i / 97.0;
+            exact->integrate({kEntry, kEntry + s * d.u}, out);
+            const double expected = r1Exact(s, cosT);
+            ASSERT_NEAR(out.dampingIntegral, expected, kExactRelative * expected + 1e-15)
+                << "theta " << theta << " s " << s;
+            // Chords sum to the shaft length, split by label as the layers dictate.
+            const double sum = std::accumulate(out.labelLengthMm.begin(), out.labelLengthMm.end(), 0.0);
+            ASSERT_NEAR(sum, s, kChordSumRelative * s);
+        }
+    }
+}
+
+TEST_P(R1, LabelLengthsAndFirstHitsFollowTheLayers)
+{
+    auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
+    const auto& table = volume::TissueTable::builtin();
+    ShaftIntegral out;
+    const Direction d = direction(30.0);
+    const double cosT = std::cos(degToRad(30.0)), s = 25.0 / cosT; // tip at depth 25: in the ligament
+    exact->integrate({kEntry, kEntry + s * d.u}, out);
+    ASSERT_TRUE(out.labelsValid);
+    const auto len = [&](const char* n) { return out.labelLengthMm[std::size_t(table.at(n).id)]; };
+    const auto hit = [&](const char* n) { return out.firstHitMm[std::size_t(table.at(n).id)]; };
+    EXPECT_NEAR(len("skin"), 2.0 / cosT, 1e-9);
+    EXPECT_NEAR(len("fat"), 8.0 / cosT, 1e-9); // the deeper fat layer is not reached
+    EXPECT_NEAR(len("muscle"), 10.0 / cosT, 1e-9);
+    EXPECT_NEAR(len("interspinous_ligament"), 5.0 / cosT, 1e-9);
+    EXPECT_NEAR(hit("skin"), 0.0, 1e-12);
+    EXPECT_NEAR(hit("muscle"), 10.0 / cosT, 1e-9);
+    EXPECT_NEAR(hit("interspinous_ligament"), 20.0 / cosT, 1e-9);
+    EXPECT_EQ(hit("lung"), kNotHit);
+}
+
+TEST_P(R1, TrilinearMarchWithinThePhysicsBound)
+{
+    // physics.md §7 R1: |ΔF| <= v0·[max|Δβ|·h/(8cosθ) + Σ|Δβ|·cosθ·Δs²/(4h)], h the voxel size
+    // along the normal. The first term (smearing) assumes both sides of every boundary lie on
+    // the shaft. A shaft that starts on the skin surface sees only the inner half of the
+    // surface's smear, a deficit of β_skin·h/(8cosθ) that stays once the tip is past it: the
+    // printed bound omits it. So: shafts that start half a voxel up in the air meet the printed
+    // bound; shafts that start on the surface meet it plus that entry term.
+    const double h = GetParam().y();
+    const double entryTerm = storedBeta("skin") * h / 8.0;
+    for (double fraction : {1.0, 0.5, 0.25, 0.125}) {
+        IntegratorOptions o{Strategy::MarchTrilinear};
+        o.stepMm = fraction * h;
+        auto march = makeIntegrator(*fixture().field, o);
+        ShaftIntegral out;
+        for (double theta : {0.0, 30.0, 60.0}) {
+            const Direction d = direction(theta);
+            const double cosT = std::cos(degToRad(theta)), sMax = 1.05 * kTotal / cosT;
+            const double above = 0.5 * h / cosT; // arc length of the shaft in the air
+            for (int i = 1; i <= 61; ++i) {
+                const double s = sMax * i / 61.0;
+                const auto [sumJump, maxJump] = r1Jumps(s * cosT + 0.5 * h);
+                const double printed = maxJump * h / (8.0 * cosT) + sumJump * cosT * o.stepMm * o.stepMm / (4.0 * h);
+                march->integrate({kEntry - above * d.u, kEntry + s * d.u}, out);
+                ASSERT_LE(std::abs(out.dampingIntegral - r1Exact(s, cosT)), printed + 1e-15)
+                    << "from the air: step " << o.stepMm << " theta " << theta << " s " << s;
+                march->integrate({kEntry, kEntry + s * d.u}, out);
+                ASSERT_LE(std::abs(out.dampingIntegral - r1Exact(s, cosT)), printed + entryTerm / cosT + 1e-15)
+                    << "from the surface: step " << o.stepMm << " theta " << theta << " s " << s;
+            }
+        }
+    }
+}
+
+TEST_P(R1, NearestMarchWithinHalfAStepPerBoundary)
+{
+    const double h = GetParam().y();
+    IntegratorOptions o{Strategy::MarchNearest};
+    o.stepMm = 0.25 * h;
+    auto march = makeIntegrator(*fixture().field, o);
+    ShaftIntegral out;
+    for (double theta : {0.0, 30.0, 60.0}) {
+        const Direction d = direction(theta);
+        const double cosT = std::cos(degToRad(theta));
+        for (int i = 1; i <= 61; ++i) {
+            const double s = 1.05 * kTotal / cosT * i / 61.0;
+            march->integrate({kEntry, kEntry + s * d.u}, out);
+            // The voxels reproduce the layers exactly (faces), so the only error is the
+            // trapezoid rule on each jump: at most |Δβ|·Δs/2 per boundary crossed.
+            const double bound = r1Jumps(s * cosT).first * o.stepMm / 2.0;
+            ASSERT_LE(std::abs(out.dampingIntegral - r1Exact(s, cosT)), bound + 1e-15) << theta << " " << s;
+        }
+    }
+}
+
+TEST_P(R1, ExactTrilinearIsTheLimitOfTheTrilinearMarch)
+{
+    const double h = GetParam().y();
+    auto exactTri = makeIntegrator(*fixture().field, {Strategy::ExactTrilinear});
+    IntegratorOptions fine{Strategy::MarchTrilinear};
+    fine.stepMm = h / 64.0;
+    auto march = makeIntegrator(*fixture().field, fine);
+    ShaftIntegral a, b;
+    for (double theta : {0.0, 30.0, 60.0}) {
+        const Direction d = direction(theta);
+        const double cosT = std::cos(degToRad(theta)), above = 0.5 * h / cosT;
+        for (int i = 1; i <= 23; ++i) {
+            const double s = 1.05 * kTotal / cosT * i / 23.0;
+            const Segment seg{kEntry - above * d.u, kEntry + s * d.u}; // from the air, as in the march test
+            exactTri->integrate(seg, a);
+            march->integrate(seg, b);
+            const auto [sumJump, maxJump] = r1Jumps(s * cosT + 0.5 * h);
+            // Against the fine march: only its trapezoid term remains (§7 R1, second term).
+            EXPECT_LE(std::abs(a.dampingIntegral - b.dampingIntegral),
+                      sumJump * cosT * fine.stepMm * fine.stepMm / (4.0 * h) + 1e-14);
+            // Against the piecewise-constant closed form: only the smearing term (Δs -> 0), which
+            // this exact integral attains with the tip on a boundary (1e-9 relative for round-off).
+            EXPECT_LE(std::abs(a.dampingIntegral - r1Exact(s, cosT)), maxJump * h / (8.0 * cosT) * (1.0 + 1e-9));
+        }
+    }
+}
+
+TEST_P(R1, ProfileOnTheLockedLineIsExact)
+{
+    TrajectoryProfile profile(*fixture().field, 0.05, 200.0, true);
+    ShaftIntegral out;
+    for (double theta : {0.0, 30.0, 60.0}) {
+        const Direction d = direction(theta);
+        const double cosT = std::cos(degToRad(theta)), sMax = 1.1 * kTotal / cosT;
+        ASSERT_TRUE(profile.lock(kEntry, d.u));
+        const auto rebuilds = profile.rebuilds();
+        for (int i = 0; i <= 211; ++i) {
+            const double s = sMax * i / 211.0;
+            profile.integrate({kEntry, kEntry + s * d.u}, out);
+            const double expected = r1Exact(s, cosT);
+            ASSERT_NEAR(out.dampingIntegral, expected, kExactRelative * expected + 1e-15) << theta << " " << s;
+        }
+        EXPECT_EQ(profile.rebuilds(), rebuilds) << "queries on the line must not rebuild";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Spacings, R1, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),
+                         [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
+
+/// physics.md §7 R5: sphere of radius R (β_s) in a slab (β0).
+class R5 : public testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        volume::SphereParams p; // 40 mm of fat, muscle sphere r = 10 mm centred at depth 20
+        p.halfWidthMm = 75.0;
+        p.grid.spacing = Vec3d::Constant(kH);
+        fixture = std::make_unique<test::FieldFixture>(
+            test::makeFieldFixture(volume::sphereModel(p, volume::TissueTable::builtin()), p.grid));
+    }
+    static void TearDownTestSuite() { fixture.reset(); }
+    static inline std::unique_ptr<test::FieldFixture> fixture;
+    static constexpr double kH = 0.5, kR = 10.0, kT = 40.0;
+    static inline const Vec3d kCentre{0.0, -20.0, 0.0};
+};
+
+TEST_F(R5, ExactVoxelWithinTheVoxelisationBound)
+{
+    const double b0 = testBeta().at("fat"), bs = testBeta().at("muscle");
+    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    ShaftIntegral out;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (double theta : {0.0, 30.0, 60.0}) {
+        for (int n = 0; n < 40; ++n) {
+            // A line at angle theta whose closest approach to the centre is rho <= 0.8 R.
+            const Direction d = direction(theta);
+            Vec3d side = d.u.cross(Vec3d::UnitX()).normalized();
+            side = Eigen::AngleAxisd(2.0 * kPi * unit(rng), d.u) * side;
+            const double rho = 0.8 * kR * unit(rng);
+            const Vec3d closest = kCentre + rho * side;
+            // From the top surface (y = 0) to the bottom (y = -T) along u.
+            const double toTop = (0.0 - closest.y()) / d.u.y(), toBottom = (-kT - closest.y()) / d.u.y();
+            const Segment seg{closest + toTop * d.u, closest + toBottom * d.u};
+            exact->integrate(seg, out);
+            const double length = (seg.tip - seg.entry).norm();
+            const double expected = b0 * length + (bs - b0) * 2.0 * std::sqrt(kR * kR - rho * rho);
+            // A centre-sampled voxel sphere differs from the true chord by at most 1.79h
+            // for rho <= 0.8R (physics.md §7 R5): allow 2h·|Δβ|.
+            ASSERT_LE(std::abs(out.dampingIntegral - expected), 2.0 * kH * (bs - b0)) << theta << " " << rho;
+        }
+    }
+}
+
+TEST_F(R5, ExactVoxelEqualsSupersampledVoxelField)
+{
+    // Against a march over the same voxels with steps of 2e-5 h: its trapezoid error is
+    // at most |Δβ|·Δs/2 per voxel face crossed (< 100 faces here), far below the 1e-3·h·|Δβ|
+    // tolerance of physics.md §7 R5.
+    const double dBeta = testBeta().at("muscle") - testBeta().at("fat");
+    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    IntegratorOptions fine{Strategy::MarchNearest};
+    fine.stepMm = 2e-5 * kH;
+    fine.trackLabels = false;
+    auto march = makeIntegrator(*fixture->field, fine);
+    ShaftIntegral a, b;
+    for (double theta : {0.0, 30.0, 60.0}) {
+        const Direction d = direction(theta);
+        const Vec3d closest = kCentre + Vec3d(3.1, 0.0, -2.3);
+        const double toTop = (0.0 - closest.y()) / d.u.y(), toBottom = (-kT - closest.y()) / d.u.y();
+        const Segment seg{closest + toTop * d.u, closest + toBottom * d.u};
+        exact->integrate(seg, a);
+        march->integrate(seg, b);
+        EXPECT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), 1e-3 * kH * dBeta) << theta;
+    }
+}
+
+} // namespace
+} // namespace voxhap::haptic

@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestTrajectoryProfile.cpp
+/// @brief The profile's guarantees: exact on the line, within its documented
+/// bound off the line, rebuilt beyond the tolerance, labels as the traversal.
+
+#include "common/Phantom.h"
+#include "common/Tolerances.h"
+
+#include "haptic/ShaftIntegration.h"
+#include "haptic/TrajectoryProfile.h"
+
+#include "volume/Errors.h"
+
+#include <Eigen/Geometry>
+
+#include <random>
+
+namespace voxhap::haptic {
+namespace {
+
+using test::kExactRelative;
+
+class Profile : public testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        volume::LumbarParams p; // vertebrae: interfaces in every direction
+        p.grid.spacing = Vec3d(0.5, 0.4, 0.6);
+        fixture = std::make_unique<test::FieldFixture>(
+            test::makeFieldFixture(volume::lumbarModel(p, volume::TissueTable::builtin()), p.grid));
+    }
+    static void TearDownTestSuite() { fixture.reset(); }
+    static inline std::unique_ptr<test::FieldFixture> fixture;
+    static constexpr double kTolerance = 0.05;
+};
+
+/// Shaft directions into the back: cranial tilts and lateral tilts of a few degrees.
+std::vector<std::pair<Vec3d, Vec3d>> paths()
+{
+    std::vector<std::pair<Vec3d, Vec3d>> out;
+    for (double tilt : {0.0, 8.0, 15.0, 25.0}) {
+        for (double az : {0.0, 70.0, 200.0}) {
+            const Vec3d u = Eigen::AngleAxisd(degToRad(az), Vec3d::UnitY()) *
+                            (Eigen::AngleAxisd(degToRad(tilt), Vec3d::UnitX()) * Vec3d(0, -1, 0));
+            out.emplace_back(Vec3d(0.31, 0.0, -0.17), u);
+        }
+    }
+    return out;
+}
+
+TEST_F(Profile, OnTheLineEqualsTheExactTraversalLabelsIncluded)
+{
+    TrajectoryProfile profile(*fixture->field, kTolerance, 150.0, true);
+    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    ShaftIntegral a, b;
+    for (const auto& [entry, u] : paths()) {
+        ASSERT_TRUE(profile.lock(entry, u));
+        for (double s = 0.0; s <= 90.0; s += 0.737) {
+            const Segment seg{entry, entry + s * u};
+            profile.integrate(seg, a);
+            exact->integrate(seg, b);
+            ASSERT_NEAR(a.dampingIntegral, b.dampingIntegral, kExactRelative * b.dampingIntegral + 1e-15);
+            for (int l = 0; l < kMaxLabels; ++l) {
+                ASSERT_NEAR(a.labelLengthMm[std::size_t(l)], b.labelLengthMm[std::size_t(l)], 1e-9) << "label " << l;
+                if (b.firstHitMm[std::size_t(l)] == kNotHit) {
+                    ASSERT_EQ(a.firstHitMm[std::size_t(l)], kNotHit) << "label " << l << " s " << s;
+                } else {
+                    ASSERT_NEAR(a.firstHitMm[std::size_t(l)], b.firstHitMm[std::size_t(l)], 1e-9) << "label " << l;
+                }
+            }
+        }
+    }
+    // The target: within 1e-6 N of exact on a locked path, at 10 mm/s.
+    EXPECT_LE(std::abs(a.dampingForceN(10.0) - b.dampingForceN(10.0)), 1e-6);
+}
+
+TEST_F(Profile, OffTheLineWithinTheDocumentedBound)
+{
+    TrajectoryProfile profile(*fixture->field, kTolerance, 150.0, false);
+    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel, 0.125, false});
+    std::mt19937 rng(2024);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    ShaftIntegral a, b;
+    int nonZeroBounds = 0, zeroError = 0, count = 0;
+    for (const auto& [entry, u] : paths()) {
+        ASSERT_TRUE(profile.lock(entry, u));
+        const auto rebuilds = profile.rebuilds();
+        const Vec3d side1 = u.unitOrthogonal(), side2 = u.cross(side1);
+        const auto offset = [&] {
+            const double r = kTolerance * std::sqrt(unit(rng)), phi = 2.0 * kPi * unit(rng);
+            return r * (std::cos(phi) * side1 + std::sin(phi) * side2);
+        };
+        for (int n = 0; n < 60; ++n) {
+            const double s = 90.0 * unit(rng);
+            const Segment seg{entry + offset(), entry + s * u + offset()};
+            ASSERT_TRUE(profile.covers(seg));
+            profile.integrate(seg, a);
+            exact->integrate(seg, b);
+            const double bound = profile.errorBound(seg);
+            ASSERT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), bound + 1e-12 * b.dampingIntegral)
+                << "s " << s;
+            nonZeroBounds += bound > 0.0;
+            zeroError += a.dampingIntegral == b.dampingIntegral;
+            ++count;
+        }
+        EXPECT_EQ(profile.rebuilds(), rebuilds);
+    }
+    EXPECT_GT(nonZeroBounds, 0); // the shafts do cross interfaces
+    EXPECT_LT(zeroError, count); // and the off-line error is not trivially zero
+}
+
+TEST_F(Profile, LeavingTheToleranceRebuilds)
+{
+    TrajectoryProfile profile(*fixture->field, kTolerance, 150.0, true);
+    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    ShaftIntegral a, b;
+    const Vec3d entry(0.31, 0.0, -0.17), u(0, -1, 0);
+    profile.integrate({entry, entry + 40.0 * u}, a);
+    EXPECT_EQ(profile.rebuilds(), 1u);
+    profile.integrate({entry, entry + 50.0 * u}, a); // further along the same line
+    EXPECT_EQ(profile.rebuilds(), 1u);
+    const Segment moved{entry + Vec3d(0.2, 0, 0), entry + Vec3d(0.2, 0, 0) + 50.0 * u}; // 0.2 mm > tolerance
+    EXPECT_FALSE(profile.covers(moved));
+    profile.integrate(moved, a);
+    EXPECT_EQ(profile.rebuilds(), 2u);
+    exact->integrate(moved, b);
+    EXPECT_NEAR(a.dampingIntegral, b.dampingIntegral, kExactRelative * b.dampingIntegral);
+}
+
+TEST_F(Profile, DegenerateInputGivesZero)
+{
+    TrajectoryProfile profile(*fixture->field, kTolerance, 150.0, true);
+    ShaftIntegral out;
+    const Vec3d p(0.3, -10.0, 0.2);
+    profile.integrate({p, p}, out);
+    EXPECT_EQ(out.dampingIntegral, 0.0);
+    profile.integrate({p, Vec3d(std::nan(""), 0, 0)}, out);
+    EXPECT_EQ(out.dampingIntegral, 0.0);
+    EXPECT_FALSE(profile.lock(p, Vec3d::Zero()));
+    EXPECT_THROW(TrajectoryProfile(*fixture->field, 1.0, 150.0, true), ValueError); // tolerance >= h/2
+}
+
+} // namespace
+} // namespace voxhap::haptic
