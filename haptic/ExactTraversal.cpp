@@ -113,7 +113,7 @@ public:
         constexpr double kGauss = 0.57735026918962576451; // 1/sqrt(3)
         FloatReader& r = *mSrc.betaReader;
         double sum = 0.0;
-        detail::walkCells(cells, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
+        const auto cell = [&](const openvdb::Coord& c, double ta, double tb) {
             double corner[8];
             detail::loadCorners(r, c, corner);
             const double mid = 0.5 * (ta + tb), half = 0.5 * (tb - ta) * kGauss;
@@ -121,7 +121,18 @@ public:
             const openvdb::Vec3d p = cells.a + cells.d * (mid - half) - origin;
             const openvdb::Vec3d q = cells.a + cells.d * (mid + half) - origin;
             sum += 0.5 * (tb - ta) * (detail::trilinear(corner, p[0], p[1], p[2]) + detail::trilinear(corner, q[0], q[1], q[2]));
-        });
+        };
+        // A cell is uniform when its 8 corners share one uniform block: not on the block's last plane.
+        const auto uniform = [&](const openvdb::Coord& c) {
+            const int dim = r.uniformBlock(c);
+            const int last = dim - 1;
+            return dim > 1 && (c.x() & last) != last && (c.y() & last) != last && (c.z() & last) != last ? dim : 0;
+        };
+        const auto run = [&](const openvdb::Coord& c, double ta, double tb) {
+            const float v = r.get(c);
+            if (std::isfinite(v)) sum += double(v) * (tb - ta);
+        };
+        detail::walkCellsSkipping(cells, t0, t1, 1, uniform, cell, run);
         out.dampingIntegral = sum * cells.lengthMm;
     }
     std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactTrilinear>(*this); }

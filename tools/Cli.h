@@ -56,5 +56,6 @@ using Action = std::function<int()>;
 Action registerPhantom(CLI::App& app);
 Action registerInfo(CLI::App& app);
 Action registerDemo(CLI::App& app);
+Action registerBench(CLI::App& app);
 
 } // namespace voxhap::tools

@@ -18,6 +18,7 @@ int main(int argc, char** argv)
         {"demo", registerDemo(app)},
         {"phantom", registerPhantom(app)},
         {"info", registerInfo(app)},
+        {"bench", registerBench(app)},
     };
 
     if (argc > 1 && argv[1][0] != '-' && !actions.count(argv[1])) {

@@ -32,6 +32,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests, benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # benchmark plots (pngcairo, no X needed)
+  gnuplot-nox
 )
 
 missing=()

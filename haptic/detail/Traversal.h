@@ -94,6 +94,43 @@ inline void walkCells(const IndexSegment& s, double t0, double t1, Visit&& visit
     } while (dda.step());
 }
 
+/// @brief walkCells() that crosses uniform regions in one step: where
+/// uniform(cell) returns a block side dim > 1, every cell up to the exit of the
+/// aligned dim³ block (less @p shrink cells on its upper side, for trilinear
+/// cells whose far corners must stay inside) is handed to run(cell, ta, tExit)
+/// at once. Phantoms and air are mostly uniform tiles; dense CT leaves are not.
+template <typename Uniform, typename Visit, typename Run>
+inline void walkCellsSkipping(const IndexSegment& s, double t0, double t1, int shrink, Uniform&& uniform,
+                              Visit&& visit, Run&& run) noexcept
+{
+    const RayT ray(s.a, s.d, 0.0, 1.0);
+    openvdb::math::DDA<RayT, 0> dda(ray, t0, t1);
+    for (;;) {
+        const openvdb::Coord c = dda.voxel();
+        const double ta = dda.time();
+        if (const int dim = uniform(c); dim > 1) {
+            double exit = t1;
+            for (int i = 0; i < 3; ++i) {
+                if (s.d[i] == 0.0) continue;
+                const int lo = c[i] & ~(dim - 1);
+                const double face = s.d[i] > 0.0 ? double(lo + dim - shrink) : double(lo);
+                exit = std::min(exit, (face - s.a[i]) / s.d[i]);
+            }
+            // Round-off can put the restarted walk a hair before the block's face:
+            // then exit <= ta and the cell is visited the ordinary way.
+            if (exit > ta) {
+                run(c, ta, exit);
+                if (exit >= t1) return;
+                dda.init(ray, exit, t1);
+                continue;
+            }
+        }
+        const double tb = dda.next();
+        if (tb > ta) visit(c, ta, tb);
+        if (!dda.step()) return;
+    }
+}
+
 /// @brief The index-space box of a grid's active voxels as voxel cells in the
 /// shifted (+0.5) frame, grown by @p pad cells; empty grids give lo > hi.
 inline void activeBox(const openvdb::GridBase& g, double pad, openvdb::Vec3d& lo, openvdb::Vec3d& hi)
@@ -142,13 +179,20 @@ inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const ope
     }
     if (labels && t0 > 0.0) tally.add(0, 0.0, t0);
     double sum = 0.0;
-    walkCells(s, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
+    const auto voxel = [&](const openvdb::Coord& c, double ta, double tb) {
         if (beta) {
             const float b = beta->get(c);
             if (std::isfinite(b)) sum += double(b) * (tb - ta);
         }
         if (labels) tally.add(labels->get(c), ta, tb);
-    });
+    };
+    // A block is uniform for this pass when every grid it reads is uniform there.
+    const auto uniform = [&](const openvdb::Coord& c) {
+        const int b = beta ? beta->uniformBlock(c) : 4096;
+        const int l = labels ? labels->uniformBlock(c) : 4096;
+        return std::min(b, l);
+    };
+    walkCellsSkipping(s, t0, t1, 0, uniform, voxel, voxel);
     if (labels && t1 < 1.0) tally.add(0, t1, 1.0);
     if (beta) out.dampingIntegral = sum * s.lengthMm;
 }
@@ -158,6 +202,18 @@ inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const ope
 template <typename Reader>
 inline void loadCorners(Reader& r, const openvdb::Coord& c, double (&corner)[8]) noexcept
 {
+    constexpr int kLast = 7; // a cell whose lower corner is not on a leaf's last plane has all 8 in that leaf
+    if ((c.x() & kLast) != kLast && (c.y() & kLast) != kLast && (c.z() & kLast) != kLast) {
+        if (const auto* data = r.leafData(c)) {
+            const openvdb::Index o = openvdb::Index(((c.x() & kLast) << 6) | ((c.y() & kLast) << 3) | (c.z() & kLast));
+            static constexpr openvdb::Index kStep[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+            for (int i = 0; i < 8; ++i) {
+                const auto v = data[o + kStep[i]];
+                corner[i] = std::isfinite(v) ? double(v) : 0.0;
+            }
+            return;
+        }
+    }
     for (int i = 0; i < 8; ++i) {
         const float v = r.get(c.offsetBy((i >> 2) & 1, (i >> 1) & 1, i & 1));
         corner[i] = std::isfinite(v) ? double(v) : 0.0;

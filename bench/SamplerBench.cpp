@@ -1,0 +1,462 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file SamplerBench.cpp
+/// @brief Workloads, references, interleaved timing and the report.
+
+#include "bench/SamplerBench.h"
+
+#include "bench/DenseField.h"
+#include "bench/VtkProbe.h"
+#include "haptic/ShaftIntegration.h"
+#include "haptic/TrajectoryProfile.h"
+#include "volume/Grids.h"
+#include "volume/Phantoms.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <thread>
+#include <unistd.h> // for getpid: a per-process temporary directory
+
+namespace voxhap::bench {
+
+namespace {
+
+using haptic::Segment;
+using haptic::ShaftIntegral;
+using Clock = std::chrono::steady_clock;
+
+/// R1 workload layers: 100 mm deep so that 100 mm shafts stay inside at any tilt.
+const std::vector<volume::SlabLayer> kSlabLayers{
+    {"skin", 2.0}, {"fat", 18.0}, {"muscle", 40.0}, {"interspinous_ligament", 20.0}, {"fat", 20.0}};
+
+/// β per tissue for the workloads: physics.md §5.4 fitted values [N·s/mm²].
+double workloadBeta(const std::string& tissue)
+{
+    static const std::map<std::string, double> kBeta{{"skin", 8152e-6}, {"fat", 3696e-6}, {"muscle", 8152e-6},
+                                                     {"interspinous_ligament", 16304e-6}, {"ligamentum_flavum", 16304e-6},
+                                                     {"cancellous_bone", 0.0}, {"cortical_bone", 0.0}};
+    const auto it = kBeta.find(tissue);
+    return it == kBeta.end() ? 8152e-6 : it->second; // other soft tissue as muscle
+}
+
+struct Workload {
+    std::string name;
+    std::unique_ptr<volume::Volume> volume;
+    std::unique_ptr<haptic::MaterialField> field;
+    std::vector<std::vector<Segment>> paths; ///< per path, the shafts at increasing depth
+    std::function<double(const Segment&)> pcReference; ///< exact ∫β of the voxel reading (closed form if any)
+    std::string pcReferenceName;
+    double voxelMm = 0.5;
+};
+
+std::unique_ptr<haptic::MaterialField> fieldWithWorkloadBeta(const volume::Volume& v)
+{
+    const auto& table = volume::TissueTable::builtin();
+    const auto labels = volume::labelGrid(v);
+    auto beta = volume::FloatGrid::create(0.0f);
+    beta->setTree(std::make_shared<volume::FloatGrid::TreeType>(labels->tree(), 0.0f, openvdb::TopologyCopy()));
+    auto acc = labels->getConstAccessor();
+    for (auto it = beta->tree().beginValueOn(); it; ++it) {
+        it.setValue(float(workloadBeta(table.at(acc.getValue(it.getCoord())).name)));
+    }
+    beta->setTransform(labels->transform().copy());
+    return std::make_unique<haptic::MaterialField>(beta, labels, table);
+}
+
+/// Shafts from @p entry along directions tilted 0..60° from @p inward, depths up to 100 mm.
+std::vector<std::vector<Segment>> makePaths(const Vec3d& entry, const Vec3d& inward, const SamplerBenchOptions& o,
+                                            std::mt19937& rng, double jitterMm)
+{
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<std::vector<Segment>> paths;
+    const Vec3d side = inward.unitOrthogonal();
+    for (int p = 0; p < o.paths; ++p) {
+        const double tilt = degToRad(60.0) * double(p) / std::max(1, o.paths - 1);
+        const double azimuth = 2.0 * kPi * unit(rng);
+        const Vec3d axis = Eigen::AngleAxisd(azimuth, inward) * side;
+        const Vec3d u = Eigen::AngleAxisd(tilt, axis) * inward;
+        const Vec3d e = entry + jitterMm * Vec3d(unit(rng) - 0.5, 0.0, unit(rng) - 0.5);
+        std::vector<Segment> shafts;
+        for (int d = 1; d <= o.depths; ++d) shafts.push_back({e, e + (100.0 * d / o.depths) * u});
+        paths.push_back(std::move(shafts));
+    }
+    return paths;
+}
+
+Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
+{
+    Workload w;
+    w.name = "slab";
+    w.voxelMm = o.spacingMm;
+    volume::SlabParams p;
+    p.layers = kSlabLayers;
+    p.halfWidthMm = 95.0; // a 60° shaft of 100 mm drifts 87 mm sideways
+    p.grid.spacing = Vec3d::Constant(o.spacingMm);
+    const auto& table = volume::TissueTable::builtin();
+    w.volume = std::make_unique<volume::Volume>(volume::makePhantom(volume::slabModel(p, table), p.grid, table));
+    w.field = fieldWithWorkloadBeta(*w.volume);
+    w.paths = makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), o, rng, o.spacingMm);
+    // physics.md §7 R1 closed form, depth from the surface y = 0; β as the grid stores it (float).
+    w.pcReference = [](const Segment& s) {
+        const Vec3d d = s.tip - s.entry;
+        const double length = d.norm(), cosT = -d.y() / length;
+        double z = 0.0, sum = 0.0;
+        for (const auto& l : kSlabLayers) {
+            sum += double(float(workloadBeta(l.tissue))) * std::clamp(length * cosT - z, 0.0, l.thicknessMm) / cosT;
+            z += l.thicknessMm;
+        }
+        return sum;
+    };
+    w.pcReferenceName = "R1 closed form";
+    return w;
+}
+
+Workload torsoWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
+{
+    Workload w;
+    w.name = "torso";
+    w.voxelMm = o.spacingMm;
+    volume::TorsoParams p;
+    p.grid.spacing = Vec3d::Constant(o.spacingMm);
+    const auto& table = volume::TissueTable::builtin();
+    w.volume = std::make_unique<volume::Volume>(volume::makePhantom(volume::torsoModel(p, table), p.grid, table));
+    w.field = fieldWithWorkloadBeta(*w.volume);
+    // From the posterior skin 40 mm left of the midline, inward and tilted.
+    w.paths = makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), o, rng, 10.0);
+    auto exact = std::shared_ptr<haptic::ShaftIntegrator>(haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));
+    w.pcReference = [exact](const Segment& s) {
+        ShaftIntegral r;
+        exact->integrate(s, r);
+        return r.dampingIntegral;
+    };
+    w.pcReferenceName = "exact voxel traversal (validated against R1/R5 in the tests)";
+    return w;
+}
+
+struct Config {
+    std::string name, reading;
+    /// Evaluate all shafts of one path into out (one value per shaft).
+    std::function<void(const std::vector<Segment>&, std::vector<double>&)> run;
+    /// Untimed preparation before a path's batch (the profile's lock), if any.
+    std::function<void(const std::vector<Segment>&)> prepare{};
+    bool perPath = false; ///< time per path, not per evaluation (a build cost)
+};
+
+double percentile(std::vector<double> v, double q)
+{
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const double pos = q * double(v.size() - 1);
+    const auto i = std::size_t(pos);
+    const double f = pos - double(i);
+    return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+std::string fraction(double f) { return f == 1.0 ? "1" : "1/" + std::to_string(int(std::lround(1.0 / f))); }
+
+} // namespace
+
+std::string machineDescription()
+{
+    std::ifstream in("/proc/cpuinfo");
+    std::string line, model = "unknown CPU";
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            model = line.substr(line.find(':') + 2);
+            break;
+        }
+    }
+    return model + " (" + std::to_string(std::thread::hardware_concurrency()) + " cores)";
+}
+
+SamplerReport runSamplerBench(const SamplerBenchOptions& o, const std::function<void(const std::string&)>& progress)
+{
+    SamplerReport report;
+    report.machine = machineDescription();
+    report.options = o;
+    std::mt19937 rng(20261122);
+    for (const std::string& name : o.workloads) {
+        progress("building the " + name + " workload");
+        Workload w = name == "slab" ? slabWorkload(o, rng) : torsoWorkload(o, rng);
+        const double h = w.voxelMm, v0 = o.speedMmPerS;
+        const haptic::MaterialField& field = *w.field;
+
+        // References per shaft: the voxel reading and the trilinear reading.
+        std::vector<std::vector<double>> refPc, refTri;
+        auto tri = haptic::makeIntegrator(field, {haptic::Strategy::ExactTrilinear, 0.1, false});
+        for (const auto& path : w.paths) {
+            std::vector<double> pc, tr;
+            for (const auto& s : path) {
+                ShaftIntegral r;
+                tri->integrate(s, r);
+                pc.push_back(w.pcReference(s));
+                tr.push_back(r.dampingIntegral);
+            }
+            refPc.push_back(std::move(pc));
+            refTri.push_back(std::move(tr));
+        }
+
+        // The configurations. Integrators are built once; labels off: the damping force only.
+        std::vector<Config> configs;
+        std::vector<std::shared_ptr<haptic::ShaftIntegrator>> keep;
+        const auto add = [&](std::string label, std::string reading, haptic::IntegratorOptions io) {
+            io.trackLabels = false;
+            std::shared_ptr<haptic::ShaftIntegrator> integ = haptic::makeIntegrator(field, io);
+            keep.push_back(integ);
+            configs.push_back({std::move(label), std::move(reading),
+                               [integ](const std::vector<Segment>& path, std::vector<double>& out) {
+                                   ShaftIntegral r;
+                                   for (std::size_t i = 0; i < path.size(); ++i) {
+                                       integ->integrate(path[i], r);
+                                       out[i] = r.dampingIntegral;
+                                   }
+                               }});
+        };
+        add("exact-voxel", "voxel", {haptic::Strategy::ExactVoxel});
+        add("exact-trilinear", "trilinear", {haptic::Strategy::ExactTrilinear});
+        const double fractions[] = {1.0, 0.5, 0.25, 0.1};
+        for (double f : fractions) {
+            add("vdb march-nearest " + fraction(f), "voxel", {haptic::Strategy::MarchNearest, f * h});
+            add("vdb march-trilinear " + fraction(f), "trilinear", {haptic::Strategy::MarchTrilinear, f * h});
+        }
+        // The profile: locked to each path's line before its batch is timed (the
+        // servo locks once after skin puncture); the lock itself is a row of its own.
+        for (double tol : {0.01, 0.05}) {
+            auto profile = std::make_shared<haptic::TrajectoryProfile>(field, tol, 110.0, false);
+            keep.push_back(profile);
+            std::ostringstream label;
+            label << "profile tol " << tol << " mm";
+            configs.push_back({label.str(), "voxel",
+                               [profile](const std::vector<Segment>& path, std::vector<double>& out) {
+                                   ShaftIntegral r;
+                                   for (std::size_t i = 0; i < path.size(); ++i) {
+                                       profile->integrate(path[i], r);
+                                       out[i] = r.dampingIntegral;
+                                   }
+                               },
+                               [profile](const std::vector<Segment>& path) {
+                                   profile->lock(path.front().entry, path.front().tip - path.front().entry);
+                               }});
+        }
+        {
+            auto profile = std::make_shared<haptic::TrajectoryProfile>(field, 0.05, 110.0, false);
+            keep.push_back(profile);
+            configs.push_back({"profile lock (per path)", "build",
+                               [profile](const std::vector<Segment>& path, std::vector<double>& out) {
+                                   profile->lock(path.front().entry, path.front().tip - path.front().entry);
+                                   std::fill(out.begin(), out.end(), std::nan(""));
+                               },
+                               {}, true});
+        }
+        progress("copying the " + name + " workload to a dense array");
+        auto dense = std::make_shared<DenseField>(field);
+        for (double f : fractions) {
+            for (bool trilinear : {false, true}) {
+                configs.push_back({std::string("dense march-") + (trilinear ? "trilinear " : "nearest ") + fraction(f),
+                                   trilinear ? "trilinear" : "voxel",
+                                   [dense, f, h, trilinear](const std::vector<Segment>& path, std::vector<double>& out) {
+                                       for (std::size_t i = 0; i < path.size(); ++i) out[i] = dense->march(path[i], f * h, trilinear);
+                                   }});
+            }
+        }
+        std::shared_ptr<VtkProbe> probe;
+        if (o.vtk) {
+            probe = std::make_shared<VtkProbe>(*dense);
+            for (double f : {1.0, 0.25}) {
+                configs.push_back({"vtkProbeFilter " + fraction(f), "trilinear",
+                                   [probe, f, h](const std::vector<Segment>& path, std::vector<double>& out) {
+                                       for (std::size_t i = 0; i < path.size(); ++i) out[i] = probe->integrate(path[i], f * h);
+                                   }});
+            }
+        }
+
+        // Interleaved rounds: every configuration, every path, then again.
+        std::vector<std::vector<double>> batchNs(configs.size());
+        std::vector<std::vector<double>> values(configs.size());
+        std::vector<double> out(std::size_t(o.depths));
+        for (int rep = 0; rep < o.repetitions; ++rep) {
+            progress(name + ": round " + std::to_string(rep + 1) + " of " + std::to_string(o.repetitions));
+            for (std::size_t c = 0; c < configs.size(); ++c) {
+                for (std::size_t p = 0; p < w.paths.size(); ++p) {
+                    if (configs[c].prepare) configs[c].prepare(w.paths[p]);
+                    const auto t0 = Clock::now();
+                    configs[c].run(w.paths[p], out);
+                    const auto t1 = Clock::now();
+                    const double per = configs[c].perPath ? 1.0 : double(out.size());
+                    batchNs[c].push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / per);
+                    if (rep == 0) values[c].insert(values[c].end(), out.begin(), out.end());
+                }
+            }
+        }
+        for (std::size_t c = 0; c < configs.size(); ++c) {
+            SamplerRow row;
+            row.workload = name;
+            row.config = configs[c].name;
+            row.reading = configs[c].reading;
+            row.nsMedian = percentile(batchNs[c], 0.5);
+            row.nsP99 = percentile(batchNs[c], 0.99);
+            if (configs[c].perPath) { // a build cost: no error to report
+                row.evaluations = long(w.paths.size());
+                report.rows.push_back(row);
+                continue;
+            }
+            double sumPc = 0, sumTri = 0;
+            std::size_t k = 0;
+            for (std::size_t p = 0; p < w.paths.size(); ++p) {
+                for (std::size_t i = 0; i < w.paths[p].size(); ++i, ++k) {
+                    const double ePc = v0 * std::abs(values[c][k] - refPc[p][i]);
+                    const double eTri = v0 * std::abs(values[c][k] - refTri[p][i]);
+                    row.errMaxN = std::max(row.errMaxN, ePc);
+                    row.errTriMaxN = std::max(row.errTriMaxN, eTri);
+                    sumPc += ePc * ePc;
+                    sumTri += eTri * eTri;
+                }
+            }
+            row.evaluations = long(k);
+            row.errRmsN = std::sqrt(sumPc / double(std::max<std::size_t>(k, 1)));
+            row.errTriRmsN = std::sqrt(sumTri / double(std::max<std::size_t>(k, 1)));
+            report.rows.push_back(row);
+        }
+
+        // Ratios in this run against the textbook baseline (dense trilinear march at 1/4 voxel).
+        const auto find = [&](const std::string& config) -> const SamplerRow& {
+            for (const auto& r : report.rows) {
+                if (r.workload == name && r.config == config) return r;
+            }
+            return report.rows.front();
+        };
+        const SamplerRow& base = find("dense march-trilinear 1/4");
+        const auto ratio = [&](const std::string& config) { return base.nsMedian / find(config).nsMedian; };
+        std::ostringstream n;
+        n << std::fixed << std::setprecision(1);
+        n << name << ": exact-voxel is " << ratio("exact-voxel") << "x faster than the dense trilinear march at 1/4 voxel"
+          << " (target >= 5x), max error " << std::setprecision(3) << std::scientific << find("exact-voxel").errMaxN
+          << " N vs " << base.errMaxN << " N (" << w.pcReferenceName << ")";
+        report.notes.push_back(n.str());
+        n.str("");
+        n << std::fixed << std::setprecision(1) << name << ": exact-trilinear is " << ratio("exact-trilinear")
+          << "x faster than that march; error against the trilinear reading " << std::scientific << std::setprecision(3)
+          << find("exact-trilinear").errTriMaxN << " N vs " << base.errTriMaxN << " N";
+        report.notes.push_back(n.str());
+        n.str("");
+        n << std::fixed << std::setprecision(1) << name << ": profile (tol 0.05 mm) is " << ratio("profile tol 0.05 mm")
+          << "x faster than that march (target >= 100x); max deviation from exact-voxel on the locked paths "
+          << std::scientific << std::setprecision(3);
+        const auto indexOf = [&](const std::string& config) {
+            for (std::size_t c = 0; c < configs.size(); ++c) {
+                if (configs[c].name == config) return c;
+            }
+            return std::size_t(0);
+        };
+        double dev = 0;
+        const auto& prof = values[indexOf("profile tol 0.05 mm")];
+        const auto& exactValues = values[indexOf("exact-voxel")];
+        for (std::size_t k2 = 0; k2 < prof.size(); ++k2) dev = std::max(dev, v0 * std::abs(prof[k2] - exactValues[k2]));
+        n << dev << " N (target <= 1e-6 N)";
+        report.notes.push_back(n.str());
+    }
+    return report;
+}
+
+void printSamplerReport(std::ostream& os, const SamplerReport& r)
+{
+    os << "shaft integration: runtime versus error\n";
+    os << "machine: " << r.machine << "\n";
+    os << "workload: " << r.options.paths << " paths x " << r.options.depths << " depths (to 100 mm, tilt 0-60 deg), "
+       << r.options.repetitions << " interleaved rounds; voxel " << r.options.spacingMm << " mm; errors at "
+       << r.options.speedMmPerS << " mm/s\n";
+    os << "ns per evaluation: median and p99 over per-path batches of " << r.options.depths << " evaluations\n\n";
+    std::string current;
+    for (const auto& row : r.rows) {
+        if (row.workload != current) {
+            current = row.workload;
+            os << "[" << current << "]\n";
+            os << std::left << std::setw(28) << "configuration" << std::right << std::setw(10) << "median ns"
+               << std::setw(11) << "p99 ns" << std::setw(13) << "max err N" << std::setw(13) << "rms err N"
+               << std::setw(14) << "max err(tri)" << std::setw(14) << "rms err(tri)" << '\n';
+        }
+        os << std::left << std::setw(28) << row.config << std::right << std::fixed << std::setprecision(0)
+           << std::setw(10) << row.nsMedian << std::setw(11) << row.nsP99 << std::scientific << std::setprecision(2)
+           << std::setw(13) << row.errMaxN << std::setw(13) << row.errRmsN << std::setw(14) << row.errTriMaxN
+           << std::setw(14) << row.errTriRmsN << '\n';
+    }
+    os << std::defaultfloat << '\n';
+    for (const auto& n : r.notes) os << "- " << n << '\n';
+}
+
+nlohmann::json samplerReportJson(const SamplerReport& r)
+{
+    nlohmann::json j;
+    j["machine"] = r.machine;
+    j["options"] = {{"workloads", r.options.workloads}, {"paths", r.options.paths}, {"depths", r.options.depths},
+                    {"repetitions", r.options.repetitions}, {"speed_mm_per_s", r.options.speedMmPerS},
+                    {"spacing_mm", r.options.spacingMm}};
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& row : r.rows) {
+        rows.push_back({{"workload", row.workload}, {"config", row.config}, {"reading", row.reading},
+                        {"ns_median", row.nsMedian}, {"ns_p99", row.nsP99}, {"err_max_n", row.errMaxN},
+                        {"err_rms_n", row.errRmsN}, {"err_trilinear_max_n", row.errTriMaxN},
+                        {"err_trilinear_rms_n", row.errTriRmsN}, {"evaluations", row.evaluations}});
+    }
+    j["rows"] = rows;
+    j["notes"] = r.notes;
+    return j;
+}
+
+bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("voxhap-plot-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream script(dir / "plot.gp");
+    script << "set terminal pngcairo size 1200,800 font ',10'\n"
+           << "set output '" << pngFile << ".tmp'\n"
+           << "set logscale xy\nset grid\nset key outside right\n"
+           << "set xlabel 'max force error at " << r.options.speedMmPerS
+           << " mm/s against the reference of its reading [N] (0 drawn at 1e-12)'\n"
+           << "set ylabel 'median time per evaluation [ns]'\n"
+           << "set title 'shaft integration, runtime versus error (" << r.machine << ")'\n";
+    std::string plot = "plot ";
+    std::map<std::string, int> index;
+    for (const auto& row : r.rows) {
+        if (row.reading == "build") continue; // a build cost, not an evaluation
+        std::ofstream data(dir / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
+        // Each configuration against the reference of the reading it approximates.
+        const double err = row.reading == "trilinear" ? row.errTriMaxN : row.errMaxN;
+        data << std::max(err, 1e-12) << ' ' << row.nsMedian << " \"" << row.config << "\"\n";
+        index[row.workload] = 1;
+    }
+    for (const auto& [workload, unused] : index) {
+        const std::string file = (dir / (workload + ".dat")).string();
+        plot += "'" + file + "' using 1:2 with points pt 7 ps 1.5 title '" + workload + "', '" + file +
+                "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
+    }
+    script << plot.substr(0, plot.size() - 2) << '\n';
+    script.close();
+    const std::string cmd = "gnuplot '" + (dir / "plot.gp").string() + "' 2>'" + (dir / "err.txt").string() + "'";
+    const int rc = std::system(cmd.c_str());
+    bool ok = rc == 0 && fs::exists(pngFile + ".tmp");
+    if (ok) {
+        fs::rename(pngFile + ".tmp", pngFile);
+    } else {
+        std::ifstream err(dir / "err.txt");
+        std::getline(err, why);
+        why = "gnuplot failed" + (why.empty() ? std::string(" (is gnuplot-nox installed?)") : ": " + why);
+        std::error_code ignored;
+        fs::remove(pngFile + ".tmp", ignored);
+    }
+    fs::remove_all(dir);
+    return ok;
+}
+
+} // namespace voxhap::bench

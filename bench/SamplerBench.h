@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file SamplerBench.h
+/// @brief The runtime-versus-error table of docs benchmarks.md for shaft
+/// integration: every strategy and step, with the dense-array and VTK
+/// baselines measured in the same run, interleaved.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace voxhap::bench {
+
+struct SamplerBenchOptions {
+    std::vector<std::string> workloads{"slab", "torso"}; ///< "slab" (R1 closed form), "torso" (phantom)
+    int paths = 48;             ///< shaft directions per workload (tilt 0..60°)
+    int depths = 40;            ///< insertion depths per path, up to 100 mm
+    int repetitions = 5;        ///< interleaved rounds over all configurations
+    double speedMmPerS = 10.0;  ///< insertion speed for force errors [mm/s]
+    double spacingMm = 0.5;     ///< phantom voxel size [mm]
+    bool vtk = true;            ///< include the vtkProbeFilter baseline (slow)
+};
+
+/// @brief One configuration's figures.
+struct SamplerRow {
+    std::string workload;
+    std::string config;         ///< e.g. "exact-voxel", "vdb march-trilinear 1/4", "dense march-trilinear 1/4"
+    std::string reading;        ///< "voxel" or "trilinear": the interpretation it approximates
+    double nsMedian = 0, nsP99 = 0; ///< per evaluation, over per-path batches
+    double errMaxN = 0, errRmsN = 0;       ///< against the piecewise-constant reference [N]
+    double errTriMaxN = 0, errTriRmsN = 0; ///< against the trilinear reference [N]
+    long evaluations = 0;
+};
+
+struct SamplerReport {
+    std::string machine;        ///< CPU model and core count
+    SamplerBenchOptions options;
+    std::vector<SamplerRow> rows;
+    std::vector<std::string> notes; ///< ratios and targets, measured in this run
+};
+
+/// @brief Run the benchmark; @p progress receives one line per stage.
+SamplerReport runSamplerBench(const SamplerBenchOptions& options, const std::function<void(const std::string&)>& progress);
+
+/// @brief The table as plain text.
+void printSamplerReport(std::ostream& os, const SamplerReport& r);
+/// @brief The report as JSON (for comparisons across commits).
+nlohmann::json samplerReportJson(const SamplerReport& r);
+/// @brief Log–log plot, time against error, one point per configuration (gnuplot,
+/// pngcairo). @return false with @p why set if gnuplot is missing or fails.
+bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why);
+
+/// @brief "model name (N cores)" from /proc/cpuinfo.
+std::string machineDescription();
+
+} // namespace voxhap::bench
