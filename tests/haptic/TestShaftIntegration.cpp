@@ -241,27 +241,32 @@ TEST_P(R1, ProfileOnTheLockedLineIsExact)
 INSTANTIATE_TEST_SUITE_P(Spacings, R1, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),
                          [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
-/// physics.md §7 R5: sphere of radius R (β_s) in a slab (β0).
-class R5 : public testing::Test {
+/// physics.md §7 R5: sphere of radius R (β_s) in a slab (β0), isotropic and anisotropic voxels.
+class R5 : public testing::TestWithParam<Vec3d> {
 protected:
-    static void SetUpTestSuite()
+    const test::FieldFixture& fixture() const
     {
-        volume::SphereParams p; // 40 mm of fat, muscle sphere r = 10 mm centred at depth 20
-        p.halfWidthMm = 75.0;
-        p.grid.spacing = Vec3d::Constant(kH);
-        fixture = std::make_unique<test::FieldFixture>(
-            test::makeFieldFixture(volume::sphereModel(p, volume::TissueTable::builtin()), p.grid));
+        static std::map<std::tuple<double, double, double>, test::FieldFixture> cache;
+        const Vec3d h = GetParam();
+        const auto key = std::make_tuple(h.x(), h.y(), h.z());
+        if (!cache.count(key)) {
+            volume::SphereParams p; // 40 mm of fat, muscle sphere r = 10 mm centred at depth 20
+            p.halfWidthMm = 75.0;
+            p.grid.spacing = h;
+            cache.emplace(key, test::makeFieldFixture(volume::sphereModel(p, volume::TissueTable::builtin()), p.grid));
+        }
+        return cache.at(key);
     }
-    static void TearDownTestSuite() { fixture.reset(); }
-    static inline std::unique_ptr<test::FieldFixture> fixture;
-    static constexpr double kH = 0.5, kR = 10.0, kT = 40.0;
+    /// The largest voxel side: the voxelisation bound of §7 R5 is stated for cubes of side h.
+    double h() const { return GetParam().maxCoeff(); }
+    static constexpr double kR = 10.0, kT = 40.0;
     static inline const Vec3d kCentre{0.0, -20.0, 0.0};
 };
 
-TEST_F(R5, ExactVoxelWithinTheVoxelisationBound)
+TEST_P(R5, ExactVoxelWithinTheVoxelisationBound)
 {
     const double b0 = testBeta().at("fat"), bs = testBeta().at("muscle");
-    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
     ShaftIntegral out;
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -281,22 +286,22 @@ TEST_F(R5, ExactVoxelWithinTheVoxelisationBound)
             const double expected = b0 * length + (bs - b0) * 2.0 * std::sqrt(kR * kR - rho * rho);
             // A centre-sampled voxel sphere differs from the true chord by at most 1.79h
             // for rho <= 0.8R (physics.md §7 R5): allow 2h·|Δβ|.
-            ASSERT_LE(std::abs(out.dampingIntegral - expected), 2.0 * kH * (bs - b0)) << theta << " " << rho;
+            ASSERT_LE(std::abs(out.dampingIntegral - expected), 2.0 * h() * (bs - b0)) << theta << " " << rho;
         }
     }
 }
 
-TEST_F(R5, ExactVoxelEqualsSupersampledVoxelField)
+TEST_P(R5, ExactVoxelEqualsSupersampledVoxelField)
 {
     // Against a march over the same voxels with steps of 2e-5 h: its trapezoid error is
     // at most |Δβ|·Δs/2 per voxel face crossed (< 100 faces here), far below the 1e-3·h·|Δβ|
     // tolerance of physics.md §7 R5.
     const double dBeta = testBeta().at("muscle") - testBeta().at("fat");
-    auto exact = makeIntegrator(*fixture->field, {Strategy::ExactVoxel});
+    auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
     IntegratorOptions fine{Strategy::MarchNearest};
-    fine.stepMm = 2e-5 * kH;
+    fine.stepMm = 2e-5 * h();
     fine.trackLabels = false;
-    auto march = makeIntegrator(*fixture->field, fine);
+    auto march = makeIntegrator(*fixture().field, fine);
     ShaftIntegral a, b;
     for (double theta : {0.0, 30.0, 60.0}) {
         const Direction d = direction(theta);
@@ -305,9 +310,12 @@ TEST_F(R5, ExactVoxelEqualsSupersampledVoxelField)
         const Segment seg{closest + toTop * d.u, closest + toBottom * d.u};
         exact->integrate(seg, a);
         march->integrate(seg, b);
-        EXPECT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), 1e-3 * kH * dBeta) << theta;
+        EXPECT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), 1e-3 * h() * dBeta) << theta;
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(Spacings, R5, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.5)),
+                         [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
 } // namespace
 } // namespace voxhap::haptic
