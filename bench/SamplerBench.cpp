@@ -93,18 +93,25 @@ std::vector<std::vector<Segment>> makePaths(const Vec3d& entry, const Vec3d& inw
     return paths;
 }
 
-Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
+/// A workload on a phantom model at the options' spacing, β from workloadBeta().
+Workload phantomWorkload(const std::string& name, const volume::PhantomModel& model, const SamplerBenchOptions& o)
 {
     Workload w;
-    w.name = "slab";
+    w.name = name;
     w.voxelMm = o.spacingMm;
+    volume::GridSpec grid;
+    grid.spacing = Vec3d::Constant(o.spacingMm);
+    w.volume = std::make_unique<volume::Volume>(volume::makePhantom(model, grid, volume::TissueTable::builtin()));
+    w.field = fieldWithWorkloadBeta(*w.volume);
+    return w;
+}
+
+Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
+{
     volume::SlabParams p;
     p.layers = kSlabLayers;
     p.halfWidthMm = 95.0; // a 60° shaft of 100 mm drifts 87 mm sideways
-    p.grid.spacing = Vec3d::Constant(o.spacingMm);
-    const auto& table = volume::TissueTable::builtin();
-    w.volume = std::make_unique<volume::Volume>(volume::makePhantom(volume::slabModel(p, table), p.grid, table));
-    w.field = fieldWithWorkloadBeta(*w.volume);
+    Workload w = phantomWorkload("slab", volume::slabModel(p, volume::TissueTable::builtin()), o);
     w.paths = makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), o, rng, o.spacingMm);
     // physics.md §7 R1 closed form, depth from the surface y = 0; β as the grid stores it (float).
     w.pcReference = [](const Segment& s) {
@@ -123,14 +130,7 @@ Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
 
 Workload torsoWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
 {
-    Workload w;
-    w.name = "torso";
-    w.voxelMm = o.spacingMm;
-    volume::TorsoParams p;
-    p.grid.spacing = Vec3d::Constant(o.spacingMm);
-    const auto& table = volume::TissueTable::builtin();
-    w.volume = std::make_unique<volume::Volume>(volume::makePhantom(volume::torsoModel(p, table), p.grid, table));
-    w.field = fieldWithWorkloadBeta(*w.volume);
+    Workload w = phantomWorkload("torso", volume::torsoModel(volume::TorsoParams{}, volume::TissueTable::builtin()), o);
     // From the posterior skin 40 mm left of the midline, inward and tilted.
     w.paths = makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), o, rng, 10.0);
     auto exact = std::shared_ptr<haptic::ShaftIntegrator>(haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));

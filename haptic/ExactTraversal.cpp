@@ -5,9 +5,7 @@
 
 #include "haptic/ExactTraversal.h"
 
-#include "haptic/detail/FieldGrids.h"
-#include "haptic/detail/LeafReader.h"
-#include "haptic/detail/Traversal.h"
+#include "haptic/detail/FieldReaders.h"
 #include "volume/Errors.h"
 
 #include <optional>
@@ -16,72 +14,49 @@ namespace voxhap::haptic {
 
 namespace {
 
-using detail::FloatGrid;
+using detail::FieldReaders;
 using detail::IndexSegment;
-using detail::LabelGrid;
-using FloatReader = detail::LeafReader<FloatGrid::TreeType>;
-using LabelReader = detail::LeafReader<LabelGrid::TreeType>;
 
-/// Grids, readers and boxes shared by both exact strategies.
-struct Sources {
-    Sources(const MaterialField& field, bool trackLabels)
-        : beta(detail::dampingGrid(field)), labels(trackLabels ? detail::labelGrid(field) : nullptr)
+/// Readers plus the boxes both exact strategies clip to.
+struct Sources : FieldReaders {
+    Sources(const MaterialField& field, bool trackLabels, bool needDamping)
+        : FieldReaders(field, trackLabels, needDamping, "shaft integration")
     {
-        if (!beta && !labels) throw ValueError("shaft integration: the material field has neither damping nor labels");
-        const openvdb::GridBase& ref = beta ? static_cast<const openvdb::GridBase&>(*beta) : *labels;
-        xform = ref.transformPtr();
-        if (beta) {
-            betaReader.emplace(beta->tree());
-            detail::activeBox(*beta, 0.0, voxelLo, voxelHi);
-            detail::activeBox(*beta, 0.5, cellLo, cellHi); // the trilinear field reaches one voxel further
-            cellLo -= openvdb::Vec3d(0.5); // back to the unshifted frame of trilinear cells
+        box(0.0, voxelLo, voxelHi);
+        if (beta) { // trilinear cells, unshifted: the field reaches one voxel past the active ones
+            detail::activeBox(*beta, 0.5, cellLo, cellHi);
+            cellLo -= openvdb::Vec3d(0.5);
             cellHi -= openvdb::Vec3d(0.5);
         }
-        if (labels) {
-            labelReader.emplace(labels->tree());
-            openvdb::Vec3d lo, hi;
-            detail::activeBox(*labels, 0.0, lo, hi);
-            voxelLo = beta ? openvdb::math::minComponent(voxelLo, lo) : lo;
-            voxelHi = beta ? openvdb::math::maxComponent(voxelHi, hi) : hi;
-        }
     }
-    Sources(const Sources& o)
-        : beta(o.beta), labels(o.labels), xform(o.xform), voxelLo(o.voxelLo), voxelHi(o.voxelHi), cellLo(o.cellLo),
-          cellHi(o.cellHi)
-    {
-        if (o.betaReader) betaReader.emplace(*o.betaReader);
-        if (o.labelReader) labelReader.emplace(*o.labelReader);
-    }
-
-    FloatGrid::ConstPtr beta;
-    LabelGrid::ConstPtr labels;
-    openvdb::math::Transform::ConstPtr xform;
     openvdb::Vec3d voxelLo{1.0}, voxelHi{-1.0}; // voxel cells, shifted (+0.5) frame
     openvdb::Vec3d cellLo{1.0}, cellHi{-1.0};   // trilinear cells, unshifted frame
-    std::optional<FloatReader> betaReader;
-    std::optional<LabelReader> labelReader;
 };
+
+/// Shared start of integrate(): reset, length, validity.
+inline bool begin(const Sources& src, const Segment& seg, double shift, IndexSegment& s, ShaftIntegral& out) noexcept
+{
+    out.reset();
+    s = detail::toIndex(*src.xform, seg, shift);
+    out.lengthMm = s.lengthMm;
+    out.labelsValid = src.labelReader.has_value();
+    return s.valid;
+}
 
 /// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally.
 void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out) noexcept
 {
-    FloatReader* beta = wantBeta && src.betaReader ? &*src.betaReader : nullptr;
-    LabelReader* labels = src.labelReader ? &*src.labelReader : nullptr;
-    detail::chordPass(s, src.voxelLo, src.voxelHi, beta, labels, out);
+    detail::chordPass(s, src.voxelLo, src.voxelHi, wantBeta ? src.betaPtr() : nullptr, src.labelPtr(), out);
 }
 
 class ExactVoxel final : public ShaftIntegrator {
 public:
-    ExactVoxel(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels) {}
+    ExactVoxel(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, false) {}
 
     void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
     {
-        out.reset();
-        const IndexSegment s = detail::toIndex(*mSrc.xform, seg, 0.5);
-        out.lengthMm = s.lengthMm;
-        out.labelsValid = mSrc.labelReader.has_value();
-        if (!s.valid) return;
-        voxelPass(mSrc, s, true, out);
+        IndexSegment s;
+        if (begin(mSrc, seg, 0.5, s, out)) voxelPass(mSrc, s, true, out);
     }
     std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactVoxel>(*this); }
     std::string name() const override { return "exact-voxel"; }
@@ -92,18 +67,12 @@ private:
 
 class ExactTrilinear final : public ShaftIntegrator {
 public:
-    ExactTrilinear(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels)
-    {
-        if (!mSrc.beta) throw ValueError("shaft integration: the trilinear strategy needs a damping grid");
-    }
+    ExactTrilinear(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, true) {}
 
     void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
     {
-        out.reset();
-        const IndexSegment cells = detail::toIndex(*mSrc.xform, seg, 0.0);
-        out.lengthMm = cells.lengthMm;
-        out.labelsValid = mSrc.labelReader.has_value();
-        if (!cells.valid) return;
+        IndexSegment cells;
+        if (!begin(mSrc, seg, 0.0, cells, out)) return;
         if (mSrc.labelReader) voxelPass(mSrc, detail::toIndex(*mSrc.xform, seg, 0.5), false, out);
 
         double t0 = 0.0, t1 = 0.0;
@@ -111,7 +80,7 @@ public:
         // Along a chord the trilinear field is a cubic in t; two-point Gauss–Legendre
         // quadrature is exact for cubics, so each cell's integral is exact.
         constexpr double kGauss = 0.57735026918962576451; // 1/sqrt(3)
-        FloatReader& r = *mSrc.betaReader;
+        detail::FloatReader& r = *mSrc.betaReader;
         double sum = 0.0;
         const auto cell = [&](const openvdb::Coord& c, double ta, double tb) {
             double corner[8];

@@ -5,9 +5,7 @@
 
 #include "haptic/TrajectoryProfile.h"
 
-#include "haptic/detail/FieldGrids.h"
-#include "haptic/detail/LeafReader.h"
-#include "haptic/detail/Traversal.h"
+#include "haptic/detail/FieldReaders.h"
 #include "volume/Errors.h"
 
 #include <optional>
@@ -20,19 +18,9 @@ using detail::LabelGrid;
 
 struct TrajectoryProfile::Impl {
     Impl(const MaterialField& field, double tolerance, double maxLength, bool trackLabels)
-        : beta(detail::dampingGrid(field)), labels(trackLabels ? detail::labelGrid(field) : nullptr)
+        : src(field, trackLabels, true, "trajectory profile"), labels(src.labels != nullptr), xform(src.xform)
     {
-        if (!beta) throw ValueError("trajectory profile: the material field has no damping grid");
-        xform = beta->transformPtr();
-        betaReader.emplace(beta->tree());
-        if (labels) labelReader.emplace(labels->tree());
-        detail::activeBox(*beta, 0.0, lo, hi);
-        if (labels) {
-            openvdb::Vec3d l, h;
-            detail::activeBox(*labels, 0.0, l, h);
-            lo = openvdb::math::minComponent(lo, l);
-            hi = openvdb::math::maxComponent(hi, h);
-        }
+        src.box(0.0, lo, hi);
         const volume::Geometry g = volume::geometryOf(*xform);
         const double hMin = g.spacing.minCoeff();
         if (!(tolerance >= 0.0) || tolerance >= 0.5 * hMin) {
@@ -99,12 +87,12 @@ struct TrajectoryProfile::Impl {
     /// Largest |β(w) − β(v)| over the 26 neighbours w of voxel v.
     double span(const openvdb::Coord& v) noexcept
     {
-        const double centre = betaReader->get(v);
+        const double centre = src.betaReader->get(v);
         double m = 0.0;
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dz = -1; dz <= 1; ++dz) {
-                    const float w = betaReader->get(v.offsetBy(dx, dy, dz));
+                    const float w = src.betaReader->get(v.offsetBy(dx, dy, dz));
                     if (std::isfinite(w)) m = std::max(m, std::abs(double(w) - centre));
                 }
         return m;
@@ -153,9 +141,9 @@ struct TrajectoryProfile::Impl {
         if (detail::clip(s, lo, hi, t0, t1)) {
             append(0.0, t0 * maxLength, 0.0, 0, 0.0);
             detail::walkCells(s, t0, t1, [&](const openvdb::Coord& c, double ta, double tb) {
-                const float bv = betaReader->get(c);
+                const float bv = src.betaReader->get(c);
                 const double b = std::isfinite(bv) ? double(bv) : 0.0;
-                int l = labelReader ? labelReader->get(c) : 0;
+                int l = src.labelReader ? src.labelReader->get(c) : 0;
                 if (static_cast<unsigned>(l) >= static_cast<unsigned>(kMaxLabels)) l = 0;
                 const double sa = ta * maxLength, sb = tb * maxLength;
                 const double sp = span(c);
@@ -219,11 +207,9 @@ struct TrajectoryProfile::Impl {
     }
     double integralTo(double s, std::size_t k) const noexcept { return cumulative[k] + value[k] * (s - start[k]); }
 
-    FloatGrid::ConstPtr beta;
-    LabelGrid::ConstPtr labels;
+    detail::FieldReaders src;
+    bool labels;
     openvdb::math::Transform::ConstPtr xform;
-    std::optional<detail::LeafReader<FloatGrid::TreeType>> betaReader;
-    std::optional<detail::LeafReader<LabelGrid::TreeType>> labelReader;
     openvdb::Vec3d lo{1.0}, hi{-1.0};
     std::array<Vec3d, 3> worldToIndexRow;
 
@@ -295,9 +281,8 @@ void TrajectoryProfile::integrate(const Segment& s, ShaftIntegral& out) noexcept
     Impl& m = *mImpl;
     if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
         const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
-        auto* labels = m.labelReader ? &*m.labelReader : nullptr;
-        out.labelsValid = labels != nullptr;
-        detail::chordPass(direct, m.lo, m.hi, &*m.betaReader, labels, out);
+        out.labelsValid = m.labels;
+        detail::chordPass(direct, m.lo, m.hi, m.src.betaPtr(), m.src.labelPtr(), out);
         return;
     }
     if (!covers(s) && !lock(s.entry, s.tip - s.entry)) return;
