@@ -32,6 +32,7 @@ void PivotCorrection::reset() noexcept
 {
     const double h = mP.layerThicknessMm;
     for (auto& l : mLayers) l = KelvinElement(mP.kappa1NPerMm2 * h, mP.kappa2NPerMm2 * h, mP.tauS);
+    mTouched = 0;
 }
 
 double PivotCorrection::update(double theta, double depthMm, double period) noexcept
@@ -39,8 +40,10 @@ double PivotCorrection::update(double theta, double depthMm, double period) noex
     if (!std::isfinite(theta) || !std::isfinite(depthMm) || !(mP.hubDistanceMm > 0.0)) return 0.0;
     const double h = mP.layerThicknessMm;
     const int n = std::clamp(int(std::ceil(std::max(depthMm, 0.0) / h)), 0, kMaxLayers);
+    mTouched = std::max(mTouched, n);
     double torque = 0.0;
-    for (int i = 0; i < kMaxLayers; ++i) {
+    // Layers never reached have F = 0 and x = 0 and would stay so: only the touched ones step.
+    for (int i = 0; i < mTouched; ++i) {
         const double r = (double(i) + 0.5) * h;            // depth of layer i below the pivot
         const double x = i < n ? r * theta : 0.0;           // x_i ≈ r_i·θ; layers not reached relax to 0
         torque += mLayers[std::size_t(i)].step(x, period) * r;

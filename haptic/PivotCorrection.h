@@ -53,6 +53,7 @@ public:
 private:
     PivotParams mP;
     std::array<KelvinElement, kMaxLayers> mLayers;
+    int mTouched = 0; ///< layers ever reached: deeper ones hold zero state and are skipped
 };
 
 } // namespace voxhap::haptic

@@ -31,8 +31,9 @@ TEST(T1DampingLaw, ReproducesTheFittedFatAndMuscleValues)
         // §5.4: beta_fat = 3696, beta_muscle = 8152 N·s/m² = 3696e-6, 8152e-6 N·s/mm².
         EXPECT_NEAR(law.dampingNsPerMm2(fatT1), 3696e-6, kFitRounding * 3696e-6);
         EXPECT_NEAR(law.dampingNsPerMm2(muscleT1), 8152e-6, kFitRounding * 8152e-6);
-        // Ratio 4.354/1.974 = 2.206, the [C-ui] puncture-force ratio the fit targets.
-        EXPECT_NEAR(law.dampingNsPerMm2(muscleT1) / law.dampingNsPerMm2(fatT1), 4.354 / 1.974, 2e-3);
+        // Ratio 4.354/1.974 = 2.206, the [C-ui] puncture-force ratio the fit targets; the
+        // ratio of two values each off by kFitRounding is off by at most twice that.
+        EXPECT_NEAR(law.dampingNsPerMm2(muscleT1) / law.dampingNsPerMm2(fatT1), 4.354 / 1.974, 2.0 * kFitRounding * 2.206);
     }
 }
 
