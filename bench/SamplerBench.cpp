@@ -5,6 +5,7 @@
 #include "bench/SamplerBench.h"
 
 #include "bench/DenseField.h"
+#include "bench/Gnuplot.h"
 #include "bench/VtkProbe.h"
 #include "haptic/ShaftIntegration.h"
 #include "haptic/TrajectoryProfile.h"
@@ -25,7 +26,6 @@
 #include <random>
 #include <sstream>
 #include <thread>
-#include <unistd.h> // for getpid: a per-process temporary directory
 
 namespace voxhap::bench {
 
@@ -415,13 +415,9 @@ nlohmann::json samplerReportJson(const SamplerReport& r)
 
 bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why)
 {
-    namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("voxhap-plot-" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    std::ofstream script(dir / "plot.gp");
-    script << "set terminal pngcairo size 1200,800 font ',10'\n"
-           << "set output '" << pngFile << ".tmp'\n"
-           << "set logscale xy\nset grid\nset key outside right\n"
+    const PlotDir dir;
+    std::ostringstream script;
+    script << "set logscale xy\nset grid\nset key outside right\n"
            << "set xlabel 'max force error at " << r.options.speedMmPerS
            << " mm/s against the reference of its reading [N] (0 drawn at 1e-12)'\n"
            << "set ylabel 'median time per evaluation [ns]'\n"
@@ -430,33 +426,19 @@ bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::
     std::map<std::string, int> index;
     for (const auto& row : r.rows) {
         if (row.reading == "build") continue; // a build cost, not an evaluation
-        std::ofstream data(dir / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
+        std::ofstream data(dir.path() / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
         // Each configuration against the reference of the reading it approximates.
         const double err = row.reading == "trilinear" ? row.errTriMaxN : row.errMaxN;
         data << std::max(err, 1e-12) << ' ' << row.nsMedian << " \"" << row.config << "\"\n";
         index[row.workload] = 1;
     }
     for (const auto& [workload, unused] : index) {
-        const std::string file = (dir / (workload + ".dat")).string();
+        const std::string file = (dir.path() / (workload + ".dat")).string();
         plot += "'" + file + "' using 1:2 with points pt 7 ps 1.5 title '" + workload + "', '" + file +
                 "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
     }
     script << plot.substr(0, plot.size() - 2) << '\n';
-    script.close();
-    const std::string cmd = "gnuplot '" + (dir / "plot.gp").string() + "' 2>'" + (dir / "err.txt").string() + "'";
-    const int rc = std::system(cmd.c_str());
-    bool ok = rc == 0 && fs::exists(pngFile + ".tmp");
-    if (ok) {
-        fs::rename(pngFile + ".tmp", pngFile);
-    } else {
-        std::ifstream err(dir / "err.txt");
-        std::getline(err, why);
-        why = "gnuplot failed" + (why.empty() ? std::string(" (is gnuplot-nox installed?)") : ": " + why);
-        std::error_code ignored;
-        fs::remove(pngFile + ".tmp", ignored);
-    }
-    fs::remove_all(dir);
-    return ok;
+    return runGnuplot(dir, script.str(), pngFile, 1200, 800, why);
 }
 
 } // namespace voxhap::bench

@@ -57,5 +57,6 @@ Action registerPhantom(CLI::App& app);
 Action registerInfo(CLI::App& app);
 Action registerDemo(CLI::App& app);
 Action registerBench(CLI::App& app);
+Action registerSimulate(CLI::App& app);
 
 } // namespace voxhap::tools

@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CmdSimulate.cpp
+/// @brief `voxhap simulate`: a constant-speed or scripted insertion through a
+/// scene's force model → CSV, force–depth PNG and a summary.
+
+#include "tools/Cli.h"
+#include "tools/ForcePlot.h"
+
+#include "haptic/Insertion.h"
+#include "haptic/Scene.h"
+#include "volume/Errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace voxhap::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SimulateOptions {
+    CommonOptions common;
+    std::string input;       ///< .vdb file or phantom name, optional
+    std::string scene;
+    std::string entry, target, script, out = "voxhap-simulate";
+    double speed = 0, depth = 0, rate = 0;
+    bool noPlot = false;
+};
+
+/// "lumbar", "lumbar:overweight", "torso", or a .vdb file.
+haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSource& scene)
+{
+    haptic::VolumeSource s;
+    s.spacingMm = scene.spacingMm;
+    const auto colon = input.find(':');
+    const std::string kind = input.substr(0, colon);
+    if (kind == "lumbar" || kind == "torso") {
+        s.phantom = kind;
+        if (colon != std::string::npos) s.preset = input.substr(colon + 1);
+        return s;
+    }
+    if (!fs::exists(input)) throw IoError(input + ": no such volume file (or phantom: lumbar[:preset], torso)");
+    s.file = input;
+    return s;
+}
+
+nlohmann::json summaryJson(const haptic::InsertionResult& r, const haptic::Scene& scene, const std::string& csv,
+                           const std::string& png)
+{
+    const haptic::InsertionSummary& s = r.summary;
+    const auto depth = [](double d) { return std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr); };
+    nlohmann::json events = nlohmann::json::array();
+    for (const haptic::Event& e : r.events) {
+        events.push_back({{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
+    }
+    return {{"scene", scene.name},
+            {"skin_puncture_mm", depth(s.skinEntryMm)},
+            {"pops", s.pops},
+            {"loss_of_resistance_mm", depth(s.lorMm)},
+            {"dura_puncture_mm", depth(s.duraMm)},
+            {"bone_contact_mm", depth(s.boneMm)},
+            {"critical_breach_mm", depth(s.breachMm)},
+            {"peak_model_force_N", s.peakModelN},
+            {"peak_rendered_force_N", s.peakRenderedN},
+            {"peak_plunger_force_N", s.peakPlungerN},
+            {"faults", s.faults},
+            {"final_depth_mm", s.finalDepthMm},
+            {"duration_s", s.durationS},
+            {"events", events},
+            {"csv", csv},
+            {"png", png}};
+}
+
+int run(const SimulateOptions& o, const CLI::App& cmd)
+{
+    const volume::TissueTable& table = tissueTable(o.common);
+    const haptic::Scene scene = haptic::loadScene(o.scene);
+    std::optional<Vec3d> entry, target;
+    if (!o.entry.empty()) entry = parseVec3(o.entry, "--entry");
+    if (!o.target.empty()) target = parseVec3(o.target, "--target");
+    if (cmd.count("--script") && (cmd.count("--speed") || cmd.count("--depth"))) {
+        throw UsageError("--script gives the motion: --speed and --depth do not apply");
+    }
+    std::shared_ptr<const volume::Volume> vol;
+    if (!o.input.empty()) vol = haptic::makeSourceVolume(sourceFor(o.input, scene.volume), table);
+    const haptic::SceneInstance inst(scene, vol, table, entry, target);
+
+    const double speed = cmd.count("--speed") ? o.speed : scene.speedMmPerS;
+    const double rate = cmd.count("--rate") ? o.rate : scene.rateHz;
+    const double pathLength = (inst.target() - inst.entry()).norm();
+    const double depth = cmd.count("--depth") ? o.depth : scene.depthMm.value_or(pathLength);
+    const haptic::InsertionScript script = o.script.empty()
+                                               ? haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed)
+                                               : haptic::InsertionScript::load(o.script);
+    if (script.duration() * rate > 5e7) throw UsageError("--rate and the insertion give more than 5e7 ticks");
+
+    auto model = inst.makeModel();
+    const haptic::InsertionResult r = haptic::runInsertion(*model, script, rate);
+
+    fs::create_directories(o.out);
+    const std::string csv = (fs::path(o.out) / "insertion.csv").string();
+    const std::string png = (fs::path(o.out) / "force-depth.png").string();
+    const std::string json = (fs::path(o.out) / "summary.json").string();
+    haptic::writeInsertionCsv(r, inst.layers(), csv);
+    std::string why;
+    const bool plotted = !o.noPlot && plotForceDepth(r, inst.layers(), scene.name + ": " + scene.description, png, why);
+    const nlohmann::json summary = summaryJson(r, scene, csv, plotted ? png : "");
+    {
+        std::ofstream f(json + ".part");
+        f << summary.dump(2) << '\n';
+        if (!f.flush()) throw IoError(json + ": write failed");
+    }
+    fs::rename(json + ".part", json);
+
+    if (o.common.json) {
+        std::cout << summary.dump(2) << '\n';
+    } else {
+        std::cout << "voxhap simulate: " << scene.name << " (" << haptic::layerModelName(scene.recipe.model) << ", "
+                  << (scene.fixedTable ? "the paper's layer table" : "layers from the labels on the path") << ")\n"
+                  << "  path " << inst.entry().transpose() << " -> " << inst.target().transpose() << " mm, "
+                  << (o.script.empty() ? std::to_string(speed) + " mm/s" : "scripted") << ", " << rate << " Hz, device "
+                  << scene.device.name << "\n\n"
+                  << haptic::insertionSummaryText(r, inst.layers()) << "\noutputs:\n  " << csv << "\n  " << json << '\n';
+        if (plotted) std::cout << "  " << png << '\n';
+    }
+    if (!plotted && !o.noPlot) std::cerr << "voxhap simulate: no plot: " << why << '\n';
+    return 0;
+}
+
+} // namespace
+
+Action registerSimulate(CLI::App& app)
+{
+    auto o = std::make_shared<SimulateOptions>();
+    std::string names;
+    for (const auto& n : haptic::builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
+    CLI::App* cmd = app.add_subcommand(
+        "simulate", "Insert a needle through a scene's force model: CSV, force-depth PNG and a summary");
+    cmd->add_option("volume", o->input,
+                    "A .vdb volume, or a phantom: lumbar[:average|overweight|calcified], torso (default: the scene's)");
+    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name (" + names + ")")->required();
+    cmd->add_option("--entry", o->entry, "Entry point on the skin x,y,z [mm, LPS] (default: the scene's)");
+    cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS] (default: the scene's)");
+    cmd->add_option("--speed", o->speed, "Constant insertion speed [mm/s] (default: the scene's)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--depth", o->depth, "Insert this far past the entry [mm] (default: to the target)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--script", o->script, "Scripted motion: a CSV of t_s,depth_mm rows (depth past the entry)");
+    cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
+    cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-simulate)");
+    cmd->add_flag("--no-plot", o->noPlot, "Skip the PNG");
+    addCommonOptions(*cmd, o->common);
+    return [o, cmd] { return run(*o, *cmd); };
+}
+
+} // namespace voxhap::tools
