@@ -10,6 +10,12 @@
 
 namespace voxhap::haptic {
 
+namespace {
+/// Depths are sums of layer thicknesses and tick steps: a puncture depth reached to
+/// within this counts as reached, so that round-off never defers a pop by a tick.
+constexpr double kDepthToleranceMm = 1e-9;
+} // namespace
+
 const char* layerStateName(LayerState s)
 {
     switch (s) {
@@ -126,11 +132,15 @@ void InsertionState::update(double d, double t, double shaftLengthMm, EventBuffe
         }
         if (s == LayerState::Tenting) {
             const double z = d - mOrigin[std::size_t(i)];
-            if (l.elasticForceN(z) >= l.punctureForceN || z >= l.punctureDepthMm) {
+            if (l.elasticForceN(z) >= l.punctureForceN || z >= l.punctureDepthMm - kDepthToleranceMm) {
                 pop(i, d, z, t, ev);
             } else {
                 tip.pushLayer = i;
                 tip.pushMm = z;
+                // The pushed span counts as shaft in the layer: [LP]'s per-layer tip force
+                // is read as the tip inside it (Sénac and Conci layers have no b).
+                const double lo = std::max(mOrigin[std::size_t(i)], shaftStart);
+                if (d > lo) tip.viscousNsPerMm += l.viscousNsPerMm2 * (d - lo);
                 break;
             }
         }

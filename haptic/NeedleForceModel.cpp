@@ -102,8 +102,10 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     mState.update(d, t, mNeedle.lengthMm, out.events);
     const TipState& tip = mState.tip();
     const auto& layers = mState.layers();
+    bool popped = false;
     for (const Event& e : out.events) {
         if (e.type == EventType::Withdrawn) mProxy.reset(), mPivot.reset(), mLor.reset();
+        popped = popped || e.type == EventType::Pop;
     }
 
     if (mIntegrator && (mTerms.damping.on || mTerms.critical)) mIntegrator->integrate(Segment{hub, in.tip}, mIntegral);
@@ -113,12 +115,12 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     double threshold = 0.0; // Coulomb-type terms: the proxy's slip force (§6.2)
     if (mTerms.tip && tip.pushLayer >= 0) f.elastic = layers[std::size_t(tip.pushLayer)].elasticForceN(tip.pushMm);
     const int current = tip.currentLayer();
-    if (mTerms.cutting && tip.inBody) {
+    if (mTerms.cutting && current >= 0) {
         threshold += tip.cuttingSumN;                                       // §2.1 Eq. 3, nested boxes
         if (tip.pushLayer < 0 && tip.inLayer >= 0) threshold += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm); // §3.1
         if (current >= 0 && std::abs(v) >= mTerms.karnoppDeltaVMmPerS) threshold += layers[std::size_t(current)].coulombN; // §4 Eq. 3
     }
-    if (mTerms.viscous && tip.inBody) f.viscous = tip.viscousNsPerMm * v; // §4 Eq. 3: Σ b_i·l_i·v
+    if (mTerms.viscous && current >= 0) f.viscous = tip.viscousNsPerMm * v; // §4 Eq. 3: Σ b_i·l_i·v
     if (mTerms.damping.on && v > 0.0) {
         // §1.2 Eq. 5 (advancing only), chord-weighted; the damping the device can
         // render is rendered as damping, the rest as friction at the reference speed
@@ -128,7 +130,8 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         f.damping = std::min(rendered * v, mTerms.damping.capN);
         threshold += std::clamp((b - rendered) * mTerms.damping.referenceSpeedMmPerS, 0.0, mTerms.damping.capN - f.damping);
     }
-    if (tip.inBody) f.proxy = mProxy.update(d, threshold);
+    if (popped && v > 0.0) mProxy.preload(d, threshold); // the drop at a pop is exact (§3.1 T_f)
+    if (current >= 0) f.proxy = mProxy.update(d, threshold);
     else mProxy.reset();
     if (mTerms.keepDirectionN > 0.0 && v <= 0.0 && tip.inBody) f.keepDirection = -mTerms.keepDirectionN * mLastDirection;
 

@@ -28,6 +28,14 @@ public:
         else if (f < -t) mProxy = d + t / mK, f = -t; // slip backward
         return f;
     }
+    /// @brief Start sliding forward at @p thresholdN: at a pop the tissue gives way and
+    /// the needle is already moving, so kinetic friction applies at once (no stick phase).
+    void preload(double d, double thresholdN) noexcept
+    {
+        if (!std::isfinite(d) || !std::isfinite(thresholdN)) return;
+        mProxy = d - std::max(0.0, thresholdN) / mK;
+        mEngaged = true;
+    }
     void reset() noexcept { mEngaged = false; }
     double proxy() const noexcept { return mProxy; }
     double coupling() const noexcept { return mK; }
