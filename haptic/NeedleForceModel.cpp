@@ -71,6 +71,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
 {
     out.events.clear();
     out.terms = ForceBreakdown{};
+    out.fault = out.critical = false;
     const double t = std::isfinite(in.timeS) ? in.timeS : mLastTimeS;
     const double dt = std::isfinite(in.dtS) && in.dtS > 0.0 ? std::min(in.dtS, mSafety.params().maxDtS) : 0.0;
     const double dirNorm = in.direction.norm();

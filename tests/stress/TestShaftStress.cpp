@@ -6,6 +6,7 @@
 
 #include "common/Phantom.h"
 #include "common/Tolerances.h"
+#include "stress/AllocationCounter.h"
 
 #include "haptic/ShaftIntegration.h"
 #include "haptic/TrajectoryProfile.h"
@@ -18,22 +19,6 @@
 #include <numeric>
 #include <random>
 
-// Count every allocation in this test program, so that a test can assert none happens.
-namespace {
-std::atomic<long> gAllocations{0};
-}
-void* operator new(std::size_t n)
-{
-    ++gAllocations;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-// GCC cannot see that these replace the global pair, and warns at inlined call sites.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
 
 namespace voxhap::haptic {
 namespace {
@@ -239,12 +224,12 @@ TEST_F(Stress, IntegrationNeverAllocates)
     for (Strategy st : kAll) integrators.push_back(make(st));
     ShaftIntegral r;
     for (auto& integ : integrators) integ->integrate({{0.1, 1.0, 0.2}, {0.1, -15.0, 0.2}}, r); // warm up
-    const long before = gAllocations.load();
+    const long before = test::allocations();
     for (int n = 0; n < 200; ++n) {
         const double x = 0.01 * n; // moves off the profile's line: rebuilds are included
         for (auto& integ : integrators) integ->integrate({{x, 1.0, 0.2}, {0.1, -15.0 - 0.05 * n, 0.2}}, r);
     }
-    EXPECT_EQ(gAllocations.load() - before, 0);
+    EXPECT_EQ(test::allocations() - before, 0);
     auto* profile = dynamic_cast<TrajectoryProfile*>(integrators.back().get());
     ASSERT_NE(profile, nullptr);
     EXPECT_GT(profile->rebuilds(), 10u);
