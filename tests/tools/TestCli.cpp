@@ -76,7 +76,7 @@ TEST_F(Cli, HelpExplainsTheCommands)
 {
     const Result top = run("--help");
     EXPECT_EQ(top.exitCode, 0);
-    for (const char* cmd : {"phantom", "info", "demo"}) EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
+    for (const char* cmd : {"phantom", "info", "demo", "simulate"}) EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
     const Result phantom = run("phantom --help");
     EXPECT_EQ(phantom.exitCode, 0);
     for (const char* word : {"lumbar", "torso", "--preset", "--bmi", "--spacing", "--out"}) {
@@ -168,6 +168,61 @@ TEST_F(Cli, DemoWritesItsOutputsAndSaysWhere)
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(mDir / "demo-out" / "lumbar.vdb"));
     EXPECT_NE(r.out.find("demo-out/lumbar.vdb"), std::string::npos);
+}
+
+} // namespace
+
+namespace {
+
+// `voxhap simulate` on the [LP] scene: its events at the table's depths (physics.md §4:
+// skin ends at 7, dura at 35 mm of the table, which starts 5 mm out of the skin), the
+// CSV with one row per 1 kHz tick, a PNG and a JSON summary, and nothing half-written.
+TEST_F(Cli, SimulateWritesCsvPlotAndSummary)
+{
+    const Result r = run("simulate --scene lumbar-puncture --out sim");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("skin puncture       at 2.0 mm"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dura puncture       at 30.0 mm"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("bone contact        at 43.0 mm"), std::string::npos) << r.out;
+    std::ifstream csv(mDir / "sim" / "insertion.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    EXPECT_EQ(header, "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events");
+    long rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(rows, 2751); // from -5 to 49.99 mm at 20 mm/s: 2.7495 s, ticks 0..2750 (the last clamped to the end)
+    std::ifstream png(mDir / "sim" / "force-depth.png", std::ios::binary);
+    char magic[8] = {};
+    png.read(magic, 8);
+    EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+    const nlohmann::json s = nlohmann::json::parse(slurp(mDir / "sim" / "summary.json"));
+    EXPECT_NEAR(s["dura_puncture_mm"].get<double>(), 30.0, 0.02);
+    EXPECT_EQ(s["pops"].get<int>(), 3);
+    for (const auto& e : fs::directory_iterator(mDir / "sim")) EXPECT_NE(e.path().extension(), ".part") << e.path();
+}
+
+TEST_F(Cli, SimulateScriptedMotionAndBadInput)
+{
+    {
+        std::ofstream s(mDir / "script.csv");
+        s << "t_s,depth_mm\n0,-5\n1,8\n2,3\n";
+    }
+    const Result r = run("simulate --scene senac-average --script script.csv --out sim --no-plot --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json s = nlohmann::json::parse(r.out);
+    EXPECT_TRUE(s["skin_puncture_mm"].is_null()); // the derma tents to 8 mm, short of its 10 mm pop, and is released
+    EXPECT_NEAR(s["final_depth_mm"].get<double>(), 3.0, 1e-9);
+
+    {
+        std::ofstream s(mDir / "bad.csv");
+        s << "t_s,depth_mm\n0,-5\n1,eight\n";
+    }
+    expectFailure(run("simulate --scene senac-average --script bad.csv --out bad"), "bad.csv: line 3");
+    expectFailure(run("simulate --scene no-such-scene"), "no-such-scene: no such scene file or built-in scene");
+    expectUsageError(run("simulate --scene kyung --entry 1,2"), "--entry");
+    expectUsageError(run("simulate --scene kyung --script script.csv --speed 3"), "--script");
+    expectFailure(run("simulate missing.vdb --scene kyung"), "missing.vdb");
+    EXPECT_FALSE(fs::exists(mDir / "bad" / "insertion.csv"));
 }
 
 } // namespace
