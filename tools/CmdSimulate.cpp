@@ -4,13 +4,11 @@
 /// scene's force model → CSV, force–depth PNG and a summary.
 
 #include "tools/Cli.h"
-#include "tools/ForcePlot.h"
+#include "tools/SimulationOutputs.h"
 
 #include "haptic/Insertion.h"
 #include "haptic/Scene.h"
 #include "volume/Errors.h"
-
-#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -50,33 +48,6 @@ haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSou
     return s;
 }
 
-nlohmann::json summaryJson(const haptic::InsertionResult& r, const haptic::Scene& scene, const std::string& csv,
-                           const std::string& png)
-{
-    const haptic::InsertionSummary& s = r.summary;
-    const auto depth = [](double d) { return std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr); };
-    nlohmann::json events = nlohmann::json::array();
-    for (const haptic::Event& e : r.events) {
-        events.push_back({{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
-    }
-    return {{"scene", scene.name},
-            {"skin_puncture_mm", depth(s.skinEntryMm)},
-            {"pops", s.pops},
-            {"loss_of_resistance_mm", depth(s.lorMm)},
-            {"dura_puncture_mm", depth(s.duraMm)},
-            {"bone_contact_mm", depth(s.boneMm)},
-            {"critical_breach_mm", depth(s.breachMm)},
-            {"peak_model_force_N", s.peakModelN},
-            {"peak_rendered_force_N", s.peakRenderedN},
-            {"peak_plunger_force_N", s.peakPlungerN},
-            {"faults", s.faults},
-            {"final_depth_mm", s.finalDepthMm},
-            {"duration_s", s.durationS},
-            {"events", events},
-            {"csv", csv},
-            {"png", png}};
-}
-
 int run(const SimulateOptions& o, const CLI::App& cmd)
 {
     const volume::TissueTable& table = tissueTable(o.common);
@@ -103,33 +74,19 @@ int run(const SimulateOptions& o, const CLI::App& cmd)
     auto model = inst.makeModel();
     const haptic::InsertionResult r = haptic::runInsertion(*model, script, rate);
 
-    fs::create_directories(o.out);
-    const std::string csv = (fs::path(o.out) / "insertion.csv").string();
-    const std::string png = (fs::path(o.out) / "force-depth.png").string();
-    const std::string json = (fs::path(o.out) / "summary.json").string();
-    haptic::writeInsertionCsv(r, inst.layers(), csv);
-    std::string why;
-    const bool plotted = !o.noPlot && plotForceDepth(r, inst.layers(), scene.name + ": " + scene.description, png, why);
-    const nlohmann::json summary = summaryJson(r, scene, csv, plotted ? png : "");
-    {
-        std::ofstream f(json + ".part");
-        f << summary.dump(2) << '\n';
-        if (!f.flush()) throw IoError(json + ": write failed");
-    }
-    fs::rename(json + ".part", json);
-
+    const SimulationFiles files = writeSimulation(r, inst, o.out, !o.noPlot);
     if (o.common.json) {
-        std::cout << summary.dump(2) << '\n';
+        std::cout << files.summary.dump(2) << '\n';
     } else {
         std::cout << "voxhap simulate: " << scene.name << " (" << haptic::layerModelName(scene.recipe.model) << ", "
                   << (scene.fixedTable ? "the paper's layer table" : "layers from the labels on the path") << ")\n"
                   << "  path " << inst.entry().transpose() << " -> " << inst.target().transpose() << " mm, "
                   << (o.script.empty() ? std::to_string(speed) + " mm/s" : "scripted") << ", " << rate << " Hz, device "
                   << scene.device.name << "\n\n"
-                  << haptic::insertionSummaryText(r, inst.layers()) << "\noutputs:\n  " << csv << "\n  " << json << '\n';
-        if (plotted) std::cout << "  " << png << '\n';
+                  << haptic::insertionSummaryText(r, inst.layers()) << "\noutputs:\n";
+        printOutputs(std::cout, files);
     }
-    if (!plotted && !o.noPlot) std::cerr << "voxhap simulate: no plot: " << why << '\n';
+    if (!files.plotted && !o.noPlot) std::cerr << "voxhap simulate: no plot: " << files.plotWhy << '\n';
     return 0;
 }
 

@@ -168,6 +168,14 @@ TEST_F(Cli, DemoWritesItsOutputsAndSaysWhere)
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(mDir / "demo-out" / "lumbar.vdb"));
     EXPECT_NE(r.out.find("demo-out/lumbar.vdb"), std::string::npos);
+    // The [S19] average patient: loss of resistance where the epidural space begins
+    // (derma 10 + 3 + 15 + 7.4 mm = 35.4 mm, on the 0.5 mm lattice 35.5 mm), dura intact.
+    EXPECT_NE(r.out.find("loss of resistance  at 35.5 mm"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dura puncture       none"), std::string::npos) << r.out;
+    for (const char* f : {"insertion.csv", "summary.json", "force-depth.png"}) {
+        EXPECT_TRUE(fs::exists(mDir / "demo-out" / "insertion" / f)) << f;
+        EXPECT_NE(r.out.find(std::string("demo-out/insertion/") + f), std::string::npos) << f;
+    }
 }
 
 } // namespace

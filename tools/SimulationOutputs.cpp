@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file SimulationOutputs.cpp
+#include "tools/SimulationOutputs.h"
+
+#include "tools/ForcePlot.h"
+#include "volume/Errors.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace voxhap::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json summaryJson(const haptic::InsertionResult& r, const haptic::Scene& scene, const std::string& csv,
+                           const std::string& png)
+{
+    const haptic::InsertionSummary& s = r.summary;
+    const auto depth = [](double d) { return std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr); };
+    nlohmann::json events = nlohmann::json::array();
+    for (const haptic::Event& e : r.events) {
+        events.push_back({{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
+    }
+    return {{"scene", scene.name},
+            {"skin_puncture_mm", depth(s.skinEntryMm)},
+            {"pops", s.pops},
+            {"loss_of_resistance_mm", depth(s.lorMm)},
+            {"dura_puncture_mm", depth(s.duraMm)},
+            {"bone_contact_mm", depth(s.boneMm)},
+            {"critical_breach_mm", depth(s.breachMm)},
+            {"peak_model_force_N", s.peakModelN},
+            {"peak_rendered_force_N", s.peakRenderedN},
+            {"peak_plunger_force_N", s.peakPlungerN},
+            {"faults", s.faults},
+            {"final_depth_mm", s.finalDepthMm},
+            {"duration_s", s.durationS},
+            {"events", events},
+            {"csv", csv},
+            {"png", png}};
+}
+
+} // namespace
+
+SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::SceneInstance& inst,
+                                const std::string& outDir, bool plot)
+{
+    const haptic::Scene& scene = inst.scene();
+    fs::create_directories(outDir);
+    SimulationFiles f;
+    f.csv = (fs::path(outDir) / "insertion.csv").string();
+    f.json = (fs::path(outDir) / "summary.json").string();
+    const std::string png = (fs::path(outDir) / "force-depth.png").string();
+    haptic::writeInsertionCsv(r, inst.layers(), f.csv);
+    f.plotted = plot && plotForceDepth(r, inst.layers(), scene.name + ": " + scene.description, png, f.plotWhy);
+    if (f.plotted) f.png = png;
+    f.summary = summaryJson(r, scene, f.csv, f.png);
+    {
+        std::ofstream out(f.json + ".part");
+        out << f.summary.dump(2) << '\n';
+        if (!out.flush()) throw IoError(f.json + ": write failed");
+    }
+    fs::rename(f.json + ".part", f.json);
+    return f;
+}
+
+void printOutputs(std::ostream& os, const SimulationFiles& f)
+{
+    os << "  " << f.csv << "  (one row per servo tick)\n  " << f.json << "  (events and peaks)\n";
+    if (f.plotted) os << "  " << f.png << "  (force against depth, layers and events)\n";
+}
+
+} // namespace voxhap::tools
