@@ -97,13 +97,16 @@ Layer baseLayer(const volume::Tissue& t, double start, double end)
     return l;
 }
 
-/// §2.1 Eq. 3–4 with the §2.2 [chosen] a1, a2: tenting where the recipe says, cutting everywhere.
+/// §2.1 Eq. 1, 3–4 with the §2.2 [chosen] a1, a2: tenting where the recipe says, cutting
+/// everywhere, and shaft friction (Okamura's third term, which [S19] left out) as the
+/// tissue table's viscous b.
 void applySenac(Layer& l, const volume::Tissue& t, const LayerRecipe& r)
 {
     if (l.rigid || l.role == LayerRole::Air) return;
     const auto ov = r.overrides.find(t.name);
     const TissueOverride o = ov == r.overrides.end() ? TissueOverride{} : ov->second;
     l.cuttingForceN = o.cuttingForceN.value_or(value(t.cuttingForce)) * r.forceScale;
+    l.viscousNsPerMm2 = value(t.frictionViscous);
     if (std::find(r.tenting.begin(), r.tenting.end(), t.name) == r.tenting.end()) return;
     const double fp = o.punctureForceN.value_or(value(t.punctureForce)) * r.forceScale;
     const double k = o.elasticityNPerMm.value_or(value(t.elasticity));
