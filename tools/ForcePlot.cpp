@@ -34,7 +34,8 @@ bool plotForceDepth(const haptic::InsertionResult& r, const std::vector<haptic::
     for (const haptic::Layer& l : layers) {
         if (l.startMm >= maxDepth || l.role == haptic::LayerRole::Air) continue;
         const double end = std::min(l.endMm, maxDepth);
-        g << "set object " << ++n << " rect from " << l.startMm << ", graph 0 to " << end
+        ++n;
+        g << "set object " << n << " rect from " << l.startMm << ", graph 0 to " << end
           << ", graph 1 behind fillstyle solid 0.12 noborder fillcolor rgb '" << (n % 2 ? "#4a90d9" : "#d9a04a") << "'\n"
           << "set label " << n << " \"" << l.name << "\" at " << 0.5 * (l.startMm + end)
           << ", graph 0.97 right rotate by 90 font ',8' noenhanced\n";
@@ -49,7 +50,8 @@ bool plotForceDepth(const haptic::InsertionResult& r, const std::vector<haptic::
     }
     int a = 0;
     for (const auto& [depth, text] : marks) {
-        g << "set arrow " << ++a << " from " << depth << ", graph 0 to " << depth
+        ++a;
+        g << "set arrow " << a << " from " << depth << ", graph 0 to " << depth
           << ", graph 1 nohead dashtype 2 linecolor rgb '#aa0000'\n"
           << "set label " << (1000 + a) << " \"" << text << "\" at " << depth
           << ", graph 0.03 left rotate by 90 offset 0.7,0 font ',8' textcolor rgb '#aa0000' noenhanced\n";

@@ -141,7 +141,9 @@ TEST(InsertionR3, ConciProfileAndExactDrop)
     double before = 0.0, after = 0.0;
     drive(m, 0.0, 45.0, 10.0, 1000.0, [&](double d, const NeedleOutput& o) {
         const ConciModel::Output c = reference.update(d);
-        if (o.tip.pushLayer >= 0) EXPECT_NEAR(o.axialN, c.forceN, test::kExactRelative * 20.0) << "elastic stage at " << d;
+        if (o.tip.pushLayer >= 0) {
+            EXPECT_NEAR(o.axialN, c.forceN, test::kExactRelative * 20.0) << "elastic stage at " << d;
+        }
         if (std::abs(d - 40.89) < 1e-9) before = o.axialN;
         if (std::abs(d - 40.9) < 1e-9) {
             after = o.axialN;
@@ -184,7 +186,9 @@ TEST(InsertionR4, SenacTentingAndNestedBoxes)
             EXPECT_NEAR(o.axialN, closed, 1e-12 * closed) << "tenting at " << d;
         }
         for (const auto& b : boxes) {
-            if (std::abs(d - b.depth) < 1e-9) EXPECT_NEAR(o.axialN, b.cutting, 1e-12 * b.cutting) << "box at " << d;
+            if (std::abs(d - b.depth) < 1e-9) {
+                EXPECT_NEAR(o.axialN, b.cutting, 1e-12 * b.cutting) << "box at " << d;
+            }
         }
     });
     EXPECT_TRUE(popped);

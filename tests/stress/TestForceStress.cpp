@@ -10,6 +10,8 @@
 #include "haptic/LayerTables.h"
 #include "haptic/NeedleForceModel.h"
 #include "haptic/Scene.h"
+#include "haptic/ServoLoop.h"
+#include "haptic/SimulatedDevices.h"
 #include "volume/Grids.h"
 
 #include <Eigen/Geometry> // for cross and unitOrthogonal
@@ -108,6 +110,26 @@ TEST(ForceStress, StepNeverAllocates)
     EXPECT_EQ(test::allocations() - before, 0);
 }
 
+// The servo tick: device read, model, watchdog, write, queues and statistics allocate nothing.
+TEST(ForceStress, ServoTickNeverAllocates)
+{
+    const SceneInstance& inst = instance("senac-average");
+    auto model = inst.makeModel();
+    HandParams p;
+    p.speedMmPerS = 10.0;
+    p.stopOnLor = false;
+    HandDevice hand(model->path(), p, model->device());
+    ServoLoop loop(*model, hand);
+    loop.runTicks(10); // first touches
+    const long before = test::allocations();
+    loop.runTicks(8000); // through skin, ligaments, LOR and dura
+    EXPECT_EQ(test::allocations() - before, 0);
+    Event e;
+    bool dura = false;
+    while (loop.popEvent(e)) dura = dura || e.type == EventType::DuraPuncture;
+    EXPECT_TRUE(dura); // the ticks did go through the interesting states
+}
+
 /// Work done on the hand: the force held over each tick times the device point's
 /// displacement, Σ F_n·(x_{n+1} − x_n) (zero-order hold, the sampled-data truth).
 class EnergyMeter {
@@ -182,7 +204,9 @@ TEST(Passivity, LateralCirclesAfterSkinEntry)
             const Vec3d dir = (std::cos(th) * u + std::sin(th) * (std::cos(phi) * a + std::sin(phi) * b)).normalized();
             m.move(e + 25.0 * dir, dir);
             // R7 in the pipeline: the Kelvin correction stays within [K01]'s 2 N (§1.4).
-            if (std::string(scene) == "kyung") EXPECT_LE(m.out().terms.lateral.norm(), 2.0 + 1e-12);
+            if (std::string(scene) == "kyung") {
+                EXPECT_LE(m.out().terms.lateral.norm(), 2.0 + 1e-12);
+            }
         }
         // Then sideways translations in a square, which the lock resists.
         const Vec3d c = e + 25.0 * u;

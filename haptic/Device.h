@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Device.h
+/// @brief A haptic device as the servo loop sees it (architecture.md "Devices"):
+/// read the needle pose and velocity, write a force, report limits. Simulated,
+/// replay and network devices implement it; a vendor SDK plugs in the same way.
+#pragma once
+
+#include "haptic/DeviceLimits.h"
+#include "volume/Math.h"
+
+#include <string>
+
+namespace voxhap::haptic {
+
+/// @brief One reading. @c valid is false when the device has nothing new (a quiet
+/// network stream): the servo loop's watchdog counts those.
+struct DeviceReading {
+    Vec3d tip{0, 0, 0};        ///< [mm, LPS]
+    Vec3d direction{0, 0, 1};  ///< hub to tip, unit
+    Vec3d velocity{0, 0, 0};   ///< [mm/s]
+    bool valid = false;
+};
+
+class Device {
+public:
+    virtual ~Device() = default;
+    /// @brief The pose at servo time @p timeS. Called from the servo thread: must not
+    /// block, allocate or throw.
+    virtual DeviceReading read(double timeS) noexcept = 0;
+    /// @brief The force to render until the next tick [N], and the syringe plunger's
+    /// force [N] for devices that have one. Same rules as read().
+    virtual void write(const Vec3d& forceN, double plungerN, double timeS) noexcept = 0;
+    virtual const DeviceLimits& limits() const noexcept = 0;
+    virtual std::string name() const = 0;
+    /// @brief A scripted or replayed device that has reached its end.
+    virtual bool finished() const noexcept { return false; }
+};
+
+} // namespace voxhap::haptic
