@@ -3,6 +3,7 @@
 /// @brief The insertion state machine and force pipeline against the §7
 /// regression phantoms (R2, R3, R4, R6) and the papers' layer depths.
 
+#include "common/Layers.h"
 #include "common/Tolerances.h"
 
 #include "haptic/ConciModel.h"
@@ -198,20 +199,10 @@ TEST(InsertionR4, SenacTentingAndNestedBoxes)
 // §2.1 Eq. 2 (A = 150 N·s/m, d = 40 ms, f = 100 Hz), to 1e-12; the tip then holds.
 TEST(InsertionR6, BoneTransientAndNoSliding)
 {
-    Layer fat;
-    fat.name = "fat";
-    fat.startMm = 0.0;
-    fat.endMm = 10.0;
-    Layer bone;
-    bone.name = "cortical_bone";
-    bone.role = LayerRole::Bone;
-    bone.rigid = true;
-    bone.startMm = 10.0;
-    bone.endMm = 20.0;
     ForceTerms t = layerTerms();
     DeviceLimits dev = benchDevice();
     dev.maxStiffnessNPerMm = 0.5; // contact at the device's stiffness (§1.3)
-    NeedleForceModel m({fat, bone}, kPath, t, Needle{}, dev);
+    NeedleForceModel m(test::fatOverBone(10.0), kPath, t, Needle{}, dev);
     const double v = 10.0, T = 1e-3; // mm/s, s
     long contactTick = -1;
     long tick = 0;

@@ -5,6 +5,8 @@
 /// space without puncturing the dura at a careful speed and punctures it at a
 /// reckless one; the watchdog ramps the force to zero when the device goes quiet.
 
+#include "common/Layers.h"
+
 #include "haptic/Scene.h"
 #include "haptic/ServoLoop.h"
 #include "haptic/SimulatedDevices.h"
@@ -75,23 +77,12 @@ TEST(Servo, RecklessHandPuncturesTheDura)
 // friction |f| <= 0.5 N: x = (63 ± 0.5)/3 mm.
 TEST(Servo, HandStopsAtBone)
 {
-    Layer fat;
-    fat.name = "fat";
-    fat.startMm = 0.0;
-    fat.endMm = 20.0;
-    fat.cuttingForceN = 0.5;
-    Layer bone;
-    bone.name = "cortical_bone";
-    bone.role = LayerRole::Bone;
-    bone.rigid = true;
-    bone.startMm = 20.0;
-    bone.endMm = 30.0;
     ForceTerms terms;
     terms.critical = false;
     DeviceLimits dev;
     dev.maxForceN = dev.maxContinuousForceN = 8.5;
     dev.maxStiffnessNPerMm = 2.0;
-    NeedleForceModel model({fat, bone}, NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)}, terms, Needle{}, dev);
+    NeedleForceModel model(test::fatOverBone(20.0, 0.5), NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)}, terms, Needle{}, dev);
     HandParams p;
     p.speedMmPerS = 10.0;
     p.stopOnLor = false;
