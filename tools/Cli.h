@@ -58,5 +58,6 @@ Action registerInfo(CLI::App& app);
 Action registerDemo(CLI::App& app);
 Action registerBench(CLI::App& app);
 Action registerSimulate(CLI::App& app);
+Action registerServe(CLI::App& app);
 
 } // namespace voxhap::tools

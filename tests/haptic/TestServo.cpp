@@ -9,6 +9,7 @@
 
 #include "haptic/Scene.h"
 #include "haptic/ServoLoop.h"
+#include "haptic/Session.h"
 #include "haptic/SimulatedDevices.h"
 
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <thread>
+#include <unistd.h>
 
 namespace voxhap::haptic {
 namespace {
@@ -161,6 +163,77 @@ TEST(Servo, RealTimeThreadStartsAndStops)
     long records = 0;
     while (loop.popRecord(rec)) ++records;
     EXPECT_EQ(records, loop.ticks());
+}
+
+} // namespace
+} // namespace voxhap::haptic
+
+namespace voxhap::haptic {
+namespace {
+
+Session record(ServoLoop& loop)
+{
+    Session s;
+    ServoRecord r;
+    while (loop.popRecord(r)) s.records.push_back(r);
+    Event e;
+    while (loop.popEvent(e)) s.events.push_back(e);
+    return s;
+}
+
+// A recorded session replays into the same events at the same depths: the replay
+// reads the recorded poses at the recorded tick times.
+TEST(Session, RecordWriteReadReplay)
+{
+    auto model = senac().makeModel();
+    HandParams p;
+    p.speedMmPerS = 10.0;
+    p.stopOnLor = false;
+    HandDevice hand(model->path(), p, model->device());
+    ServoLoop loop(*model, hand);
+    loop.runTicks(15000);
+    const Session original = record(loop);
+    ASSERT_EQ(original.records.size(), 15000u);
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("voxhap-session-" + std::to_string(::getpid()));
+    writeSession(original, model->layers(), dir);
+    const std::vector<ServoRecord> poses = readSessionPoses(dir / "session.csv");
+    std::filesystem::remove_all(dir);
+    ASSERT_EQ(poses.size(), original.records.size());
+    EXPECT_NEAR((poses.back().tip - original.records.back().tip).norm(), 0.0, 1e-6); // 10 significant digits written
+
+    auto again = senac().makeModel();
+    ReplayDevice replay(poses, again->device());
+    ServoLoop loop2(*again, replay);
+    loop2.runTicks(15000);
+    const Session replayed = record(loop2);
+    ASSERT_EQ(replayed.events.size(), original.events.size());
+    for (std::size_t i = 0; i < original.events.size(); ++i) {
+        EXPECT_EQ(replayed.events[i].type, original.events[i].type) << i;
+        EXPECT_NEAR(replayed.events[i].depthMm, original.events[i].depthMm, 1e-5) << i;
+    }
+    // [S19] metrics: the reckless hand punctured the dura.
+    const TraineeMetrics m = traineeMetrics(original, model->layers(), model->path().direction);
+    EXPECT_FALSE(m.success);
+    ASSERT_TRUE(m.insertionAngleDeg.has_value());
+    EXPECT_NEAR(*m.insertionAngleDeg, 0.0, 1e-9); // the hand moves along the path
+    ASSERT_TRUE(m.overshootMm.has_value());
+    EXPECT_GT(*m.overshootMm, 0.0);
+}
+
+// A constant-speed script: mean speed is the script's, variance zero (to round-off of
+// depths differenced over 1 ms ticks).
+TEST(Session, MetricsOfAConstantSpeedInsertion)
+{
+    auto model = senac().makeModel();
+    ScriptedDevice script(model->path(), InsertionScript::constantSpeed(-5.0, 30.0, 5.0), model->device());
+    ServoLoop loop(*model, script);
+    loop.runTicks(7001);
+    const TraineeMetrics m = traineeMetrics(record(loop), model->layers(), model->path().direction);
+    EXPECT_TRUE(m.success);
+    EXPECT_NEAR(m.speedMeanMmPerS, 5.0, 1e-9);
+    EXPECT_NEAR(m.speedVarianceMm2PerS2, 0.0, 1e-9);
+    EXPECT_EQ(m.boneContacts, 0);
+    EXPECT_NEAR(m.durationS, 7.0, 1e-9);
 }
 
 } // namespace

@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CmdServe.cpp
+/// @brief `voxhap serve`: the servo loop in real time against a device, with a live
+/// status line; Ctrl-C stops cleanly and writes the session and the metrics.
+
+#include "tools/Cli.h"
+
+#include "haptic/Scene.h"
+#include "haptic/ServoLoop.h"
+#include "haptic/Session.h"
+#include "haptic/SimulatedDevices.h"
+#include "volume/Errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+namespace voxhap::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+volatile std::sig_atomic_t gInterrupted = 0;
+extern "C" void onInterrupt(int) { gInterrupted = 1; }
+
+struct ServeOptions {
+    CommonOptions common;
+    std::string scene, device = "hand", out = "voxhap-serve";
+    double speed = 0, duration = 0, rate = 0;
+    bool reckless = false;
+};
+
+std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App& cmd, const haptic::NeedleForceModel& m,
+                                           const haptic::Scene& scene, double& duration)
+{
+    const double speed = cmd.count("--speed") ? o.speed : scene.speedMmPerS;
+    if (o.device == "hand") {
+        haptic::HandParams p;
+        p.speedMmPerS = speed;
+        p.startMm = -scene.approachMm;
+        p.stopOnLor = !o.reckless;
+        if (duration <= 0.0) duration = 60.0;
+        return std::make_unique<haptic::HandDevice>(m.path(), p, m.device());
+    }
+    if (o.device == "sim") {
+        const double depth = scene.depthMm.value_or(60.0);
+        return std::make_unique<haptic::ScriptedDevice>(
+            m.path(), haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed), m.device());
+    }
+    if (o.device.rfind("replay:", 0) == 0) {
+        return std::make_unique<haptic::ReplayDevice>(haptic::readSessionPoses(o.device.substr(7)), m.device());
+    }
+    throw UsageError("--device: '" + o.device + "' is not sim, hand or replay:FILE (the OpenIGTLink bridge is not built yet)");
+}
+
+std::string layerName(const haptic::NeedleForceModel& m, int i)
+{
+    return i >= 0 && i < int(m.layers().size()) ? m.layers()[std::size_t(i)].name : "outside";
+}
+
+int run(const ServeOptions& o, const CLI::App& cmd)
+{
+    const volume::TissueTable& table = tissueTable(o.common);
+    haptic::Scene scene = haptic::loadScene(o.scene);
+    if (cmd.count("--rate")) scene.rateHz = o.rate;
+    const haptic::SceneInstance inst(scene, nullptr, table);
+    auto model = inst.makeModel();
+    double duration = o.duration;
+    auto device = makeDevice(o, cmd, *model, scene, duration);
+    haptic::ServoOptions so;
+    so.rateHz = scene.rateHz;
+    haptic::ServoLoop loop(*model, *device, so);
+
+    gInterrupted = 0;
+    const auto previous = std::signal(SIGINT, onInterrupt);
+    haptic::Session session;
+    const bool live = stderrIsTerminal() && !o.common.json;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    const auto drain = [&] {
+        haptic::ServoRecord r;
+        while (loop.popRecord(r)) session.records.push_back(r);
+        haptic::Event e;
+        while (loop.popEvent(e)) session.events.push_back(e);
+    };
+    loop.start();
+    while (loop.running() && !gInterrupted && (duration <= 0.0 || elapsed() < duration)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        drain();
+        if (live) {
+            std::cerr << "\r" << std::fixed << std::setprecision(1) << elapsed() << " s  " << std::setprecision(0)
+                      << double(loop.ticks()) / std::max(elapsed(), 1e-9) << " Hz  tick p99 " << std::setprecision(1)
+                      << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us  F " << std::setprecision(2)
+                      << loop.lastForceN() << " N  " << layerName(*model, loop.lastLayer()) << "  events "
+                      << session.events.size() << "        " << std::flush;
+        }
+    }
+    loop.stop();
+    std::signal(SIGINT, previous);
+    drain();
+    if (live) std::cerr << '\n';
+    const double wall = elapsed();
+
+    haptic::writeSession(session, model->layers(), o.out);
+    const haptic::TraineeMetrics m = haptic::traineeMetrics(session, model->layers(), model->path().direction);
+    const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
+    nlohmann::json j = {{"scene", scene.name},
+                        {"device", device->name()},
+                        {"success_dura_intact", m.success},
+                        {"bone_contacts", m.boneContacts},
+                        {"pops", m.pops},
+                        {"insertion_angle_deg", opt(m.insertionAngleDeg)},
+                        {"speed_mean_mm_per_s", m.speedMeanMmPerS},
+                        {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2},
+                        {"epidural_overshoot_mm", opt(m.overshootMm)},
+                        {"syrrate_per_m", opt(m.syrrate)},
+                        {"duration_s", m.durationS},
+                        {"ticks", loop.ticks()},
+                        {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
+                        {"tick_compute_ns", {{"p50", loop.stats().computeQuantileNs(0.5)},
+                                             {"p99", loop.stats().computeQuantileNs(0.99)},
+                                             {"max", loop.maxComputeNs()}}},
+                        {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)},
+                        {"overruns", loop.overruns()},
+                        {"dropped_records", loop.droppedRecords()},
+                        {"interrupted", bool(gInterrupted)}};
+    {
+        const fs::path f = fs::path(o.out) / "metrics.json";
+        std::ofstream out(f.string() + ".part");
+        out << j.dump(2) << '\n';
+        if (!out.flush()) throw IoError(f.string() + ": write failed");
+        out.close();
+        fs::rename(f.string() + ".part", f);
+    }
+    if (o.common.json) {
+        std::cout << j.dump(2) << '\n';
+        return 0;
+    }
+    std::cout << "voxhap serve: " << scene.name << ", device " << device->name() << ", " << loop.ticks() << " ticks in "
+              << std::fixed << std::setprecision(1) << wall << " s" << (gInterrupted ? " (interrupted)" : "") << "\n"
+              << "  dura            " << (m.success ? "intact (success)" : "punctured") << "\n"
+              << "  pops            " << m.pops << ", bone contacts " << m.boneContacts << "\n"
+              << "  speed           " << std::setprecision(2) << m.speedMeanMmPerS << " mm/s mean, variance "
+              << m.speedVarianceMm2PerS2 << " mm²/s²\n";
+    if (m.overshootMm) std::cout << "  epidural travel " << *m.overshootMm << " mm\n";
+    std::cout << "  tick compute    p50 " << std::setprecision(1) << loop.stats().computeQuantileNs(0.5) * 1e-3
+              << " us, p99 " << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us, overruns " << loop.overruns() << "\n"
+              << "\noutputs:\n  " << (fs::path(o.out) / "session.csv").string() << "\n  "
+              << (fs::path(o.out) / "events.csv").string() << "\n  " << (fs::path(o.out) / "metrics.json").string() << '\n';
+    return 0;
+}
+
+} // namespace
+
+Action registerServe(CLI::App& app)
+{
+    auto o = std::make_shared<ServeOptions>();
+    CLI::App* cmd = app.add_subcommand("serve", "Run the haptic servo loop in real time against a device; Ctrl-C stops "
+                                                "and writes the session and trainee metrics");
+    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name")->required();
+    cmd->add_option("--device", o->device,
+                    "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion) or "
+                    "replay:FILE (a recorded session.csv)");
+    cmd->add_option("--speed", o->speed, "Hand or script speed [mm/s] (default: the scene's)")->check(CLI::PositiveNumber);
+    cmd->add_option("--duration", o->duration, "Stop after this many seconds (hand default 60)")->check(CLI::PositiveNumber);
+    cmd->add_flag("--reckless", o->reckless, "The simulated hand does not stop when it feels the loss of resistance");
+    cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
+    cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-serve)");
+    addCommonOptions(*cmd, o->common);
+    return [o, cmd] { return run(*o, *cmd); };
+}
+
+} // namespace voxhap::tools
