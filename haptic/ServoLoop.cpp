@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <sys/prctl.h>
 
 namespace voxhap::haptic {
 
@@ -122,10 +123,17 @@ void ServoLoop::loop() noexcept
     const std::int64_t t0 = nowNs();
     std::int64_t deadline = t0, last = t0;
     bool first = true;
+    const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
+    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
     while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished()) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
-        const timespec ts = toTimespec(deadline);
-        clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+        if (spin) {
+            while (nowNs() < deadline) {
+            }
+        } else {
+            const timespec ts = toTimespec(deadline);
+            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+        }
         const std::int64_t now = nowNs();
         const std::int64_t actual = now - last;
         if (!first) mStats.addPeriodError(double(std::llabs(actual - period)));

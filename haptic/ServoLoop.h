@@ -25,6 +25,9 @@ struct ServoOptions {
     /// quiet (no valid reading) this long, or when a period lasted this long [s].
     double watchdogS = 0.020;      ///< [chosen] 20 periods at 1 kHz
     double rampS = 0.050;          ///< [chosen]
+    /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
+    /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
+    double spinBelowS = 100e-6;
 };
 
 /// @brief One tick, for the session record.

@@ -5,6 +5,7 @@
 #include "tools/Cli.h"
 
 #include "bench/SamplerBench.h"
+#include "bench/ServoBench.h"
 
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@ namespace {
 
 struct BenchOptions {
     bench::SamplerBenchOptions sampler;
+    bench::ServoBenchOptions servo;
     bool quick = false;
     bool noVtk = false;
     std::string json, png;
@@ -50,6 +52,28 @@ int runSampler(BenchOptions o)
     return 0;
 }
 
+int runServo(BenchOptions o)
+{
+    if (o.quick) {
+        o.servo.seconds = 5.0;
+        o.servo.ladderSeconds = 1.0;
+    }
+    static bool tty = false;
+    tty = stderrIsTerminal();
+    const auto report = bench::runServoBench(o.servo, [](const std::string& stage) {
+        if (tty) std::cerr << "\r\033[K" << stage << std::flush;
+    });
+    if (tty) std::cerr << "\r\033[K";
+    bench::printServoReport(std::cout, report);
+    if (!o.json.empty()) {
+        const std::string tmp = o.json + ".tmp";
+        std::ofstream(tmp) << bench::servoReportJson(report).dump(2) << '\n';
+        std::filesystem::rename(tmp, o.json);
+        std::cout << "json: " << o.json << '\n';
+    }
+    return 0;
+}
+
 } // namespace
 
 Action registerBench(CLI::App& app)
@@ -71,7 +95,14 @@ Action registerBench(CLI::App& app)
     sampler->add_flag("--no-vtk", o->noVtk, "Skip the (slow) vtkProbeFilter baseline");
     sampler->add_option("--json", o->json, "Also write the table as JSON");
     sampler->add_option("--png", o->png, "Also draw time against error, log-log (needs gnuplot)");
-    return [o] { return runSampler(*o); };
+    CLI::App* servo = cmd->add_subcommand(
+        "servo", "The servo loop in real time with the simulated hand: tick compute, jitter, overruns, sustained rate");
+    servo->footer("Scenes senac-average (labels, lock, LOR) and kyung (voxel damping, pivot, bone). A 1 kHz run, then a\n"
+                  "rate ladder 1-100 kHz; periods up to 100 us are spun, not slept.");
+    servo->add_option("--seconds", o->servo.seconds, "Length of the 1 kHz run (default 30)")->check(CLI::Range(0.5, 3600.0));
+    servo->add_flag("--quick", o->quick, "5 s at 1 kHz and 1 s per ladder rate");
+    servo->add_option("--json", o->json, "Also write the figures as JSON");
+    return [o, servo] { return servo->parsed() ? runServo(*o) : runSampler(*o); };
 }
 
 } // namespace voxhap::tools

@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ServoBench.h
+/// @brief The servo-loop figures of benchmarks.md: a real-time loop with the
+/// simulated hand for N seconds (tick compute median, p99, max; period error;
+/// overruns), and the highest rate the loop sustains.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace voxhap::bench {
+
+struct ServoBenchOptions {
+    std::vector<std::string> scenes{"senac-average", "kyung"};
+    double seconds = 30.0;                     ///< the 1 kHz run
+    std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
+    double ladderSeconds = 2.0;
+};
+
+struct ServoRun {
+    std::string scene;
+    double rateHz = 0, seconds = 0, achievedHz = 0;
+    long ticks = 0, overruns = 0;
+    double computeP50Ns = 0, computeP99Ns = 0, computeMaxNs = 0;
+    double periodErrP50Ns = 0, periodErrP99Ns = 0;
+};
+
+struct ServoReport {
+    std::string machine;
+    std::vector<ServoRun> runs;     ///< the long run at 1 kHz, per scene
+    std::vector<ServoRun> ladder;   ///< per scene and rate
+    std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene
+};
+
+ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std::string&) = nullptr);
+void printServoReport(std::ostream& os, const ServoReport& r);
+nlohmann::json servoReportJson(const ServoReport& r);
+
+} // namespace voxhap::bench
