@@ -14,6 +14,15 @@ find_package(nlohmann_json CONFIG REQUIRED)    # nlohmann_json::nlohmann_json
 find_package(CLI11 CONFIG REQUIRED)            # CLI11::CLI11
 find_package(Threads REQUIRED)
 
+# OpenIGTLink 1.11 ships an old-style config without a target, and its USE_FILE adds
+# global flags that break other code (toolchain.md): wrap it in an imported target.
+find_package(OpenIGTLink REQUIRED CONFIG)
+find_library(VOXHAP_IGTL_LIBRARY NAMES OpenIGTLink HINTS ${OpenIGTLink_LIBRARY_DIRS} REQUIRED)
+add_library(voxhap_openigtlink INTERFACE IMPORTED)
+set_target_properties(voxhap_openigtlink PROPERTIES
+  INTERFACE_INCLUDE_DIRECTORIES "${OpenIGTLink_INCLUDE_DIRS}"
+  INTERFACE_LINK_LIBRARIES "${VOXHAP_IGTL_LIBRARY};Threads::Threads")
+
 if(VOXHAP_BUILD_TESTS)
   find_package(GTest REQUIRED)                 # GTest::gtest_main
   include(GoogleTest)

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "haptic/DeviceLimits.h"
+#include "haptic/Events.h"
 #include "volume/Math.h"
 
 #include <string>
@@ -19,6 +20,7 @@ struct DeviceReading {
     Vec3d direction{0, 0, 1};  ///< hub to tip, unit
     Vec3d velocity{0, 0, 0};   ///< [mm/s]
     bool valid = false;
+    bool lost = false;         ///< the link is gone: the force must be zero at once
 };
 
 class Device {
@@ -30,6 +32,8 @@ public:
     /// @brief The force to render until the next tick [N], and the syringe plunger's
     /// force [N] for devices that have one. Same rules as read().
     virtual void write(const Vec3d& forceN, double plungerN, double timeS) noexcept = 0;
+    /// @brief An insertion event, for devices that show or forward them. Same rules as read().
+    virtual void event(const Event&) noexcept {}
     virtual const DeviceLimits& limits() const noexcept = 0;
     virtual std::string name() const = 0;
     /// @brief A scripted or replayed device that has reached its end.

@@ -61,7 +61,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
         in.velocity = r.velocity;
         mModel.step(in, mOut);
         target = mOut.force;
-        for (const Event& e : mOut.events) mEvents->push(e);
+        for (const Event& e : mOut.events) mEvents->push(e), mDevice.event(e);
     } else {
         mQuietS += dt;
     }
@@ -70,7 +70,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     constexpr double kTimeTolS = 1e-9; // sums of tick periods carry round-off
     const bool stalled = mQuietS > mOpt.watchdogS + kTimeTolS || lastPeriod > mOpt.watchdogS + kTimeTolS;
     const double step = mOpt.rampS > 0.0 ? std::max(dt, lastPeriod) / mOpt.rampS : 1.0;
-    mGain = stalled ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
+    mGain = r.lost ? 0.0 : stalled ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
     mLastForceVec = target;
     const Vec3d f = mGain * target;
     mDevice.write(f, mOut.plungerN, t);

@@ -5,6 +5,7 @@
 
 #include "tools/Cli.h"
 
+#include "haptic/IgtlDevice.h"
 #include "haptic/Scene.h"
 #include "haptic/ServoLoop.h"
 #include "haptic/Session.h"
@@ -56,10 +57,25 @@ std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App
         return std::make_unique<haptic::ScriptedDevice>(
             m.path(), haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed), m.device());
     }
+    if (o.device == "igtl" || o.device.rfind("igtl:", 0) == 0) {
+        haptic::IgtlOptions io;
+        if (o.device.size() > 5) {
+            try {
+                io.port = std::stoi(o.device.substr(5));
+            } catch (const std::exception&) {
+                throw UsageError("--device: '" + o.device + "': the port must be a number");
+            }
+            if (io.port < 1 || io.port > 65535) throw UsageError("--device: port " + o.device.substr(5) + " outside 1..65535");
+        }
+        auto dev = std::make_unique<haptic::IgtlDevice>(io, m.device());
+        std::cerr << "voxhap serve: OpenIGTLink server on 127.0.0.1:" << dev->port()
+                  << " (TRANSFORM in: tip = translation, needle = z axis; SENSOR force out, in N)\n";
+        return dev;
+    }
     if (o.device.rfind("replay:", 0) == 0) {
         return std::make_unique<haptic::ReplayDevice>(haptic::readSessionPoses(o.device.substr(7)), m.device());
     }
-    throw UsageError("--device: '" + o.device + "' is not sim, hand or replay:FILE (the OpenIGTLink bridge is not built yet)");
+    throw UsageError("--device: '" + o.device + "' is not hand, sim, igtl[:PORT] or replay:FILE");
 }
 
 std::string layerName(const haptic::NeedleForceModel& m, int i)
@@ -168,8 +184,9 @@ Action registerServe(CLI::App& app)
                                                 "and writes the session and trainee metrics");
     cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name")->required();
     cmd->add_option("--device", o->device,
-                    "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion) or "
-                    "replay:FILE (a recorded session.csv)");
+                    "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion), "
+                    "igtl[:PORT] (an OpenIGTLink server on loopback, default port 18944) or replay:FILE (a recorded "
+                    "session.csv)");
     cmd->add_option("--speed", o->speed, "Hand or script speed [mm/s] (default: the scene's)")->check(CLI::PositiveNumber);
     cmd->add_option("--duration", o->duration, "Stop after this many seconds (hand default 60)")->check(CLI::PositiveNumber);
     cmd->add_flag("--reckless", o->reckless, "The simulated hand does not stop when it feels the loss of resistance");

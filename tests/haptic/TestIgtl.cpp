@@ -1,0 +1,222 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestIgtl.cpp
+/// @brief The OpenIGTLink bridge over a real loopback socket: Debian's example
+/// tracker client (built from openigtlink-examples, not written here) drives it;
+/// garbage, oversized, corrupted and truncated messages leave it alive; a lost
+/// client zeroes the force within one tick.
+
+#include "haptic/IgtlDevice.h"
+#include "haptic/Scene.h"
+#include "haptic/ServoLoop.h"
+
+#include <igtlSensorMessage.h>
+#include <igtlTransformMessage.h>
+
+#include <arpa/inet.h>
+#include <csignal>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry> // for cross and unitOrthogonal
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+#include <vector>
+
+namespace voxhap::haptic {
+namespace {
+
+IgtlOptions anyPort()
+{
+    IgtlOptions o;
+    o.port = 0;
+    return o;
+}
+
+template <typename Pred>
+bool waitFor(Pred&& p, double seconds = 5.0)
+{
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+        if (p()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return p();
+}
+
+/// A raw TCP client, so that the test can send what no library would.
+class RawClient {
+public:
+    explicit RawClient(int port)
+    {
+        mFd = ::socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(std::uint16_t(port));
+        ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+        mOk = ::connect(mFd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    }
+    ~RawClient() { close(); }
+    void close()
+    {
+        if (mFd >= 0) ::close(mFd);
+        mFd = -1;
+    }
+    bool ok() const { return mOk; }
+    void send(const void* p, std::size_t n) { (void)::send(mFd, p, n, MSG_NOSIGNAL); }
+    /// A TRANSFORM with the tip at @p tip and the needle (the tool's z axis) along @p dir;
+    /// @p corrupt flips a body byte after packing.
+    void sendPose(const Vec3d& tip, bool corrupt = false, const Vec3d& dir = Vec3d(0, 0, 1))
+    {
+        auto msg = igtl::TransformMessage::New();
+        msg->SetDeviceName("Needle");
+        igtl::Matrix4x4 m;
+        igtl::IdentityMatrix(m);
+        const Vec3d z = dir.normalized(), x = z.unitOrthogonal(), y = z.cross(x);
+        for (int i = 0; i < 3; ++i) m[i][0] = float(x[i]), m[i][1] = float(y[i]), m[i][2] = float(z[i]);
+        m[0][3] = float(tip.x()), m[1][3] = float(tip.y()), m[2][3] = float(tip.z());
+        msg->SetMatrix(m);
+        msg->Pack();
+        std::vector<unsigned char> bytes(static_cast<unsigned char*>(msg->GetPackPointer()),
+                                         static_cast<unsigned char*>(msg->GetPackPointer()) + msg->GetPackSize());
+        if (corrupt) bytes[70] ^= 0x5a;
+        send(bytes.data(), bytes.size());
+    }
+    /// The next SENSOR reply's three values [N], or false within 2 s.
+    bool readForce(double (&f)[3])
+    {
+        for (;;) {
+            unsigned char h[58];
+            if (!readExactly(h, 58)) return false;
+            auto head = igtl::MessageHeader::New();
+            head->InitPack();
+            std::memcpy(head->GetPackPointer(), h, 58);
+            head->Unpack();
+            std::vector<unsigned char> body(std::size_t(head->GetBodySizeToRead()));
+            if (!readExactly(body.data(), body.size())) return false;
+            if (std::strcmp(head->GetDeviceType(), "SENSOR") != 0) continue; // events (STRING) interleave
+            auto s = igtl::SensorMessage::New();
+            s->SetMessageHeader(head);
+            s->AllocatePack();
+            std::memcpy(s->GetPackBodyPointer(), body.data(), body.size());
+            if (!(s->Unpack(1) & igtl::MessageHeader::UNPACK_BODY) || s->GetLength() != 3) return false;
+            for (unsigned i = 0; i < 3; ++i) f[i] = s->GetValue(i);
+            return true;
+        }
+    }
+
+private:
+    bool readExactly(unsigned char* p, std::size_t n)
+    {
+        std::size_t got = 0;
+        while (got < n) {
+            pollfd q{mFd, POLLIN, 0};
+            if (::poll(&q, 1, 2000) <= 0) return false;
+            const ssize_t r = ::recv(mFd, p + got, n - got, 0);
+            if (r <= 0) return false;
+            got += std::size_t(r);
+        }
+        return true;
+    }
+    int mFd = -1;
+    bool mOk = false;
+};
+
+// Debian's TrackerClient streams TRANSFORMs at 50 fps: tip (50cosφ, 50sinφ, 50cosφ),
+// φ = 0, 0.2, ... (its GetRandomTestMatrix). The bridge receives them and answers.
+TEST(Igtl, DebianTrackerClientDrivesTheServer)
+{
+    IgtlDevice dev(anyPort(), DeviceLimits{});
+    const pid_t child = ::fork();
+    if (child == 0) {
+        ::freopen("/dev/null", "w", stdout);
+        ::execl(VOXHAP_IGTL_TRACKER_CLIENT, "TrackerClient", "127.0.0.1", std::to_string(dev.port()).c_str(), "50",
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    ASSERT_GT(child, 0);
+    const bool got = waitFor([&] { return dev.counters().poses.load() >= 5; });
+    const DeviceReading r = dev.read(0.0);
+    ::kill(child, SIGTERM);
+    ::waitpid(child, nullptr, 0);
+    ASSERT_TRUE(got) << "poses received: " << dev.counters().poses.load();
+    EXPECT_GE(dev.counters().forcesSent.load() + 0, 1);
+    EXPECT_TRUE(r.valid);
+    // The client's path: x = z = 50cosφ and x² + y² = 50² (float matrix: 1e-3 mm).
+    EXPECT_NEAR(r.tip.x(), r.tip.z(), 1e-3);
+    EXPECT_NEAR(std::hypot(r.tip.x(), r.tip.y()), 50.0, 1e-3);
+    EXPECT_NEAR(r.direction.norm(), 1.0, 1e-12);
+    EXPECT_TRUE(waitFor([&] { return !dev.connected(); }));
+    EXPECT_TRUE(dev.read(0.0).lost);
+}
+
+// Each kind of bad input: the server drops that client, stays alive, keeps its last
+// good pose, and the next client is served.
+TEST(Igtl, MalformedInputLeavesTheServerAlive)
+{
+    IgtlDevice dev(anyPort(), DeviceLimits{});
+    const Vec3d good(1.0, 2.0, 3.0);
+    {
+        RawClient c(dev.port());
+        ASSERT_TRUE(c.ok());
+        c.sendPose(good);
+        double f[3];
+        ASSERT_TRUE(c.readForce(f));
+        EXPECT_EQ(f[0], 0.0); // nothing written yet
+    }
+    std::vector<unsigned char> garbage(300);
+    for (std::size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<unsigned char>(i * 37 + 11);
+    unsigned char huge[58] = {0, 1, 'T', 'R', 'A', 'N', 'S', 'F', 'O', 'R', 'M'};
+    huge[42] = 0x00, huge[43] = 0x00, huge[44] = 0x01; // body size 2^40 bytes
+    const long rejectedBefore = dev.counters().rejected.load();
+    for (int kind = 0; kind < 4; ++kind) {
+        RawClient c(dev.port());
+        ASSERT_TRUE(c.ok());
+        ASSERT_TRUE(waitFor([&] { return dev.connected(); }));
+        if (kind == 0) c.send(garbage.data(), garbage.size());    // garbage
+        if (kind == 1) c.send(huge, sizeof huge);                  // a huge body size
+        if (kind == 2) c.sendPose(Vec3d(99.0, 99.0, 99.0), true);  // a bad CRC
+        if (kind == 3) c.send(huge, 20), c.close();                // half a header, then gone
+        EXPECT_TRUE(waitFor([&] { return !dev.connected(); })) << "kind " << kind;
+        c.close();
+        const DeviceReading r = dev.read(0.0);
+        EXPECT_EQ(r.tip, Vec3d(good)) << "kind " << kind; // no garbage pose got through
+    }
+    EXPECT_GE(dev.counters().rejected.load() - rejectedBefore, 3); // garbage, size, CRC (the half header is a hang-up)
+    RawClient again(dev.port());
+    again.sendPose(Vec3d(4.0, 5.0, 6.0));
+    double f[3];
+    EXPECT_TRUE(again.readForce(f));
+    EXPECT_TRUE(waitFor([&] { return dev.read(0.0).tip == Vec3d(4.0, 5.0, 6.0); }));
+}
+
+// In the ligament the force is large; when the client goes away the servo's next
+// tick writes zero (DeviceReading::lost → gain 0 at once).
+TEST(Igtl, DisconnectZeroesTheForceWithinOneTick)
+{
+    const SceneInstance inst(loadScene("lumbar-puncture"), nullptr, volume::TissueTable::builtin());
+    auto model = inst.makeModel();
+    IgtlDevice dev(anyPort(), model->device());
+    ServoLoop loop(*model, dev);
+    auto client = std::make_unique<RawClient>(dev.port());
+    const Vec3d e = inst.entry(), u = (inst.target() - inst.entry()).normalized();
+    for (double d = -5.0; d <= 20.0; d += 0.5) { // into the ligament along the path
+        client->sendPose(e + d * u, false, u);
+        double f[3];
+        ASSERT_TRUE(client->readForce(f));
+        loop.runTicks(1);
+    }
+    EXPECT_GT(loop.lastForceN(), 0.0);
+    client.reset();
+    ASSERT_TRUE(waitFor([&] { return !dev.connected(); }));
+    loop.runTicks(1);
+    EXPECT_EQ(loop.lastForceN(), 0.0);
+}
+
+} // namespace
+} // namespace voxhap::haptic
