@@ -3,11 +3,23 @@
 #include "bench/ServoBench.h"
 
 #include "bench/SamplerBench.h"
+#include "haptic/IgtlDevice.h"
 #include "haptic/Scene.h"
 #include "haptic/ServoLoop.h"
 #include "haptic/SimulatedDevices.h"
 
+#include <igtlTransformMessage.h>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <iomanip>
 #include <map>
 #include <memory>
@@ -57,6 +69,84 @@ ServoRun runOnce(const haptic::SceneInstance& inst, double rateHz, double second
     return r;
 }
 
+/// A loopback client sends a TRANSFORM every millisecond and waits for the SENSOR reply.
+IgtlRoundTrip igtlRoundTrip(const haptic::SceneInstance& inst, double seconds)
+{
+    auto model = inst.makeModel();
+    haptic::IgtlOptions io;
+    io.port = 0;
+    haptic::IgtlDevice dev(io, model->device());
+    haptic::ServoLoop loop(*model, dev);
+    loop.start();
+    IgtlRoundTrip out;
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(std::uint16_t(dev.port()));
+    ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+    const int one = 1;
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+        ::close(fd);
+        loop.stop();
+        return out;
+    }
+    const auto readExactly = [fd](unsigned char* p, std::size_t n) {
+        for (std::size_t got = 0; got < n;) {
+            pollfd q{fd, POLLIN, 0};
+            if (::poll(&q, 1, 100) <= 0) return false;
+            const ssize_t r = ::recv(fd, p + got, n - got, 0);
+            if (r <= 0) return false;
+            got += std::size_t(r);
+        }
+        return true;
+    };
+    auto msg = igtl::TransformMessage::New();
+    msg->SetDeviceName("Needle");
+    std::vector<double> rtt;
+    const Vec3d e = inst.entry(), u = (inst.target() - inst.entry()).normalized();
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long n = 0;; ++n) {
+        const auto due = t0 + std::chrono::microseconds(1000 * n);
+        if (std::chrono::duration<double>(due - t0).count() > seconds) break;
+        std::this_thread::sleep_until(due);
+        igtl::Matrix4x4 m;
+        igtl::IdentityMatrix(m);
+        const Vec3d tip = e + (-5.0 + 0.005 * double(n % 8000)) * u; // in and out along the path at 5 mm/s
+        m[0][3] = float(tip.x()), m[1][3] = float(tip.y()), m[2][3] = float(tip.z());
+        m[0][2] = float(u.x()), m[1][2] = float(u.y()), m[2][2] = float(u.z());
+        msg->SetMatrix(m);
+        msg->Pack();
+        const auto sent = std::chrono::steady_clock::now();
+        if (::send(fd, msg->GetPackPointer(), std::size_t(msg->GetPackSize()), MSG_NOSIGNAL) < 0) break;
+        bool got = false;
+        unsigned char h[58];
+        std::vector<unsigned char> body;
+        while (readExactly(h, 58)) {
+            std::uint64_t size = 0;
+            for (int i = 42; i < 50; ++i) size = (size << 8) | h[i];
+            body.resize(std::size_t(size));
+            if (!readExactly(body.data(), body.size())) break;
+            if (std::strncmp(reinterpret_cast<const char*>(h) + 2, "SENSOR", 12) == 0) {
+                got = true;
+                break;
+            }
+        }
+        if (got) rtt.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent).count());
+        else ++out.lost;
+    }
+    ::close(fd);
+    loop.stop();
+    out.samples = long(rtt.size());
+    if (!rtt.empty()) {
+        std::sort(rtt.begin(), rtt.end());
+        out.p50Us = rtt[rtt.size() / 2];
+        out.p99Us = rtt[std::min(rtt.size() - 1, std::size_t(0.99 * double(rtt.size())))];
+        out.maxUs = rtt.back();
+    }
+    return out;
+}
+
 } // namespace
 
 ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std::string&))
@@ -78,6 +168,10 @@ ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std
             if (r.achievedHz >= 0.99 * rate && double(r.overruns) <= 1e-3 * double(r.ticks)) best = rate;
         }
         report.sustainableHz.emplace_back(name, best);
+        if (name == o.scenes.front() && o.igtlSeconds > 0.0) {
+            if (progress) progress(name + ": OpenIGTLink round trip");
+            report.igtl = igtlRoundTrip(inst, o.igtlSeconds);
+        }
     }
     return report;
 }
@@ -105,6 +199,9 @@ void printServoReport(std::ostream& os, const ServoReport& r)
     for (const ServoRun& x : r.ladder) row(x);
     os << "\nhighest sustained rate (achieved within 1 %, overruns < 0.1 %):\n";
     for (const auto& [scene, hz] : r.sustainableHz) os << "  " << scene << ": " << std::setprecision(0) << hz << " Hz\n";
+    os << "\nOpenIGTLink pose -> force round trip on loopback at 1 kHz, servo running: " << r.igtl.samples
+       << " samples, " << r.igtl.lost << " lost; p50 " << std::setprecision(1) << r.igtl.p50Us << " us, p99 "
+       << r.igtl.p99Us << " us, max " << r.igtl.maxUs << " us\n";
 }
 
 nlohmann::json servoReportJson(const ServoReport& r)
@@ -121,6 +218,8 @@ nlohmann::json servoReportJson(const ServoReport& r)
     for (const auto& x : r.runs) j["runs"].push_back(run(x));
     for (const auto& x : r.ladder) j["ladder"].push_back(run(x));
     for (const auto& [scene, hz] : r.sustainableHz) j["sustainable_hz"][scene] = hz;
+    j["igtl_round_trip"] = {{"samples", r.igtl.samples}, {"lost", r.igtl.lost}, {"p50_us", r.igtl.p50Us},
+                            {"p99_us", r.igtl.p99Us}, {"max_us", r.igtl.maxUs}};
     return j;
 }
 

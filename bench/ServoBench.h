@@ -18,6 +18,7 @@ struct ServoBenchOptions {
     double seconds = 30.0;                     ///< the 1 kHz run
     std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
     double ladderSeconds = 2.0;
+    double igtlSeconds = 10.0;      ///< the OpenIGTLink round-trip run
 };
 
 struct ServoRun {
@@ -28,11 +29,18 @@ struct ServoRun {
     double periodErrP50Ns = 0, periodErrP99Ns = 0;
 };
 
+/// @brief OpenIGTLink pose → force round trip on loopback, the servo running.
+struct IgtlRoundTrip {
+    long samples = 0, lost = 0;
+    double p50Us = 0, p99Us = 0, maxUs = 0;
+};
+
 struct ServoReport {
     std::string machine;
     std::vector<ServoRun> runs;     ///< the long run at 1 kHz, per scene
     std::vector<ServoRun> ladder;   ///< per scene and rate
     std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene
+    IgtlRoundTrip igtl;             ///< at 1 kHz on the first scene
 };
 
 ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std::string&) = nullptr);

@@ -57,6 +57,7 @@ int runServo(BenchOptions o)
     if (o.quick) {
         o.servo.seconds = 5.0;
         o.servo.ladderSeconds = 1.0;
+        o.servo.igtlSeconds = 3.0;
     }
     static bool tty = false;
     tty = stderrIsTerminal();
