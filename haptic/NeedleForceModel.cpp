@@ -22,9 +22,10 @@ Vec3d lateralOf(const Vec3d& v, const Vec3d& u) noexcept { return v - v.dot(u) *
 
 NeedleForceModel::NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms,
                                    const Needle& needle, const DeviceLimits& device,
-                                   std::unique_ptr<ShaftIntegrator> integrator, const MaterialField* field)
+                                   std::unique_ptr<ShaftIntegrator> integrator, const MaterialField* field,
+                                   std::unique_ptr<ShaftIntegrator> locked)
     : mState(std::move(layers)), mPath(path), mTerms(terms), mNeedle(needle), mDevice(device),
-      mIntegrator(std::move(integrator)), mField(field),
+      mIntegrator(std::move(integrator)), mLocked(std::move(locked)), mField(field),
       mProxy(orDevice(terms.couplingNPerMm, device.maxStiffnessNPerMm)), mLor(terms.lor.params),
       mPivot(terms.pivot.params), mSafety(SafetyParams::fromDevice(device))
 {
@@ -109,7 +110,10 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         popped = popped || e.type == EventType::Pop;
     }
 
-    if (mIntegrator && (mTerms.damping.on || mTerms.critical)) mIntegrator->integrate(Segment{hub, in.tip}, mIntegral);
+    // After skin entry the needle is tied to its line: the profile answers in O(1) (it
+    // rebuilds itself, without allocating, if the shaft strays from the line).
+    ShaftIntegrator* integ = mLocked && mState.skinEntered() ? mLocked.get() : mIntegrator.get();
+    if (integ && (mTerms.damping.on || mTerms.critical)) integ->integrate(Segment{hub, in.tip}, mIntegral);
 
     // 3. Force terms, axial resistance positive outward.
     ForceBreakdown& f = out.terms;

@@ -98,10 +98,12 @@ public:
     /// @param integrator shaft integrator over the scene's material field, or null when
     ///        no term reads voxels (damping, or critical structures off the path)
     /// @param field the material field behind @p integrator (per-label flags), or null
+    /// @param locked an integrator used once the skin is entered and the needle is tied
+    ///        to its line (a TrajectoryProfile: O(1) per tick), or null to keep @p integrator
     /// @throw ValueError on a degenerate path
     NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms, const Needle& needle,
                      const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator = nullptr,
-                     const MaterialField* field = nullptr);
+                     const MaterialField* field = nullptr, std::unique_ptr<ShaftIntegrator> locked = nullptr);
 
     /// @brief One tick. Never allocates, locks or throws.
     void step(const NeedleInput& in, NeedleOutput& out) noexcept;
@@ -123,7 +125,7 @@ private:
     ForceTerms mTerms;
     Needle mNeedle;
     DeviceLimits mDevice;
-    std::unique_ptr<ShaftIntegrator> mIntegrator;
+    std::unique_ptr<ShaftIntegrator> mIntegrator, mLocked;
     const MaterialField* mField = nullptr;
     ShaftIntegral mIntegral;
     StickSlipProxy mProxy;

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -365,15 +366,20 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
 
 std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
 {
-    std::unique_ptr<ShaftIntegrator> integrator;
+    std::unique_ptr<ShaftIntegrator> integrator, locked;
     if (mField && (mScene.terms.damping.on || (mScene.terms.critical && mField->labels()))) {
         IntegratorOptions o;
         o.strategy = Strategy::ExactVoxel;
         o.trackLabels = mScene.terms.critical && mField->labels();
         integrator = makeIntegrator(*mField, o);
+        if (mScene.terms.damping.on) { // the profile integrates β: after skin entry (architecture.md "Shaft integration")
+            o.strategy = Strategy::Profile;
+            o.profileMaxLengthMm = std::max(o.profileMaxLengthMm, 2.0 * mScene.needle.lengthMm);
+            locked = makeIntegrator(*mField, o);
+        }
     }
     return std::make_unique<NeedleForceModel>(mLayers, NeedlePath{mEntry, mTarget - mEntry}, mScene.terms, mScene.needle,
-                                              mScene.device, std::move(integrator), mField.get());
+                                              mScene.device, std::move(integrator), mField.get(), std::move(locked));
 }
 
 } // namespace voxhap::haptic

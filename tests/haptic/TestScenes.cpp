@@ -211,3 +211,32 @@ TEST(Scenes, BadScenesNameFileAndField)
 
 } // namespace
 } // namespace voxhap::haptic
+
+namespace voxhap::haptic {
+namespace {
+
+// After skin entry the Kyung model reads damping from the trajectory profile (O(1) per
+// tick); on the locked line the profile is exact, so the force equals the one from the
+// exact voxel traversal, tick for tick (to round-off of the cumulative sums).
+TEST(Scenes, LockedProfileMatchesExactTraversal)
+{
+    const SceneInstance& inst = instance("kyung");
+    const Scene& scene = inst.scene();
+    auto withProfile = inst.makeModel();
+    IntegratorOptions o;
+    o.trackLabels = true;
+    NeedleForceModel exact(inst.layers(), withProfile->path(), scene.terms, scene.needle, scene.device,
+                           makeIntegrator(*inst.field(), o), inst.field());
+    const double depth = (inst.target() - inst.entry()).norm();
+    const InsertionScript script = InsertionScript::constantSpeed(-5.0, depth, 10.0);
+    const InsertionResult a = runInsertion(*withProfile, script, 1000.0);
+    const InsertionResult b = runInsertion(exact, script, 1000.0);
+    ASSERT_EQ(a.rows.size(), b.rows.size());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.rows.size(); ++i) worst = std::max(worst, std::abs(a.rows[i].axialN - b.rows[i].axialN));
+    EXPECT_LT(worst, 1e-9); // N: cumulative-sum round-off over ~100 mm of 0.5 mm voxels
+    EXPECT_GT(a.summary.peakModelN, 0.1); // and there was damping to compare
+}
+
+} // namespace
+} // namespace voxhap::haptic
