@@ -9,6 +9,7 @@
 #include "haptic/Events.h"
 #include "volume/Math.h"
 
+#include <limits>
 #include <string>
 
 namespace voxhap::haptic {
@@ -21,6 +22,9 @@ struct DeviceReading {
     Vec3d velocity{0, 0, 0};   ///< [mm/s]
     bool valid = false;
     bool lost = false;         ///< the link is gone: the force must be zero at once
+    /// Fraction of the loss-of-resistance syringe emptied, 0..1, for devices with a
+    /// plunger channel ([S19]'s pneumatic syringe); NaN otherwise.
+    double plungerFraction = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Device {

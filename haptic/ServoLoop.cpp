@@ -81,6 +81,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     rec.direction = r.direction;
     rec.force = f;
     rec.plungerN = mOut.plungerN;
+    rec.plungerFraction = r.plungerFraction;
     rec.depthMm = mOut.tip.depthMm;
     rec.axialN = mOut.axialN;
     rec.layer = std::int16_t(mOut.tip.currentLayer());

@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <thread>
 
@@ -35,6 +36,7 @@ struct ServoRecord {
     double timeS = 0;
     Vec3d tip{0, 0, 0}, direction{0, 0, 1}, force{0, 0, 0};
     double plungerN = 0, depthMm = 0, axialN = 0;
+    double plungerFraction = std::numeric_limits<double>::quiet_NaN(); ///< syringe emptied, 0..1 (DeviceReading)
     std::int16_t layer = -1;
     LayerState state = LayerState::Intact;
     bool fault = false, critical = false;

@@ -38,13 +38,13 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
     const auto layerName = [&](int i) { return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : ""; };
     writeAtomically(dir / "session.csv", [&](std::ostream& o) {
         o << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
-             "fault,critical\n";
+             "fault,critical,plunger_fraction\n";
         for (const ServoRecord& r : s.records) {
             o << r.timeS << ',' << r.tip.x() << ',' << r.tip.y() << ',' << r.tip.z() << ',' << r.direction.x() << ','
               << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ','
               << r.force.z() << ',' << r.plungerN << ',' << r.depthMm << ',' << r.axialN << ',' << layerName(r.layer)
               << ',' << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ','
-              << int(r.critical) << '\n';
+              << int(r.critical) << ',' << r.plungerFraction << '\n';
         }
     });
     writeAtomically(dir / "events.csv", [&](std::ostream& o) {
@@ -111,12 +111,12 @@ DeviceReading ReplayDevice::read(double t) noexcept
 TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection)
 {
     TraineeMetrics m;
-    double skinT = kNoLimit;
+    double skinT = kNoLimit, skinDepth = 0.0;
     for (const Event& e : s.events) {
         if (e.type == EventType::DuraPuncture) m.success = false;
         if (e.type == EventType::BoneContact) ++m.boneContacts;
         if (e.type == EventType::Pop) ++m.pops;
-        if (e.type == EventType::SkinEntry && !std::isfinite(skinT)) skinT = e.timeS;
+        if (e.type == EventType::SkinEntry && !std::isfinite(skinT)) skinT = e.timeS, skinDepth = e.depthMm;
     }
     const Vec3d u = pathDirection.normalized();
     double sum = 0, sum2 = 0, epidural = 0;
@@ -140,6 +140,19 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
         m.speedVarianceMm2PerS2 = std::max(0.0, sum2 / double(n) - m.speedMeanMmPerS * m.speedMeanMmPerS);
     }
     if (!s.records.empty()) m.durationS = s.records.back().timeS - s.records.front().timeS;
+    // syrrate ([S19], §2.3): syringe fraction emptied from the derma's puncture to the
+    // end, per metre travelled along the path in that time.
+    if (std::isfinite(skinT) && !s.records.empty() && std::isfinite(s.records.back().plungerFraction)) {
+        double startFraction = 0.0;
+        for (const ServoRecord& r : s.records) {
+            if (r.timeS >= skinT) {
+                startFraction = std::isfinite(r.plungerFraction) ? r.plungerFraction : 0.0;
+                break;
+            }
+        }
+        const double travelM = (s.records.back().depthMm - skinDepth) * 1e-3;
+        if (travelM > 0.0) m.syrrate = (s.records.back().plungerFraction - startFraction) / travelM;
+    }
     return m;
 }
 

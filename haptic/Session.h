@@ -20,7 +20,7 @@ struct Session {
 };
 
 /// @brief session.csv: t_s, tip_x/y/z_mm, dir_x/y/z, fx/fy/fz_N, plunger_N, depth_mm,
-/// axial_N, layer, state, fault, critical; then events.csv: t_s, depth_mm, event,
+/// axial_N, layer, state, fault, critical, plunger_fraction; then events.csv: t_s, depth_mm, event,
 /// layer. Written to temporary files, then renamed.
 void writeSession(const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
 
@@ -53,7 +53,7 @@ struct TraineeMetrics {
     double speedMeanMmPerS = 0;       ///< along the path, while advancing inside the body
     double speedVarianceMm2PerS2 = 0;
     std::optional<double> overshootMm; ///< distance travelled inside the epidural space
-    std::optional<double> syrrate;     ///< needs a plunger position: null for devices without one
+    std::optional<double> syrrate;     ///< fraction emptied per metre [1/m]; null without a plunger channel
     double durationS = 0;
 };
 

@@ -35,6 +35,7 @@ DeviceReading HandDevice::read(double) noexcept
     r.direction = mPath.direction;
     r.velocity = mV * mPath.direction;
     r.valid = true;
+    r.plungerFraction = mEmptied;
     return r;
 }
 
@@ -46,6 +47,9 @@ void HandDevice::write(const Vec3d& force, double plungerN, double t) noexcept
     // The hand feels the loss of resistance when the plunger, blocked before, gives way.
     mPeakPlunger = std::max(mPeakPlunger, std::isfinite(plungerN) ? plungerN : 0.0);
     if (mFeltAt < 0.0 && mPeakPlunger > mP.lorDropN && plungerN < mP.lorDropN) mFeltAt = t;
+    if (mPeakPlunger >= mP.thumbForceN && std::isfinite(plungerN) && mP.thumbForceN > 0.0) {
+        mEmptied = std::min(1.0, mEmptied + mP.emptyPerS * std::max(0.0, 1.0 - plungerN / mP.thumbForceN) * dt);
+    }
     if (mP.stopOnLor && mFeltAt >= 0.0 && t - mFeltAt >= mP.reactionS) mStopped = true;
     if (!mStopped) mSet = std::min(mSet + mP.speedMmPerS * dt, mP.maxDepthMm);
     // m·a = grip·(set − x) − c·v + F·u, semi-implicit Euler in 10 sub-steps (stable for

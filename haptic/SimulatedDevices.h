@@ -44,6 +44,11 @@ struct HandParams {
     bool stopOnLor = true;        ///< careful: stop after feeling the loss of resistance
     double lorDropN = 3.0;        ///< the plunger force below which the hand feels the loss [N]
     double reactionS = 0.25;
+    /// The syringe: once the plunger has been felt blocked, the thumb presses it with
+    /// this force, and it empties at emptyPerS·(1 − plunger force/thumb force) while
+    /// that is positive [chosen: a 5 N thumb empties a free syringe in 5 s].
+    double thumbForceN = 5.0;
+    double emptyPerS = 0.2;
 };
 
 class HandDevice final : public Device {
@@ -62,7 +67,7 @@ private:
     HandParams mP;
     DeviceLimits mLimits;
     double mX, mV = 0.0, mSet, mT = 0.0;
-    double mPeakPlunger = 0.0, mFeltAt = -1.0;
+    double mPeakPlunger = 0.0, mFeltAt = -1.0, mEmptied = 0.0;
     bool mStopped = false;
 };
 

@@ -238,3 +238,30 @@ TEST(Session, MetricsOfAConstantSpeedInsertion)
 
 } // namespace
 } // namespace voxhap::haptic
+
+namespace voxhap::haptic {
+namespace {
+
+// syrrate ([S19], physics.md §2.3): fraction emptied from derma puncture to the end per
+// metre travelled. Here 0.1 → 0.5 over 10 → 50 mm: 0.4 / 0.04 m = 10 m⁻¹.
+TEST(Session, SyrrateOfAKnownSession)
+{
+    Session s;
+    for (int i = 0; i <= 50; ++i) {
+        ServoRecord r;
+        r.timeS = 0.1 * i;
+        r.depthMm = double(i);
+        r.plungerFraction = 0.01 * i;
+        s.records.push_back(r);
+    }
+    s.events.push_back({EventType::SkinEntry, 1.0, 10.0, 0});
+    const TraineeMetrics m = traineeMetrics(s, {}, Vec3d(0, 0, 1));
+    ASSERT_TRUE(m.syrrate.has_value());
+    EXPECT_NEAR(*m.syrrate, 10.0, 1e-9);
+    EXPECT_NEAR(m.speedMeanMmPerS, 10.0, 1e-9);
+    for (ServoRecord& r : s.records) r.plungerFraction = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_FALSE(traineeMetrics(s, {}, Vec3d(0, 0, 1)).syrrate.has_value()); // no plunger channel
+}
+
+} // namespace
+} // namespace voxhap::haptic

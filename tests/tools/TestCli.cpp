@@ -257,3 +257,22 @@ TEST_F(Cli, ServeWritesSessionAndMetrics)
 }
 
 } // namespace
+
+namespace {
+
+// Ctrl-C stops the servo loop cleanly: exit 0, the session and metrics written, and
+// the metrics say the run was interrupted.
+TEST_F(Cli, ServeStopsCleanlyOnInterrupt)
+{
+    const std::string cmd = "cd '" + mDir.string() + "' && timeout --preserve-status -s INT 1.5 '" VOXHAP_BINARY_DIR
+                            "/bin/voxhap' serve --scene senac-average --out stopped --json > out.json 2> err.txt";
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << slurp(mDir / "err.txt");
+    const nlohmann::json m = nlohmann::json::parse(slurp(mDir / "stopped" / "metrics.json"));
+    EXPECT_TRUE(m["interrupted"].get<bool>());
+    EXPECT_TRUE(fs::exists(mDir / "stopped" / "session.csv"));
+    EXPECT_FALSE(fs::exists(mDir / "stopped" / "session.csv.part"));
+}
+
+} // namespace
