@@ -169,15 +169,17 @@ TEST(Igtl, MalformedInputLeavesTheServerAlive)
         ASSERT_TRUE(c.readForce(f));
         EXPECT_EQ(f[0], 0.0); // nothing written yet
     }
+    ASSERT_TRUE(waitFor([&] { return !dev.connected(); })); // the server has let the first client go
     std::vector<unsigned char> garbage(300);
     for (std::size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<unsigned char>(i * 37 + 11);
     unsigned char huge[58] = {0, 1, 'T', 'R', 'A', 'N', 'S', 'F', 'O', 'R', 'M'};
     huge[42] = 0x00, huge[43] = 0x00, huge[44] = 0x01; // body size 2^40 bytes
     const long rejectedBefore = dev.counters().rejected.load();
     for (int kind = 0; kind < 4; ++kind) {
+        const long connections = dev.counters().connections.load();
         RawClient c(dev.port());
         ASSERT_TRUE(c.ok());
-        ASSERT_TRUE(waitFor([&] { return dev.connected(); }));
+        ASSERT_TRUE(waitFor([&] { return dev.counters().connections.load() > connections; })); // this client, accepted
         if (kind == 0) c.send(garbage.data(), garbage.size());    // garbage
         if (kind == 1) c.send(huge, sizeof huge);                  // a huge body size
         if (kind == 2) c.sendPose(Vec3d(99.0, 99.0, 99.0), true);  // a bad CRC
