@@ -13,6 +13,12 @@ find_package(Eigen3 3.4 REQUIRED NO_MODULE)    # Eigen3::Eigen
 find_package(nlohmann_json CONFIG REQUIRED)    # nlohmann_json::nlohmann_json
 find_package(CLI11 CONFIG REQUIRED)            # CLI11::CLI11
 find_package(Threads REQUIRED)
+find_package(ZLIB REQUIRED)                    # ZLIB::ZLIB, for gzip-encoded .nrrd
+# GDCM's config prints a status block for every command-line tool it expects
+# in /usr/bin (libgdcm-tools, not needed to build): keep the log readable.
+set(CMAKE_MESSAGE_LOG_LEVEL NOTICE)
+find_package(GDCM 3.0 CONFIG REQUIRED)         # gdcmMSFF (un-namespaced; brings its includes)
+unset(CMAKE_MESSAGE_LOG_LEVEL)
 
 if(VOXHAP_BUILD_TESTS)
   find_package(GTest REQUIRED)                 # GTest::gtest_main

@@ -26,6 +26,8 @@ packages=(
   libopenimageio-dev openimageio-tools
   # DICOM
   libgdcm-dev
+  # gzip-encoded .nrrd
+  zlib1g-dev
   # device link
   libopenigtlink-dev openigtlink-examples
   # CLI, config, logs
