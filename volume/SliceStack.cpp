@@ -37,11 +37,13 @@ SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& 
         }
         steps.push_back(d);
     }
-    // The median step: a few gaps or odd steps do not move it, and jitter on
-    // one slice counts once rather than twice (as against the smallest step).
+    // The lower median step: a few gaps or odd steps do not move it, jitter on
+    // one slice counts once rather than twice (as against the smallest step),
+    // and of two steps (three slices, one gap) it takes the smaller.
     std::vector<double> sorted = steps;
-    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2), sorted.end());
-    g.step = sorted[sorted.size() / 2];
+    const std::size_t mid = (sorted.size() - 1) / 2;
+    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(mid), sorted.end());
+    g.step = sorted[mid];
 
     // Missing slices: a step that is a whole multiple (>= 2) of the median.
     // Non-uniform: any other step that differs from the median.

@@ -30,7 +30,7 @@ inline constexpr double kSlicePositionToleranceMm = 0.05;
 struct SliceStackGeometry {
     std::vector<SlicePlacement> slices; ///< ascending position along the normal
     Vec3d normal{0, 0, 1};              ///< row × column direction (unit)
-    double step = 0;                    ///< slice step along the normal [mm]: the median step
+    double step = 0;                    ///< slice step along the normal [mm]: the lower median step
     bool uniform = true;                ///< every step equals `step` within the tolerance, no tilt
     int missingSlices = 0;              ///< slices absent where the steps are whole multiples of `step`
     double tiltDeg = 0;                 ///< angle between the stack axis and the normal [deg]

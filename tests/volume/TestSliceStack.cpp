@@ -57,6 +57,15 @@ TEST(SliceStack, CountsMissingSlices)
     EXPECT_NE(g.problem.find("missing"), std::string::npos) << g.problem;
 }
 
+TEST(SliceStack, OneGapAmongThreeSlicesIsAMissingSlice)
+{
+    // Steps 2 and 4: the reference must be the smaller, or the gap reads as uneven spacing.
+    std::vector<SlicePlacement> slices{{Vec3d(0, 0, 0), 0}, {Vec3d(0, 0, 2), 1}, {Vec3d(0, 0, 6), 2}};
+    const auto g = orderSlices(slices, Vec3d::UnitZ());
+    EXPECT_NEAR(g.step, 2.0, kStepMm);
+    EXPECT_EQ(g.missingSlices, 1);
+}
+
 TEST(SliceStack, UnevenStepIsNotUniform)
 {
     auto slices = stack(5, Vec3d::Zero(), Vec3d(0, 0, 2.0));
