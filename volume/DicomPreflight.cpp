@@ -41,7 +41,7 @@ public:
         std::uint64_t groupEnd = 0;
         for (;;) {
             if (pos >= mSize) break;
-            unsigned char h[8];
+            unsigned char h[12]; // 8 bytes, 12 for the long VRs (length() reads the rest)
             read(pos, h, 8, Tag{0x0002, 0x0000});
             const Tag t{u16(h, false), u16(h + 2, false)};
             if (t.group != 0x0002) break;

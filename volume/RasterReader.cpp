@@ -39,7 +39,8 @@ struct ByteSource::Impl {
     std::vector<char> buf;
 };
 
-ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, bool compressed) : mImpl(std::make_unique<Impl>())
+ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, bool compressed, std::uint64_t skip)
+    : mImpl(std::make_unique<Impl>())
 {
     mImpl->name = file.string();
     mImpl->in.open(file, std::ios::binary);
@@ -52,6 +53,12 @@ ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, 
         if (inflateInit2(&mImpl->z, 15 + 32) != Z_OK) throw IoError(mImpl->name + ": zlib initialisation failed");
         mImpl->zOpen = true;
         mImpl->buf.resize(1 << 16);
+    }
+    std::vector<char> discard(1 << 12);
+    while (skip > 0) {
+        const std::size_t n = std::size_t(std::min<std::uint64_t>(skip, discard.size()));
+        if (read(discard.data(), n) != n) throw IoError(mImpl->name + ": data: the file ends before its data starts (truncated file)");
+        skip -= n;
     }
 }
 

@@ -32,8 +32,11 @@ struct RasterOptions {
 /// @brief A stream of bytes: a file from an offset, optionally inflated.
 class ByteSource {
 public:
+    /// @param offset     where the (possibly compressed) data starts in the file [bytes]
     /// @param compressed inflate gzip or zlib data (detected from its header)
-    ByteSource(const std::filesystem::path& file, std::uint64_t offset, bool compressed);
+    /// @param skip       bytes to discard from the start of the (inflated) stream,
+    ///                   e.g. a NIfTI header inside a .nii.gz
+    ByteSource(const std::filesystem::path& file, std::uint64_t offset, bool compressed, std::uint64_t skip = 0);
     ~ByteSource();
     ByteSource(const ByteSource&) = delete;
     ByteSource& operator=(const ByteSource&) = delete;

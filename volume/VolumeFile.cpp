@@ -5,6 +5,7 @@
 #include "volume/VolumeFile.h"
 
 #include "volume/Errors.h"
+#include "volume/NiftiFile.h"
 #include "volume/NrrdFile.h"
 #include "volume/VdbFile.h"
 
@@ -27,6 +28,11 @@ std::string lowerExtension(const std::filesystem::path& p)
 VolumeFormat formatOf(const std::filesystem::path& path)
 {
     const std::string ext = lowerExtension(path);
+    std::string name = path.filename().string();
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".nii" || ext == ".hdr" || (name.size() > 7 && name.compare(name.size() - 7, 7, ".nii.gz") == 0)) {
+        return VolumeFormat::Nifti;
+    }
     if (ext == ".vdb") return VolumeFormat::Vdb;
     if (ext == ".nrrd") return VolumeFormat::Nrrd;
     if (ext == ".dcm" || ext == ".dicom" || ext == ".ima") return VolumeFormat::Dicom;
@@ -40,6 +46,7 @@ std::string formatName(VolumeFormat f)
     case VolumeFormat::Dicom: return "dicom";
     case VolumeFormat::Vdb: return "vdb";
     case VolumeFormat::Nrrd: return "nrrd";
+    case VolumeFormat::Nifti: return "nifti";
     case VolumeFormat::Unknown: break;
     }
     return "unknown";
@@ -63,9 +70,10 @@ Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options,
     case VolumeFormat::Dicom: return loadDicom({path}, options.dicom, report);
     case VolumeFormat::Vdb: return loadVdb(path);
     case VolumeFormat::Nrrd: return loadNrrd(path, rasterOptions(options));
+    case VolumeFormat::Nifti: return loadNifti(path, rasterOptions(options));
     case VolumeFormat::Unknown: break;
     }
-    throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .vdb or .nrrd)");
+    throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd or .vdb)");
 }
 
 void saveVolume(const Volume& v, const std::filesystem::path& file)

@@ -14,9 +14,9 @@
 
 namespace voxhap::volume {
 
-enum class VolumeFormat { Dicom, Vdb, Nrrd, Unknown };
+enum class VolumeFormat { Dicom, Vdb, Nrrd, Nifti, Unknown };
 
-/// @brief The format of @p path ("dicom", "vdb", "nrrd"), from its kind, magic and extension.
+/// @brief The format of @p path, from its kind, magic and extension.
 VolumeFormat formatOf(const std::filesystem::path& path);
 std::string formatName(VolumeFormat f);
 
