@@ -5,6 +5,7 @@
 #include "volume/VolumeFile.h"
 
 #include "volume/Errors.h"
+#include "volume/MetaImageFile.h"
 #include "volume/NiftiFile.h"
 #include "volume/NrrdFile.h"
 #include "volume/VdbFile.h"
@@ -34,6 +35,7 @@ VolumeFormat formatOf(const std::filesystem::path& path)
         return VolumeFormat::Nifti;
     }
     if (ext == ".vdb") return VolumeFormat::Vdb;
+    if (ext == ".mha" || ext == ".mhd") return VolumeFormat::MetaImage;
     if (ext == ".nrrd") return VolumeFormat::Nrrd;
     if (ext == ".dcm" || ext == ".dicom" || ext == ".ima") return VolumeFormat::Dicom;
     if (std::filesystem::exists(path) && looksLikeDicom(path)) return VolumeFormat::Dicom;
@@ -47,6 +49,7 @@ std::string formatName(VolumeFormat f)
     case VolumeFormat::Vdb: return "vdb";
     case VolumeFormat::Nrrd: return "nrrd";
     case VolumeFormat::Nifti: return "nifti";
+    case VolumeFormat::MetaImage: return "metaimage";
     case VolumeFormat::Unknown: break;
     }
     return "unknown";
@@ -71,9 +74,10 @@ Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options,
     case VolumeFormat::Vdb: return loadVdb(path);
     case VolumeFormat::Nrrd: return loadNrrd(path, rasterOptions(options));
     case VolumeFormat::Nifti: return loadNifti(path, rasterOptions(options));
+    case VolumeFormat::MetaImage: return loadMetaImage(path, rasterOptions(options));
     case VolumeFormat::Unknown: break;
     }
-    throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd or .vdb)");
+    throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd, .mha, .mhd or .vdb)");
 }
 
 void saveVolume(const Volume& v, const std::filesystem::path& file)

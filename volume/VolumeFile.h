@@ -14,7 +14,7 @@
 
 namespace voxhap::volume {
 
-enum class VolumeFormat { Dicom, Vdb, Nrrd, Nifti, Unknown };
+enum class VolumeFormat { Dicom, Vdb, Nrrd, Nifti, MetaImage, Unknown };
 
 /// @brief The format of @p path, from its kind, magic and extension.
 VolumeFormat formatOf(const std::filesystem::path& path);
