@@ -194,8 +194,13 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
     for (const auto& f : expand(inputs)) {
         if (preflightDicom(f) == DicomKind::Dicom) files.push_back(f);
     }
+    // One scan reads every tag any step needs: headers are parsed once per load.
     gdcm::Scanner scanner;
-    for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kRows, kColumns, kFrames}) scanner.AddTag(t);
+    for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames,
+                          kPosition, kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding,
+                          kPixelRepresentation}) {
+        scanner.AddTag(t);
+    }
     scanner.Scan(names(files));
     std::vector<DicomHeader> out;
     for (const auto& f : files) {
@@ -205,6 +210,9 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
         if (!rows) continue; // DICOM without an image (DICOMDIR, reports)
         DicomHeader h;
         h.file = f;
+        for (const auto& [tag, value] : scanner.GetMapping(name.c_str())) {
+            if (value) h.tags[std::uint32_t(tag.GetGroup()) << 16 | tag.GetElement()] = value;
+        }
         h.seriesUid = trim(scanner.GetValue(name.c_str(), kSeriesUid));
         h.modality = trim(scanner.GetValue(name.c_str(), kModality));
         h.seriesDescription = trim(scanner.GetValue(name.c_str(), kSeriesDescription));
@@ -225,32 +233,22 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
 
 std::vector<DicomHeader> readSeriesHeaders(const std::vector<fs::path>& files)
 {
-    quietGdcm();
-    for (const auto& f : files) {
-        if (preflightDicom(f) != DicomKind::Dicom) throw IoError(f.string() + ": not a DICOM file (no DICM magic at byte 128)");
-    }
-    gdcm::Scanner scanner;
-    for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames,
-                          kPosition, kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding,
-                          kPixelRepresentation}) {
-        scanner.AddTag(t);
-    }
-    scanner.Scan(names(files));
-    std::vector<DicomHeader> out;
-    for (const auto& f : files) {
-        const std::string name = f.string();
-        if (!scanner.IsKey(name.c_str())) throw IoError(name + ": not a readable DICOM file");
-        const auto get = [&](const gdcm::Tag& t) { return scanner.GetValue(name.c_str(), t); };
-        DicomHeader h;
-        h.file = f;
-        h.seriesUid = trim(get(kSeriesUid));
-        h.modality = trim(get(kModality));
-        h.seriesDescription = trim(get(kSeriesDescription));
-        h.seriesNumber = trim(get(kSeriesNumber));
+    std::vector<DicomHeader> out = scanDicomHeaders(files);
+    if (out.size() != files.size()) throw IoError(files.front().parent_path().string() + ": not every file is a DICOM image");
+    for (DicomHeader& h : out) completeDicomHeader(h);
+    return out;
+}
+
+void completeDicomHeader(DicomHeader& h)
+{
+    const fs::path& f = h.file;
+    const std::string name = f.string();
+    const auto get = [&](const gdcm::Tag& t) -> const char* {
+        const auto it = h.tags.find(std::uint32_t(t.GetGroup()) << 16 | t.GetElement());
+        return it == h.tags.end() ? nullptr : it->second.c_str();
+    };
+    {
         h.imageType = trim(get(kImageType));
-        h.rows = positiveInt(get(kRows), f, kRows, "Rows");
-        h.columns = positiveInt(get(kColumns), f, kColumns, "Columns");
-        h.frames = trim(get(kFrames)).empty() ? 1 : positiveInt(get(kFrames), f, kFrames, "NumberOfFrames");
         h.gantryTilt = optionalNumber(get(kTilt), f, kTilt, "GantryDetectorTilt").value_or(0.0);
         h.sliceThickness = optionalNumber(get(kThickness), f, kThickness, "SliceThickness").value_or(0.0);
         h.padding = optionalNumber(get(kPadding), f, kPadding, "PixelPaddingValue");
@@ -289,9 +287,7 @@ std::vector<DicomHeader> readSeriesHeaders(const std::vector<fs::path>& files)
             throw IoError(name + ": " + tagName(kPixelSpacing, "PixelSpacing") + ": must be positive");
         }
         if (h.slope == 0) throw IoError(name + ": " + tagName(kSlope, "RescaleSlope") + ": is zero");
-        out.push_back(std::move(h));
     }
-    return out;
 }
 
 void checkSameGrid(const DicomHeader& first, const DicomHeader& h)

@@ -6,7 +6,9 @@
 
 #include "volume/Math.h"
 
+#include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +28,8 @@ struct DicomHeader {
     double slope = 1, intercept = 0;    ///< (0028,1053), (0028,1052)
     double gantryTilt = 0;              ///< (0018,1120) [deg]
     std::optional<double> padding;      ///< (0028,0120) in stored units
+    /// The scanned values, keyed by (group << 16 | element), parsed by completeDicomHeader.
+    std::map<std::uint32_t, std::string> tags;
 
     /// @brief ImageType or SeriesDescription names a T1 map (quantitative, ms).
     bool looksLikeT1Map() const;
@@ -36,6 +40,11 @@ struct DicomHeader {
 /// order; files that are not DICOM images are skipped.
 /// @throw IoError if an input is missing or no DICOM image is found
 std::vector<DicomHeader> scanDicomHeaders(const std::vector<std::filesystem::path>& inputs);
+
+/// @brief Parse and check the geometry fields of a scanned header (and, for
+/// multi-frame files, read their functional groups).
+/// @throw IoError naming the file and the tag that is missing or malformed
+void completeDicomHeader(DicomHeader& h);
 
 /// @brief All fields of the given files, geometry parsed and checked.
 /// @throw IoError naming the file and the tag that is missing or malformed

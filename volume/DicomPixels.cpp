@@ -7,7 +7,6 @@
 #include "volume/Errors.h"
 
 #include <gdcmImageReader.h>
-#include <gdcmReader.h>
 #include <gdcmTrace.h>
 
 #include <cstring>
@@ -57,6 +56,13 @@ void quietGdcm()
 
 DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue)
 {
+    DicomFrames f;
+    decodeDicomFrames(file, paddingValue, f);
+    return f;
+}
+
+void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue, DicomFrames& f)
+{
     quietGdcm();
     const std::string name = file.string();
     gdcm::ImageReader reader;
@@ -69,7 +75,6 @@ DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<d
         throw IoError(name + ": (0028,0002) SamplesPerPixel is " + std::to_string(pf.GetSamplesPerPixel()) +
                       ": colour images are not volumes");
     }
-    DicomFrames f;
     f.columns = int(img.GetDimension(0));
     f.rows = int(img.GetDimension(1));
     f.frames = img.GetNumberOfDimensions() > 2 ? int(img.GetDimension(2)) : 1;
@@ -78,25 +83,17 @@ DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<d
     const std::size_t count = std::size_t(f.rows) * std::size_t(f.columns) * std::size_t(f.frames);
     const std::size_t expected = img.GetBufferLength();
     // GDCM zero-fills a truncated uncompressed pixel element and only warns:
-    // the file must hold the element header plus rows × columns × frames × bytes
-    // after the point where the pixel data element starts.
+    // preflightDicom (run on every file before GDCM sees it) has checked that
+    // the element fits in the file; here its declared length must cover the image.
     if (!ts.IsEncapsulated()) {
-        // Skipping the pixel element leaves the stream at the start of its value.
-        std::ifstream in(file, std::ios::binary);
-        gdcm::Reader head;
-        head.SetStream(in);
-        head.ReadUpToTag(gdcm::Tag(0x7fe0, 0x0010), {gdcm::Tag(0x7fe0, 0x0010)});
-        in.clear();
-        const std::streamoff start = in.tellg();
-        std::error_code ec;
-        const std::uint64_t size = std::filesystem::file_size(file, ec);
-        if (ec || start <= 0 || size < std::uint64_t(start) + expected) {
-            const std::uint64_t have = (!ec && start > 0 && size > std::uint64_t(start)) ? size - std::uint64_t(start) : 0;
-            throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(have) + " bytes, expected " +
-                          std::to_string(expected) + " (truncated file)");
+        const gdcm::ByteValue* bv = img.GetDataElement().GetByteValue();
+        if (!bv || bv->GetLength() < expected) {
+            throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(bv ? std::uint64_t(bv->GetLength()) : 0) +
+                          " bytes, expected " + std::to_string(expected));
         }
     }
-    std::vector<char> raw(expected);
+    std::vector<char>& raw = f.raw;
+    raw.resize(expected);
     if (!img.GetBuffer(raw.data())) {
         throw IoError(name + ": (0002,0010) TransferSyntaxUID " + std::string(ts.GetString() ? ts.GetString() : "?") +
                       ": cannot decode the pixel data (unsupported or corrupt)");
@@ -121,8 +118,9 @@ DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<d
         f.padding.resize(count);
         const float pad = float(*paddingValue);
         for (std::size_t n = 0; n < count; ++n) f.padding[n] = f.values[n] == pad;
+    } else {
+        f.padding.clear();
     }
-    return f;
 }
 
 } // namespace voxhap::volume

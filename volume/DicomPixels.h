@@ -20,6 +20,7 @@ struct DicomFrames {
     /// Stored values equal to PixelPaddingValue (0028,0120), flagged so that
     /// the caller can make them air; empty when the file has no padding value.
     std::vector<std::uint8_t> padding;
+    std::vector<char> raw; ///< decoding scratch, kept so that a reused instance does not reallocate
 };
 
 /// @brief Silence GDCM's own warnings and errors: voxhap reports its own, one line each.
@@ -30,5 +31,9 @@ void quietGdcm();
 /// @throw IoError naming the file and the field: unreadable file, unsupported
 ///        transfer syntax, colour images, truncated pixel data
 DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue);
+
+/// @brief As above, into @p out, reusing its buffers: a thread that decodes
+/// many slices keeps one instance and avoids fresh page-faulting allocations.
+void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue, DicomFrames& out);
 
 } // namespace voxhap::volume

@@ -73,14 +73,18 @@ public:
     /// Copy one frame, rescaled, into @p out (rows × columns floats); padding becomes @p air.
     void read(const Slice& s, float* out, float air)
     {
-        std::shared_ptr<const DicomFrames> frames;
+        std::shared_ptr<const DicomFrames> cached;
+        const DicomFrames* frames = nullptr;
         const DicomHeader& h = mHeaders[s.file];
         if (h.frames > 1) {
             std::lock_guard<std::mutex> lock(mMutex);
             if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file, h.padding));
-            frames = mCache[s.file];
+            cached = mCache[s.file];
+            frames = cached.get();
         } else {
-            frames = std::make_shared<DicomFrames>(decodeDicomFrames(h.file, h.padding));
+            thread_local DicomFrames scratch; // one per decoding thread, buffers reused slice after slice
+            decodeDicomFrames(h.file, h.padding, scratch);
+            frames = &scratch;
         }
         if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {
             throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
@@ -114,10 +118,12 @@ bool looksLikeDicom(const fs::path& path)
     return std::string(magic + 128, 4) == "DICM";
 }
 
-std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs)
+namespace {
+
+std::vector<DicomSeriesInfo> groupSeries(const std::vector<DicomHeader>& headers)
 {
     std::map<std::string, DicomSeriesInfo> byUid;
-    for (const DicomHeader& h : scanDicomHeaders(inputs)) {
+    for (const DicomHeader& h : headers) {
         DicomSeriesInfo& s = byUid[h.seriesUid];
         if (s.files.empty()) {
             s.uid = h.seriesUid;
@@ -138,13 +144,25 @@ std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs
     return all;
 }
 
+} // namespace
+
+std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs)
+{
+    return groupSeries(scanDicomHeaders(inputs));
+}
+
 Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& options, DicomLoadReport* report)
 {
     const auto start = std::chrono::steady_clock::now();
-    const std::vector<DicomSeriesInfo> all = listDicomSeries(inputs);
+    std::vector<DicomHeader> scanned = scanDicomHeaders(inputs);
+    const std::vector<DicomSeriesInfo> all = groupSeries(scanned);
     const DicomSeriesInfo& series = chooseSeries(all, options.series);
 
-    std::vector<DicomHeader> headers = readSeriesHeaders(series.files);
+    std::vector<DicomHeader> headers;
+    for (DicomHeader& h : scanned) {
+        if (h.seriesUid == series.uid) headers.push_back(std::move(h));
+    }
+    for (DicomHeader& h : headers) completeDicomHeader(h);
     const DicomHeader& first = headers.front();
     const bool isMr = first.modality == "MR";
 

@@ -31,8 +31,9 @@ public:
     static constexpr int kSlabSlices = 8;
 
     /// @brief Add slices k0 .. k0+nz-1 of an nx × ny image stack.
-    /// @param data nx·ny·nz values, x fastest; air values are overwritten with the background
-    /// @throw ValueError on a non-finite value (naming its index)
+    /// @param data nx·ny·nz values, x fastest (read only)
+    /// @param k0   a multiple of kSlabSlices; nz at most kSlabSlices; each slab added once
+    /// @throw ValueError on a non-finite value (naming its index) or a misaligned slab
     void addSlab(float* data, int nx, int ny, int k0, int nz);
 
     /// @brief The grid built so far (the builder is empty afterwards).

@@ -54,7 +54,8 @@ protected:
         for (int k = 0; k < 10; ++k)
             for (int j = 0; j < 9; ++j)
                 for (int i = 0; i < 11; ++i) data[std::size_t((k * 9 + j) * 11 + i)] = value(i, j, k);
-        slabs.addSlab(data.data(), 11, 9, 0, 10);
+        slabs.addSlab(data.data(), 11, 9, 0, 8); // slabs are one leaf (8 slices) thick
+        slabs.addSlab(data.data() + 11 * 9 * 8, 11, 9, 8, 2);
         v.setGrid(Channel::Hu, slabs.finish());
         v.metadata().modality = "CT";
         return v;
