@@ -70,7 +70,19 @@ void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> 
     if (!reader.Read()) throw IoError(name + ": not a readable DICOM image (header or (7FE0,0010) PixelData)");
     const gdcm::Image& img = reader.GetImage();
     const gdcm::PixelFormat& pf = img.GetPixelFormat();
-    const gdcm::TransferSyntax& ts = img.GetTransferSyntax();
+    // The header's syntax: the image's own may already be "corrected" by GDCM.
+    const gdcm::TransferSyntax& ts = reader.GetFile().GetHeader().GetDataSetTransferSyntax();
+    const std::string tsUid = ts.GetString() ? ts.GetString() : "?";
+    // Video syntaxes (MPEG-2/4, HEVC: 1.2.840.10008.1.2.4.100 to .108) are not slice images.
+    if (!ts.IsValid() || tsUid.rfind("1.2.840.10008.1.2.4.10", 0) == 0) {
+        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid + ": unsupported transfer syntax");
+    }
+    // A compressed syntax needs encapsulated pixel data; GDCM would read plain
+    // bytes under it without a word, so the header and the data disagree.
+    if (ts.IsEncapsulated() && !img.GetDataElement().GetSequenceOfFragments()) {
+        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid +
+                      " is compressed but (7FE0,0010) PixelData is not encapsulated: inconsistent header");
+    }
     if (pf.GetSamplesPerPixel() != 1) {
         throw IoError(name + ": (0028,0002) SamplesPerPixel is " + std::to_string(pf.GetSamplesPerPixel()) +
                       ": colour images are not volumes");
@@ -95,8 +107,7 @@ void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> 
     std::vector<char>& raw = f.raw;
     raw.resize(expected);
     if (!img.GetBuffer(raw.data())) {
-        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + std::string(ts.GetString() ? ts.GetString() : "?") +
-                      ": cannot decode the pixel data (unsupported or corrupt)");
+        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid + ": cannot decode the pixel data (unsupported or corrupt)");
     }
     f.values.resize(count);
     const int bs = pf.GetBitsStored();

@@ -95,6 +95,20 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
     if (!again.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
 }
 
+/// @brief Rewrite @p file declaring transfer syntax @p ts while its data
+/// stays plain little-endian: a header that contradicts its pixel data.
+inline void relabelTransferSyntax(const std::filesystem::path& file, gdcm::TransferSyntax::TSType ts)
+{
+    gdcm::Reader r;
+    r.SetFileName(file.string().c_str());
+    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
+    r.GetFile().GetHeader().SetDataSetTransferSyntax(gdcm::TransferSyntax(ts));
+    gdcm::Writer w;
+    w.SetFile(r.GetFile());
+    w.SetFileName(file.string().c_str());
+    if (!w.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+}
+
 /// @brief Write @p frames (one slice each, same grid, positions along the
 /// normal with step @p step) as one multi-frame (enhanced) CT file.
 inline void writeSyntheticMultiFrame(const std::vector<SyntheticSlice>& frames, double step, const std::filesystem::path& file)

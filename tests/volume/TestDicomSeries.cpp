@@ -358,6 +358,24 @@ TEST_F(DicomSeries, TruncatedPixelDataNamesTheFileAndField)
     }
 }
 
+TEST_F(DicomSeries, UnsupportedOrContradictoryTransferSyntaxIsRefused)
+{
+    for (auto ts : {gdcm::TransferSyntax::MPEG2MainProfile, gdcm::TransferSyntax::JPEG2000Lossless}) {
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+        for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+        voxhap::test::relabelTransferSyntax(mDir / "s2.dcm", ts);
+        try {
+            loadDicom({mDir});
+            FAIL() << "a file with transfer syntax " << int(ts) << " and plain pixel data loaded";
+        } catch (const voxhap::IoError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find("s2.dcm"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("(0002,0010) TransferSyntaxUID"), std::string::npos) << msg;
+        }
+    }
+}
+
 TEST_F(DicomSeries, NonDicomFilesAreSkippedAndAnEmptyFolderIsAnError)
 {
     std::ofstream(mDir / "notes.txt") << "not an image\n";
