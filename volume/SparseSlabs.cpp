@@ -52,6 +52,7 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
         tbb::parallel_for(0, bx * by, [&](int b) {
             const int x0 = (b % bx) * kDim, y0 = (b / bx) * kDim;
             std::unique_ptr<LeafT> leaf;
+            float* values = nullptr; // the leaf's buffer, fetched once (each access checks delayed loading)
             for (int z = 0; z < nz; ++z) {
                 for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
                     const float* row = data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx);
@@ -62,8 +63,14 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
                                              std::to_string(k0 + z) + ") is not a finite number");
                         }
                         if (v < air) continue; // air: the inactive background
-                        if (!leaf) leaf = std::make_unique<LeafT>(openvdb::Coord(x0, y0, k0), bg, false);
-                        leaf->setValueOn(LeafT::coordToOffset(openvdb::Coord(x, y, k0 + z)), v);
+                        if (!leaf) {
+                            leaf = std::make_unique<LeafT>(openvdb::Coord(x0, y0, k0), bg, false);
+                            values = leaf->buffer().data();
+                        }
+                        // LeafNode offsets: x slowest, z fastest, within the 8³ block.
+                        const openvdb::Index n = openvdb::Index(((x - x0) << 6) | ((y - y0) << 3) | z);
+                        values[n] = v;
+                        leaf->getValueMask().setOn(n);
                     }
                 }
             }
