@@ -93,8 +93,8 @@ int run(const ConvertOptions& o)
 Action registerConvert(CLI::App& app)
 {
     auto o = std::make_shared<ConvertOptions>();
-    CLI::App* cmd = app.add_subcommand("convert", "Convert a volume (DICOM series, .nrrd, .vdb) to a sparse .vdb or a .nrrd for 3D Slicer");
-    cmd->add_option("in", o->in, "Input: a DICOM directory or file, a .nrrd or a .vdb")->required();
+    CLI::App* cmd = app.add_subcommand("convert", "Convert a volume (DICOM series, NIfTI, NRRD, MetaImage, .vdb) to a sparse .vdb or a .nrrd for 3D Slicer");
+    cmd->add_option("in", o->in, "Input: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")->required();
     cmd->add_option("out", o->out, "Output file: .vdb (all grids) or .nrrd (hu, else t1, else label)")->required();
     addReaderOptions(*cmd, o->reader);
     addCommonOptions(*cmd, o->common);

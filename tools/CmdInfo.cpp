@@ -76,7 +76,7 @@ Action registerInfo(CLI::App& app)
 {
     auto o = std::make_shared<InfoOptions>();
     CLI::App* cmd = app.add_subcommand("info", "Describe a volume: grids, geometry, sparsity, memory, values, labels, layers");
-    cmd->add_option("file", o->file, "Volume: a .vdb or .nrrd file, or a DICOM directory or file")->required();
+    cmd->add_option("file", o->file, "Volume: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")->required();
     addReaderOptions(*cmd, o->reader);
     addCommonOptions(*cmd, o->common);
     return [o] { return run(*o); };
