@@ -32,7 +32,8 @@ const gdcm::Tag kSeriesUid(0x0020, 0x000e), kModality(0x0008, 0x0060), kSeriesDe
     kSeriesNumber(0x0020, 0x0011), kImageType(0x0008, 0x0008), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011),
     kFrames(0x0028, 0x0008), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037), kPixelSpacing(0x0028, 0x0030),
     kThickness(0x0018, 0x0050), kSlope(0x0028, 0x1053), kIntercept(0x0028, 0x1052), kTilt(0x0018, 0x1120),
-    kPadding(0x0028, 0x0120), kPixelRepresentation(0x0028, 0x0103);
+    kPadding(0x0028, 0x0120), kPixelRepresentation(0x0028, 0x0103), kSamplesPerPixel(0x0028, 0x0002),
+    kBitsAllocated(0x0028, 0x0100), kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102);
 
 std::string tagName(const gdcm::Tag& t, const char* name)
 {
@@ -198,7 +199,7 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
     gdcm::Scanner scanner;
     for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames,
                           kPosition, kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding,
-                          kPixelRepresentation}) {
+                          kPixelRepresentation, kSamplesPerPixel, kBitsAllocated, kBitsStored, kHighBit}) {
         scanner.AddTag(t);
     }
     scanner.Scan(names(files));
@@ -248,6 +249,26 @@ void completeDicomHeader(DicomHeader& h)
         return it == h.tags.end() ? nullptr : it->second.c_str();
     };
     {
+        // Debian's GDCM asserts (aborts the process) on some out-of-range pixel
+        // module values, e.g. SamplesPerPixel > 4: check them before it decodes.
+        const auto small = [&](const gdcm::Tag& t, const char* field, double lo, double hi, double fallback) {
+            const double v = optionalNumber(get(t), f, t, field).value_or(fallback);
+            if (v < lo || v > hi || v != std::floor(v)) {
+                throw IoError(name + ": " + tagName(t, field) + ": " + trim(get(t)) + " is out of range");
+            }
+            return int(v);
+        };
+        if (small(kSamplesPerPixel, "SamplesPerPixel", 1, 4, 1) != 1) {
+            throw IoError(name + ": " + tagName(kSamplesPerPixel, "SamplesPerPixel") + ": " + trim(get(kSamplesPerPixel)) +
+                          ": colour images are not volumes");
+        }
+        const int allocated = small(kBitsAllocated, "BitsAllocated", 1, 64, 16);
+        if (allocated != 8 && allocated != 16 && allocated != 32 && allocated != 64) {
+            throw IoError(name + ": " + tagName(kBitsAllocated, "BitsAllocated") + ": " + std::to_string(allocated) + " is not supported");
+        }
+        const int stored = small(kBitsStored, "BitsStored", 1, allocated, allocated);
+        small(kHighBit, "HighBit", stored - 1, allocated - 1, stored - 1);
+        small(kPixelRepresentation, "PixelRepresentation", 0, 1, 0);
         h.imageType = trim(get(kImageType));
         h.gantryTilt = optionalNumber(get(kTilt), f, kTilt, "GantryDetectorTilt").value_or(0.0);
         h.sliceThickness = optionalNumber(get(kThickness), f, kThickness, "SliceThickness").value_or(0.0);

@@ -376,6 +376,28 @@ TEST_F(DicomSeries, UnsupportedOrContradictoryTransferSyntaxIsRefused)
     }
 }
 
+TEST_F(DicomSeries, OutOfRangePixelModuleValuesAreRefusedBeforeGdcmDecodes)
+{
+    // GDCM asserts (aborts the process) on SamplesPerPixel > 4; found by mutating files.
+    for (int k = 0; k < 2; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    gdcm::Reader r;
+    r.SetFileName((mDir / "s1.dcm").string().c_str());
+    ASSERT_TRUE(r.Read());
+    gdcm::Attribute<0x0028, 0x0002> spp;
+    spp.SetValue(9);
+    r.GetFile().GetDataSet().Replace(spp.GetAsDataElement());
+    gdcm::Writer w;
+    w.SetFile(r.GetFile());
+    w.SetFileName((mDir / "s1.dcm").string().c_str());
+    ASSERT_TRUE(w.Write());
+    try {
+        loadDicom({mDir});
+        FAIL() << "SamplesPerPixel 9 loaded";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("s1.dcm: (0028,0002) SamplesPerPixel"), std::string::npos) << e.what();
+    }
+}
+
 TEST_F(DicomSeries, NonDicomFilesAreSkippedAndAnEmptyFolderIsAnError)
 {
     std::ofstream(mDir / "notes.txt") << "not an image\n";
