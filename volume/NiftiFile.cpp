@@ -50,14 +50,47 @@ void checkMagic(const std::filesystem::path& file, const std::string& name)
     std::int32_t size = 0;
     std::memcpy(&size, h, 4);
     const std::int32_t swapped = std::int32_t(__builtin_bswap32(std::uint32_t(size)));
+    const bool swap = size != 348 && size != 540;
+    const auto i16 = [&](std::size_t at) {
+        std::uint16_t v;
+        std::memcpy(&v, h + at, 2);
+        return std::int16_t(swap ? __builtin_bswap16(v) : v);
+    };
+    const auto i64 = [&](std::size_t at) {
+        std::uint64_t v;
+        std::memcpy(&v, h + at, 8);
+        return std::int64_t(swap ? __builtin_bswap64(v) : v);
+    };
+    // dim[] and datatype checked here too: niftilib prints its own "** ERROR"
+    // lines on stderr for them, and voxhap reports one line of its own.
+    const auto checkDims = [&](std::int64_t ndim, auto dim) {
+        if (ndim < 1 || ndim > 7) throw IoError(name + ": dim: dim[0] = " + std::to_string(ndim) + " (1 to 7 expected)");
+        for (int a = 1; a <= ndim; ++a) {
+            if (dim(a) < 1) throw IoError(name + ": dim: dim[" + std::to_string(a) + "] = " + std::to_string(dim(a)) + " (must be positive)");
+        }
+    };
+    std::int16_t datatype = 0;
+    bool nifti = false;
     if (got >= 348 && (size == 348 || swapped == 348)) {
         const std::string magic(reinterpret_cast<const char*>(h + 344), 4);
-        if (magic == std::string("n+1\0", 4) || magic == std::string("ni1\0", 4)) return;
+        nifti = magic == std::string("n+1\0", 4) || magic == std::string("ni1\0", 4);
+        if (nifti) {
+            checkDims(i16(40), [&](int a) { return std::int64_t(i16(40 + 2 * std::size_t(a))); });
+            datatype = i16(70);
+        }
     } else if (got >= 540 && (size == 540 || swapped == 540)) {
         const std::string magic(reinterpret_cast<const char*>(h + 4), 4);
-        if (magic == std::string("n+2\0", 4) || magic == std::string("ni2\0", 4)) return;
+        nifti = magic == std::string("n+2\0", 4) || magic == std::string("ni2\0", 4);
+        if (nifti) {
+            checkDims(i64(16), [&](int a) { return i64(16 + 8 * std::size_t(a)); });
+            datatype = i16(12);
+        }
     } else {
         throw IoError(name + ": header: sizeof_hdr is neither 348 (NIfTI-1) nor 540 (NIfTI-2), or the file is truncated");
+    }
+    if (nifti) {
+        sampleType(datatype, name); // throws on an unsupported datatype
+        return;
     }
     throw IoError(name + ": magic: not n+1/ni1 or n+2/ni2 (ANALYZE 7.5 or a corrupt header)");
 }
