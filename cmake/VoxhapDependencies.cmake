@@ -13,6 +13,21 @@ find_package(Eigen3 3.4 REQUIRED NO_MODULE)    # Eigen3::Eigen
 find_package(nlohmann_json CONFIG REQUIRED)    # nlohmann_json::nlohmann_json
 find_package(CLI11 CONFIG REQUIRED)            # CLI11::CLI11
 find_package(Threads REQUIRED)
+find_package(ZLIB REQUIRED)                    # ZLIB::ZLIB, for gzip-encoded .nrrd
+# niftilib (NIfTI-1/2 headers, qform/sform). Debian 12's NIFTIConfig.cmake
+# points at /usr/lib/libznz.so.3.0.0, which the package installs elsewhere:
+# find the library and header directly and wrap them in a target.
+find_library(VOXHAP_NIFTI2_LIBRARY nifti2 REQUIRED)
+find_library(VOXHAP_ZNZ_LIBRARY znz REQUIRED)
+find_path(VOXHAP_NIFTI_INCLUDE_DIR nifti2_io.h PATH_SUFFIXES nifti REQUIRED)
+add_library(voxhap_nifti2 INTERFACE IMPORTED)
+target_include_directories(voxhap_nifti2 SYSTEM INTERFACE ${VOXHAP_NIFTI_INCLUDE_DIR})
+target_link_libraries(voxhap_nifti2 INTERFACE ${VOXHAP_NIFTI2_LIBRARY} ${VOXHAP_ZNZ_LIBRARY} ZLIB::ZLIB m)
+# GDCM's config prints a status block for every command-line tool it expects
+# in /usr/bin (libgdcm-tools, not needed to build): keep the log readable.
+set(CMAKE_MESSAGE_LOG_LEVEL NOTICE)
+find_package(GDCM 3.0 CONFIG REQUIRED)         # gdcmMSFF (un-namespaced; brings its includes)
+unset(CMAKE_MESSAGE_LOG_LEVEL)
 
 # OpenIGTLink 1.11 ships an old-style config without a target, and its USE_FILE adds
 # global flags that break other code (toolchain.md): wrap it in an imported target.

@@ -18,6 +18,7 @@ int main(int argc, char** argv)
         {"demo", registerDemo(app)},
         {"phantom", registerPhantom(app)},
         {"info", registerInfo(app)},
+        {"convert", registerConvert(app)},
         {"simulate", registerSimulate(app)},
         {"serve", registerServe(app)},
         {"bench", registerBench(app)},

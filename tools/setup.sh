@@ -26,6 +26,8 @@ packages=(
   libopenimageio-dev openimageio-tools
   # DICOM
   libgdcm-dev
+  # gzip-encoded .nrrd; NIfTI headers (qform/sform)
+  zlib1g-dev libnifti2-dev
   # device link
   libopenigtlink-dev openigtlink-examples
   # CLI, config, logs

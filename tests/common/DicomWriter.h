@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file DicomWriter.h
+/// @brief Write small synthetic DICOM slices with GDCM, for reader tests.
+///
+/// The pixel values are a known function of (column, row, slice), so a test
+/// can check every voxel the reader returns against the formula.
+#pragma once
+
+#include "volume/Math.h"
+
+#include <gdcmAttribute.h>
+#include <gdcmImageWriter.h>
+#include <gdcmReader.h>
+#include <gdcmWriter.h>
+#include <gdcmUIDs.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace voxhap::test {
+
+/// @brief One slice to write.
+struct SyntheticSlice {
+    std::string seriesUid = "1.2.826.0.1.3680043.2.1125.99.1";
+    std::string modality = "CT";
+    std::string seriesDescription = "synthetic";
+    int rows = 12, columns = 16;
+    Vec3d position{-20.0, -30.0, 0.0};   ///< centre of the first pixel [mm, LPS]
+    Vec3d rowDirection{1, 0, 0};
+    Vec3d columnDirection{0, 1, 0};
+    double pixelSpacing[2] = {0.75, 0.5}; ///< between rows, between columns [mm]
+    double slope = 1.0, intercept = -1024.0;
+    double gantryTilt = 0.0;             ///< written to (0018,1120) [deg]
+    std::vector<std::int16_t> pixels;    ///< rows × columns stored values, column fastest
+};
+
+/// @brief Write @p s as a CT or MR Image Storage file (explicit VR little endian).
+inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::path& file)
+{
+    gdcm::ImageWriter w;
+    gdcm::Image& img = w.GetImage();
+    img.SetNumberOfDimensions(2);
+    img.SetDimension(0, unsigned(s.columns));
+    img.SetDimension(1, unsigned(s.rows));
+    img.SetPixelFormat(gdcm::PixelFormat::INT16);
+    img.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
+    img.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
+    const double origin[3] = {s.position.x(), s.position.y(), s.position.z()};
+    const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(),
+                              s.columnDirection.x(), s.columnDirection.y(), s.columnDirection.z()};
+    const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], 1.0}; // GDCM: x (between columns), y
+    img.SetOrigin(origin);
+    img.SetDirectionCosines(dircos);
+    img.SetSpacing(spacing);
+    img.SetSlope(s.slope);
+    img.SetIntercept(s.intercept);
+    gdcm::DataElement pixel(gdcm::Tag(0x7fe0, 0x0010));
+    pixel.SetByteValue(reinterpret_cast<const char*>(s.pixels.data()), std::uint32_t(s.pixels.size() * 2));
+    img.SetDataElement(pixel);
+
+    gdcm::DataSet& ds = w.GetFile().GetDataSet();
+    const bool mr = s.modality == "MR";
+    gdcm::Attribute<0x0008, 0x0016> sop;
+    sop.SetValue(gdcm::UIDs::GetUIDString(mr ? gdcm::UIDs::MRImageStorage : gdcm::UIDs::CTImageStorage));
+    ds.Replace(sop.GetAsDataElement());
+    gdcm::Attribute<0x0008, 0x0060> modality;
+    modality.SetValue(s.modality);
+    ds.Replace(modality.GetAsDataElement());
+    gdcm::Attribute<0x0020, 0x000e> uid;
+    uid.SetValue(s.seriesUid);
+    ds.Replace(uid.GetAsDataElement());
+    gdcm::Attribute<0x0008, 0x103e> description;
+    description.SetValue(s.seriesDescription);
+    ds.Replace(description.GetAsDataElement());
+    gdcm::Attribute<0x0018, 0x1120> tilt;
+    tilt.SetValue(s.gantryTilt);
+    ds.Replace(tilt.GetAsDataElement());
+
+    w.SetFileName(file.string().c_str());
+    if (!w.Write()) throw std::runtime_error("GDCM could not write " + file.string());
+
+    // GDCM writes a 2D image's ImagePositionPatient with z = 0: put the true
+    // position back with a plain reader/writer pass.
+    gdcm::Reader r;
+    r.SetFileName(file.string().c_str());
+    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
+    gdcm::Attribute<0x0020, 0x0032> ipp = {{s.position.x(), s.position.y(), s.position.z()}};
+    r.GetFile().GetDataSet().Replace(ipp.GetAsDataElement());
+    gdcm::Writer again;
+    again.SetFile(r.GetFile());
+    again.SetFileName(file.string().c_str());
+    if (!again.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+}
+
+/// @brief Rewrite @p file declaring transfer syntax @p ts while its data
+/// stays plain little-endian: a header that contradicts its pixel data.
+inline void relabelTransferSyntax(const std::filesystem::path& file, gdcm::TransferSyntax::TSType ts)
+{
+    gdcm::Reader r;
+    r.SetFileName(file.string().c_str());
+    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
+    r.GetFile().GetHeader().SetDataSetTransferSyntax(gdcm::TransferSyntax(ts));
+    gdcm::Writer w;
+    w.SetFile(r.GetFile());
+    w.SetFileName(file.string().c_str());
+    if (!w.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+}
+
+/// @brief Write @p frames (one slice each, same grid, positions along the
+/// normal with step @p step) as one multi-frame (enhanced) CT file.
+inline void writeSyntheticMultiFrame(const std::vector<SyntheticSlice>& frames, double step, const std::filesystem::path& file)
+{
+    const SyntheticSlice& s = frames.front();
+    gdcm::ImageWriter w;
+    gdcm::Image& img = w.GetImage();
+    img.SetNumberOfDimensions(3); // GDCM then writes Enhanced CT with per-frame functional groups
+    img.SetDimension(0, unsigned(s.columns));
+    img.SetDimension(1, unsigned(s.rows));
+    img.SetDimension(2, unsigned(frames.size()));
+    img.SetPixelFormat(gdcm::PixelFormat::INT16);
+    img.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
+    img.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
+    const double origin[3] = {s.position.x(), s.position.y(), s.position.z()};
+    const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(),
+                              s.columnDirection.x(), s.columnDirection.y(), s.columnDirection.z()};
+    const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], step};
+    img.SetOrigin(origin);
+    img.SetDirectionCosines(dircos);
+    img.SetSpacing(spacing);
+    img.SetSlope(s.slope);
+    img.SetIntercept(s.intercept);
+    std::vector<std::int16_t> all;
+    for (const auto& f : frames) all.insert(all.end(), f.pixels.begin(), f.pixels.end());
+    gdcm::DataElement pixel(gdcm::Tag(0x7fe0, 0x0010));
+    pixel.SetByteValue(reinterpret_cast<const char*>(all.data()), std::uint32_t(all.size() * 2));
+    img.SetDataElement(pixel);
+    gdcm::DataSet& ds = w.GetFile().GetDataSet();
+    gdcm::Attribute<0x0008, 0x0016> sop;
+    sop.SetValue(gdcm::UIDs::GetUIDString(gdcm::UIDs::EnhancedCTImageStorage));
+    ds.Replace(sop.GetAsDataElement());
+    gdcm::Attribute<0x0008, 0x0060> modality;
+    modality.SetValue(s.modality);
+    ds.Replace(modality.GetAsDataElement());
+    gdcm::Attribute<0x0020, 0x000e> uid;
+    uid.SetValue(s.seriesUid);
+    ds.Replace(uid.GetAsDataElement());
+    w.SetFileName(file.string().c_str());
+    if (!w.Write()) throw std::runtime_error("GDCM could not write " + file.string());
+}
+
+} // namespace voxhap::test

@@ -1,0 +1,442 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestDicomSeries.cpp
+/// @brief DICOM series written here with GDCM: ordering by position (never by
+/// file name), per-slice rescale, geometry, irregular stacks (missing slice,
+/// uneven step, tilt) refused or resampled, series choice, bad files.
+
+#include "common/DicomWriter.h"
+#include "common/Tolerances.h"
+
+#include "volume/DicomSeries.h"
+#include "volume/Errors.h"
+#include "volume/Grids.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using voxhap::Vec3d;
+using voxhap::test::SyntheticSlice;
+using namespace voxhap::volume;
+
+/// Positions and orientations travel as DICOM decimal strings of at most 16
+/// characters: about 1e-13 mm of rounding on coordinates of order 100 mm;
+/// 1e-6 mm leaves ample headroom and is far below any pixel.
+constexpr double kDicomDecimalMm = 1e-6;
+/// Resampled values of a field linear in world space: bilinear and linear
+/// interpolation reproduce it, up to float rounding of values of order 1e3
+/// (ulp ~1e-4) accumulated over a few multiply-adds.
+constexpr double kLinearResampleHu = 1e-2;
+
+/// The stored value the synthetic slices hold at column i, row j of slice k.
+/// Column 0 is air (0 → HU = intercept, far below the air threshold).
+std::int16_t storedValue(int i, int j, int k) { return i == 0 ? std::int16_t(0) : std::int16_t(900 + 7 * i + 13 * j + 31 * k); }
+
+class DicomSeries : public testing::Test {
+protected:
+    void SetUp() override
+    {
+        mDir = fs::temp_directory_path() / ("voxhap-dicom-" + std::to_string(::getpid()) + "-" +
+                                            testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    /// A slice k of the standard series at position base + k·step·normal.
+    static SyntheticSlice slice(int k, double step = 2.5)
+    {
+        SyntheticSlice s;
+        s.position = Vec3d(-20.0, -30.0, 10.0) + k * step * Vec3d::UnitZ();
+        // Per-slice rescale, as scanners may write: the reader must apply each slice's own.
+        s.slope = 1.0 + (k % 2);
+        s.intercept = -1024.0 + 3 * k;
+        s.pixels.resize(std::size_t(s.rows * s.columns));
+        for (int j = 0; j < s.rows; ++j)
+            for (int i = 0; i < s.columns; ++i) s.pixels[std::size_t(j * s.columns + i)] = storedValue(i, j, k);
+        return s;
+    }
+    /// Write @p slices under names in a shuffled order (file name order ≠ position order).
+    void writeShuffled(const std::vector<SyntheticSlice>& slices, const std::string& prefix = "img")
+    {
+        std::vector<int> names(slices.size());
+        std::iota(names.begin(), names.end(), 0);
+        std::mt19937 rng(12345);
+        std::shuffle(names.begin(), names.end(), rng);
+        for (std::size_t n = 0; n < slices.size(); ++n) {
+            voxhap::test::writeSyntheticSlice(slices[n], mDir / (prefix + std::to_string(100 + names[n]) + ".dcm"));
+        }
+    }
+    fs::path mDir;
+};
+
+TEST_F(DicomSeries, ShuffledFilesLoadInPositionOrderWithPerSliceRescale)
+{
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 10; ++k) slices.push_back(slice(k));
+    writeShuffled(slices);
+
+    DicomLoadReport report;
+    const Volume v = loadDicom({mDir}, {}, &report);
+    const auto box = v.indexBox();
+    EXPECT_EQ(box.dims(), voxhap::Vec3i(16, 12, 10));
+    const Geometry g = v.geometry();
+    EXPECT_TRUE(voxhap::test::nearVec(g.spacing, Vec3d(0.5, 0.75, 2.5), kDicomDecimalMm));
+    EXPECT_TRUE(voxhap::test::nearVec(g.origin, slices[0].position, kDicomDecimalMm));
+    ASSERT_TRUE(v.has(Channel::Hu));
+    EXPECT_EQ(v.metadata().modality, "CT");
+
+    const auto grid = huGrid(v);
+    auto acc = grid->getConstAccessor();
+    std::int64_t active = 0;
+    for (int k = 0; k < 10; ++k) {
+        for (int j = 0; j < 12; ++j) {
+            for (int i = 0; i < 16; ++i) {
+                const double hu = slices[std::size_t(k)].slope * storedValue(i, j, k) + slices[std::size_t(k)].intercept;
+                const openvdb::Coord c(i, j, k);
+                if (hu < -950.0) {
+                    EXPECT_FALSE(acc.isValueOn(c)) << i << "," << j << "," << k;
+                    EXPECT_EQ(acc.getValue(c), kAirHu);
+                } else {
+                    ++active;
+                    ASSERT_TRUE(acc.isValueOn(c)) << i << "," << j << "," << k;
+                    ASSERT_EQ(acc.getValue(c), float(hu)) << i << "," << j << "," << k; // exact
+                }
+            }
+        }
+    }
+    EXPECT_EQ(report.activeVoxels, active);
+    EXPECT_EQ(report.denseVoxels, 16 * 12 * 10);
+    EXPECT_GT(report.memoryBytes, 0u);
+}
+
+TEST_F(DicomSeries, MultiFrameFileLoadsEveryFrameAtItsPosition)
+{
+    std::vector<SyntheticSlice> frames;
+    for (int k = 0; k < 5; ++k) {
+        SyntheticSlice s = slice(k);
+        s.slope = 1.0; // one rescale for the whole file (shared functional group)
+        s.intercept = -1024.0;
+        frames.push_back(s);
+    }
+    voxhap::test::writeSyntheticMultiFrame(frames, 2.5, mDir / "enhanced.dcm");
+    const Volume v = loadDicom({mDir});
+    EXPECT_EQ(v.indexBox().dims(), voxhap::Vec3i(16, 12, 5));
+    EXPECT_TRUE(voxhap::test::nearVec(v.geometry().spacing, Vec3d(0.5, 0.75, 2.5), kDicomDecimalMm));
+    EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(0, 0, 4)), frames[4].position, kDicomDecimalMm));
+    auto acc = huGrid(v)->getConstAccessor();
+    for (int k = 0; k < 5; ++k) {
+        for (int i = 1; i < 16; i += 4) EXPECT_EQ(acc.getValue(openvdb::Coord(i, 7, k)), float(storedValue(i, 7, k) - 1024)) << i << "," << k;
+    }
+}
+
+TEST_F(DicomSeries, ObliqueOrientationBecomesTheTransform)
+{
+    const Eigen::Matrix3d rot =
+        (Eigen::AngleAxisd(0.4, Vec3d::UnitZ()) * Eigen::AngleAxisd(-0.3, Vec3d::UnitX())).toRotationMatrix();
+    const Vec3d row = rot.col(0), col = rot.col(1), normal = row.cross(col);
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 5; ++k) {
+        SyntheticSlice s = slice(k);
+        s.rowDirection = row;
+        s.columnDirection = col;
+        s.position = Vec3d(5, -7, 30) + k * 1.25 * normal;
+        slices.push_back(s);
+    }
+    writeShuffled(slices);
+    const Volume v = loadDicom({mDir});
+    for (int k : {0, 4}) {
+        for (auto [i, j] : {std::pair{0, 0}, std::pair{15, 0}, std::pair{3, 11}}) {
+            const Vec3d expected = slices[std::size_t(k)].position + i * 0.5 * row + j * 0.75 * col;
+            EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(i, j, k)), expected, kDicomDecimalMm))
+                << i << "," << j << "," << k;
+        }
+    }
+    EXPECT_GT(v.geometry().direction.determinant(), 0.0) << "index axes must stay right-handed";
+}
+
+TEST_F(DicomSeries, MissingSliceIsRefusedOrResampled)
+{
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 8; ++k) {
+        if (k == 4) continue;
+        SyntheticSlice s = slice(k);
+        s.slope = 1.0; // one rescale, so that HU is linear in k and interpolation is exact
+        s.intercept = -1024.0;
+        slices.push_back(s);
+    }
+    writeShuffled(slices);
+    try {
+        loadDicom({mDir});
+        FAIL() << "a series with a missing slice loaded without resampling";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("1 slice(s) missing"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("ImagePositionPatient"), std::string::npos) << e.what();
+    }
+    DicomOptions o;
+    o.irregular = IrregularSlices::Resample;
+    DicomLoadReport report;
+    const Volume v = loadDicom({mDir}, o, &report);
+    EXPECT_TRUE(report.resampled);
+    EXPECT_EQ(v.indexBox().dims().z(), 8);
+    EXPECT_NE(v.metadata().extra.count("resampled"), 0u);
+    auto acc = huGrid(v)->getConstAccessor();
+    for (int k : {3, 4, 5}) {
+        for (int i = 1; i < 16; i += 5) {
+            EXPECT_NEAR(acc.getValue(openvdb::Coord(i, 6, k)), storedValue(i, 6, k) - 1024.0, kLinearResampleHu) << i << "," << k;
+        }
+    }
+}
+
+TEST_F(DicomSeries, UnevenStepIsRefused)
+{
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 4; ++k) slices.push_back(slice(k));
+    slices[3].position.z() += 0.8; // a step of 3.3 mm among steps of 2.5 mm
+    writeShuffled(slices);
+    try {
+        loadDicom({mDir});
+        FAIL() << "an uneven series loaded without resampling";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("non-uniform slice spacing"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(DicomSeries, GantryTiltIsRefusedOrResampled)
+{
+    // Tilted acquisition: the slices stay axial, but each is shifted along the
+    // column direction by step·tan(tilt). The stored values are linear in world
+    // y and z, so a correct resampling reproduces them exactly on the new grid.
+    // A shift of 0.5 mm per 2 mm step (14 deg) keeps the field below whole at every pixel centre.
+    const double step = 2.0, shift = 0.5;
+    const double tiltDeg = std::atan(shift / step) * 180.0 / voxhap::kPi;
+    const auto field = [](const Vec3d& w) { return 400.0 + 4.0 * w.y() + 5.0 * w.z(); }; // HU
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 6; ++k) {
+        SyntheticSlice s = slice(k);
+        s.slope = 1.0;
+        s.intercept = 0.0;
+        s.gantryTilt = tiltDeg;
+        s.position = Vec3d(-20.0, -30.0 + k * shift, 10.0 + k * step);
+        for (int j = 0; j < s.rows; ++j)
+            for (int i = 0; i < s.columns; ++i)
+                s.pixels[std::size_t(j * s.columns + i)] =
+                    std::int16_t(std::lround(field(s.position + Vec3d(i * 0.5, j * 0.75, 0))));
+        slices.push_back(s);
+    }
+    // The stored values are whole numbers: the field must be too at every pixel centre.
+    ASSERT_EQ(field(slices[1].position), std::round(field(slices[1].position))) << "choose a shift on the HU grid";
+    writeShuffled(slices);
+    try {
+        loadDicom({mDir});
+        FAIL() << "a tilted series loaded without resampling";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("gantry tilt"), std::string::npos) << e.what();
+    }
+    DicomOptions o;
+    o.irregular = IrregularSlices::Resample;
+    const Volume v = loadDicom({mDir}, o);
+    EXPECT_TRUE(voxhap::test::nearVec(v.geometry().direction.col(2), Vec3d::UnitZ(), kDicomDecimalMm));
+    auto acc = huGrid(v)->getConstAccessor();
+    for (int k = 0; k < 6; ++k) {
+        // Rows that every shifted input slice still covers.
+        for (int j = int(std::ceil(k * shift / 0.75)); j < 12; j += 2) {
+            const Vec3d w = v.indexToWorld(Vec3d(5, j, k));
+            EXPECT_NEAR(acc.getValue(openvdb::Coord(5, j, k)), field(w), kLinearResampleHu) << j << "," << k;
+        }
+    }
+}
+
+TEST_F(DicomSeries, TwoSeriesInOneFolderAreListedAndChosen)
+{
+    std::vector<SyntheticSlice> big, small;
+    for (int k = 0; k < 6; ++k) big.push_back(slice(k));
+    for (int k = 0; k < 3; ++k) {
+        SyntheticSlice s = slice(k, 5.0);
+        s.seriesUid = "1.2.826.0.1.3680043.2.1125.99.2";
+        small.push_back(s);
+    }
+    writeShuffled(big, "a");
+    writeShuffled(small, "b");
+    const auto all = listDicomSeries({mDir});
+    ASSERT_EQ(all.size(), 2u);
+    EXPECT_EQ(all[0].uid, big[0].seriesUid) << "largest first";
+    EXPECT_EQ(all[0].slices, 6);
+    EXPECT_EQ(all[1].slices, 3);
+
+    EXPECT_EQ(loadDicom({mDir}).indexBox().dims().z(), 6) << "default: the largest CT";
+    DicomOptions byUid;
+    byUid.series = small[0].seriesUid;
+    const Volume v = loadDicom({mDir}, byUid);
+    EXPECT_EQ(v.indexBox().dims().z(), 3);
+    EXPECT_NEAR(v.geometry().spacing.z(), 5.0, kDicomDecimalMm);
+    DicomOptions byNumber;
+    byNumber.series = "2";
+    EXPECT_EQ(loadDicom({mDir}, byNumber).indexBox().dims().z(), 3);
+    DicomOptions unknown;
+    unknown.series = "9.9.9";
+    EXPECT_THROW(loadDicom({mDir}, unknown), voxhap::ValueError);
+}
+
+TEST_F(DicomSeries, LargestCtIsPreferredOverALargerMrSeries)
+{
+    std::vector<SyntheticSlice> mr, ct;
+    for (int k = 0; k < 6; ++k) {
+        SyntheticSlice s = slice(k);
+        s.modality = "MR";
+        s.seriesUid = "1.2.826.0.1.3680043.2.1125.99.3";
+        mr.push_back(s);
+    }
+    for (int k = 0; k < 2; ++k) ct.push_back(slice(k));
+    writeShuffled(mr, "m");
+    writeShuffled(ct, "c");
+    const Volume v = loadDicom({mDir});
+    EXPECT_EQ(v.metadata().modality, "CT");
+    EXPECT_EQ(v.indexBox().dims().z(), 2);
+}
+
+TEST_F(DicomSeries, MrBecomesTheT1ChannelLabelledByKind)
+{
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 3; ++k) {
+        SyntheticSlice s = slice(k);
+        s.modality = "MR";
+        s.slope = 1.0;
+        s.intercept = 0.0;
+        slices.push_back(s);
+    }
+    writeShuffled(slices);
+    const Volume weighted = loadDicom({mDir});
+    EXPECT_FALSE(weighted.has(Channel::Hu));
+    ASSERT_TRUE(weighted.has(Channel::T1));
+    EXPECT_EQ(weighted.metadata().extra.at("t1_kind"), "T1-weighted");
+    EXPECT_NE(weighted.metadata().t1Units, "ms");
+    EXPECT_EQ(t1Grid(weighted)->getConstAccessor().getValue(openvdb::Coord(3, 2, 1)), float(storedValue(3, 2, 1)));
+
+    fs::remove_all(mDir);
+    fs::create_directories(mDir);
+    for (auto& s : slices) s.seriesDescription = "T1 map (MOLLI)";
+    writeShuffled(slices);
+    const Volume map = loadDicom({mDir});
+    EXPECT_EQ(map.metadata().extra.at("t1_kind"), "T1 map");
+    EXPECT_EQ(map.metadata().t1Units, "ms");
+}
+
+TEST_F(DicomSeries, MemoryCapRefusesBeforeLoading)
+{
+    for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    DicomOptions o;
+    o.memoryCapBytes = 1000; // the 16×12×3 float grid alone is 2304 bytes
+    try {
+        loadDicom({mDir}, o);
+        FAIL() << "the memory cap was not enforced";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("memory cap"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(DicomSeries, TruncatedPixelDataNamesTheFileAndField)
+{
+    for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    const fs::path victim = mDir / "s1.dcm";
+    fs::resize_file(victim, fs::file_size(victim) - 100);
+    try {
+        loadDicom({mDir});
+        FAIL() << "a truncated file loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("s1.dcm"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("PixelData"), std::string::npos) << msg;
+    }
+}
+
+TEST_F(DicomSeries, UnsupportedOrContradictoryTransferSyntaxIsRefused)
+{
+    for (auto ts : {gdcm::TransferSyntax::MPEG2MainProfile, gdcm::TransferSyntax::JPEG2000Lossless}) {
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+        for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+        voxhap::test::relabelTransferSyntax(mDir / "s2.dcm", ts);
+        try {
+            loadDicom({mDir});
+            FAIL() << "a file with transfer syntax " << int(ts) << " and plain pixel data loaded";
+        } catch (const voxhap::IoError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find("s2.dcm"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("(0002,0010) TransferSyntaxUID"), std::string::npos) << msg;
+        }
+    }
+}
+
+TEST_F(DicomSeries, OutOfRangePixelModuleValuesAreRefusedBeforeGdcmDecodes)
+{
+    // GDCM asserts (aborts the process) on SamplesPerPixel > 4; found by mutating files.
+    for (int k = 0; k < 2; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    gdcm::Reader r;
+    r.SetFileName((mDir / "s1.dcm").string().c_str());
+    ASSERT_TRUE(r.Read());
+    gdcm::Attribute<0x0028, 0x0002> spp;
+    spp.SetValue(9);
+    r.GetFile().GetDataSet().Replace(spp.GetAsDataElement());
+    gdcm::Writer w;
+    w.SetFile(r.GetFile());
+    w.SetFileName((mDir / "s1.dcm").string().c_str());
+    ASSERT_TRUE(w.Write());
+    try {
+        loadDicom({mDir});
+        FAIL() << "SamplesPerPixel 9 loaded";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("s1.dcm: (0028,0002) SamplesPerPixel"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(DicomSeries, NonDicomFilesAreSkippedAndAnEmptyFolderIsAnError)
+{
+    std::ofstream(mDir / "notes.txt") << "not an image\n";
+    try {
+        listDicomSeries({mDir});
+        FAIL() << "a folder without DICOM gave a series";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("no DICOM image"), std::string::npos) << e.what();
+    }
+    for (int k = 0; k < 2; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    EXPECT_EQ(loadDicom({mDir}).indexBox().dims().z(), 2);
+    EXPECT_TRUE(looksLikeDicom(mDir / "s0.dcm"));
+    EXPECT_FALSE(looksLikeDicom(mDir / "notes.txt"));
+}
+
+TEST_F(DicomSeries, MixedOrientationAndDuplicatePositionsAreRefused)
+{
+    std::vector<SyntheticSlice> slices;
+    for (int k = 0; k < 3; ++k) slices.push_back(slice(k));
+    slices[2].rowDirection = Vec3d(0, 1, 0);
+    slices[2].columnDirection = Vec3d(1, 0, 0);
+    writeShuffled(slices);
+    try {
+        loadDicom({mDir});
+        FAIL() << "slices of different orientation loaded as one volume";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("ImageOrientationPatient"), std::string::npos) << e.what();
+    }
+
+    fs::remove_all(mDir);
+    fs::create_directories(mDir);
+    slices = {slice(0), slice(1), slice(1)};
+    writeShuffled(slices);
+    try {
+        loadDicom({mDir});
+        FAIL() << "two slices at one position loaded";
+    } catch (const voxhap::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("same position"), std::string::npos) << e.what();
+    }
+}
+
+} // namespace

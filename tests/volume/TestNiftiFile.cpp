@@ -1,0 +1,174 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestNiftiFile.cpp
+/// @brief NIfTI files written here with niftilib (oblique sform, qform only,
+/// gzip, scaled int16) read back in LPS with exact values; bad files refused
+/// with one message naming the file and the field.
+
+#include "common/Tolerances.h"
+
+#include "volume/Errors.h"
+#include "volume/Grids.h"
+#include "volume/NiftiFile.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <nifti2_io.h>
+
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using voxhap::Mat3d;
+using voxhap::Vec3d;
+using namespace voxhap::volume;
+
+/// NIfTI-1 stores srow and the quaternion as float32: ~6e-6 mm of rounding on
+/// coordinates of ~100 mm, and the quaternion's rotation is recomputed from
+/// three floats. 1e-4 mm is well above that and far below a voxel.
+constexpr double kNiftiFloatMm = 1e-4;
+
+class Nifti : public testing::Test {
+protected:
+    void SetUp() override
+    {
+        mDir = fs::temp_directory_path() /
+               ("voxhap-nifti-" + std::to_string(::getpid()) + "-" + testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(mDir);
+        nifti_set_debug_level(0);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    static constexpr int kNx = 10, kNy = 7, kNz = 9;
+    static float value(int i, int j, int k) { return i == 0 ? -1000.0f : float(-500 + 29 * i + 13 * j + 7 * k) + 0.5f; }
+
+    /// An oblique ijk → RAS map: rotation × diag(spacing), then an offset.
+    static Eigen::Matrix4d rasMatrix()
+    {
+        const Mat3d r = (Eigen::AngleAxisd(0.5, Vec3d(1, 2, 3).normalized())).toRotationMatrix();
+        Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+        m.topLeftCorner<3, 3>() = r * Vec3d(0.8, 1.1, 2.0).asDiagonal();
+        m.topRightCorner<3, 1>() = Vec3d(30.5, -72.25, 15.0);
+        return m;
+    }
+
+    /// Write a float volume with the given transform fields set.
+    fs::path write(const std::string& name, bool sform, bool qform) const
+    {
+        const int64_t dims[8] = {3, kNx, kNy, kNz, 1, 1, 1, 1};
+        nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
+        float* data = static_cast<float*>(nim->data);
+        for (int k = 0; k < kNz; ++k)
+            for (int j = 0; j < kNy; ++j)
+                for (int i = 0; i < kNx; ++i) data[(k * kNy + j) * kNx + i] = value(i, j, k);
+        const Eigen::Matrix4d m = rasMatrix();
+        nifti_dmat44 mat;
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) mat.m[r][c] = m(r, c);
+        nim->sform_code = sform ? NIFTI_XFORM_SCANNER_ANAT : 0;
+        nim->sto_xyz = mat;
+        nim->qform_code = qform ? NIFTI_XFORM_SCANNER_ANAT : 0;
+        nifti_dmat44_to_quatern(mat, &nim->quatern_b, &nim->quatern_c, &nim->quatern_d, &nim->qoffset_x,
+                                &nim->qoffset_y, &nim->qoffset_z, &nim->dx, &nim->dy, &nim->dz, &nim->qfac);
+        nim->pixdim[1] = nim->dx;
+        nim->pixdim[2] = nim->dy;
+        nim->pixdim[3] = nim->dz;
+        const fs::path p = mDir / name;
+        nifti_set_filenames(nim, p.string().c_str(), 0, 1);
+        nifti_image_write(nim);
+        nifti_image_free(nim);
+        return p;
+    }
+
+    void expectLoadedInLps(const fs::path& p) const
+    {
+        const Volume v = loadNifti(p);
+        EXPECT_EQ(v.indexBox().dims(), voxhap::Vec3i(kNx, kNy, kNz));
+        const Eigen::Matrix4d m = rasMatrix();
+        for (const Vec3d& ijk : {Vec3d(0, 0, 0), Vec3d(kNx - 1, 0, 0), Vec3d(3, kNy - 1, kNz - 1)}) {
+            const Vec3d ras = (m * ijk.homogeneous()).head<3>();
+            const Vec3d lps(-ras.x(), -ras.y(), ras.z());
+            EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(ijk), lps, kNiftiFloatMm)) << ijk.transpose();
+        }
+        auto acc = huGrid(v)->getConstAccessor();
+        for (int k = 0; k < kNz; ++k)
+            for (int j = 0; j < kNy; ++j)
+                for (int i = 1; i < kNx; ++i) ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), value(i, j, k)) << i << j << k;
+        EXPECT_FALSE(acc.isValueOn(openvdb::Coord(0, 3, 3))) << "air is inactive";
+    }
+    static void expectRefused(const fs::path& p, const std::string& field, const RasterOptions& o = {})
+    {
+        try {
+            loadNifti(p, o);
+            ADD_FAILURE() << p << " loaded; expected an error about " << field;
+        } catch (const voxhap::IoError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << msg;
+            EXPECT_NE(msg.find(field), std::string::npos) << msg;
+        }
+    }
+    fs::path mDir;
+};
+
+TEST_F(Nifti, ObliqueSformReadsInLps) { expectLoadedInLps(write("sform.nii", true, false)); }
+
+TEST_F(Nifti, QformAloneReadsInLps) { expectLoadedInLps(write("qform.nii", false, true)); }
+
+TEST_F(Nifti, GzipFileReadsTheSame) { expectLoadedInLps(write("both.nii.gz", true, true)); }
+
+TEST_F(Nifti, ScaledIntegersBecomeExactValues)
+{
+    const int64_t dims[8] = {3, 4, 3, 2, 1, 1, 1, 1};
+    nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+    auto* data = static_cast<std::int16_t*>(nim->data);
+    for (int n = 0; n < 24; ++n) data[n] = std::int16_t(100 * n);
+    nim->scl_slope = 2.0;
+    nim->scl_inter = -1024.0;
+    const fs::path p = mDir / "scaled.nii";
+    nifti_set_filenames(nim, p.string().c_str(), 0, 1);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+    const Volume v = loadNifti(p);
+    auto acc = huGrid(v)->getConstAccessor();
+    EXPECT_EQ(acc.getValue(openvdb::Coord(3, 2, 1)), 2.0f * 100 * 23 - 1024.0f);
+    EXPECT_EQ(acc.getValue(openvdb::Coord(1, 0, 0)), 2.0f * 100 - 1024.0f);
+    EXPECT_EQ(v.metadata().extra.at("nifti_transform"), "pixdim (no orientation in the file)");
+}
+
+TEST_F(Nifti, BadFilesAreRefusedNamingTheField)
+{
+    const fs::path good = write("good.nii", true, false);
+    const auto copy = [&](const std::string& name, std::size_t keep, std::size_t patchAt = 0, const std::string& patch = {}) {
+        std::ifstream in(good, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        bytes.resize(std::min(bytes.size(), keep));
+        if (!patch.empty()) bytes.replace(patchAt, patch.size(), patch);
+        std::ofstream(mDir / name, std::ios::binary) << bytes;
+        return mDir / name;
+    };
+    expectRefused(copy("short-data.nii", fs::file_size(good) - 40), "data");
+    expectRefused(copy("short-header.nii", 200), "header");
+    expectRefused(copy("magic.nii", 1 << 20, 344, std::string("xx1\0", 4)), "magic");
+    // dim[] (int16 at offset 40) = {4, 10, 7, 9, 2}: a time series of two volumes.
+    expectRefused(copy("4d.nii", 1 << 20, 40, std::string("\x04\x00\x0a\x00\x07\x00\x09\x00\x02\x00", 10)), "dim");
+    RasterOptions small;
+    small.memoryCapBytes = 1000; // 10×7×9 floats = 2520 bytes
+    expectRefused(good, "memory cap", small);
+}
+
+TEST_F(Nifti, NanVoxelIsRefused)
+{
+    const int64_t dims[8] = {3, 2, 2, 2, 1, 1, 1, 1};
+    nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
+    static_cast<float*>(nim->data)[5] = std::numeric_limits<float>::quiet_NaN(); // voxel (1, 0, 1)
+    const fs::path p = mDir / "nan.nii";
+    nifti_set_filenames(nim, p.string().c_str(), 0, 1);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+    expectRefused(p, "voxel (1, 0, 1) is not a finite number");
+}
+
+} // namespace

@@ -1,0 +1,220 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestNrrdFile.cpp
+/// @brief .nrrd: exact round trips with oblique directions (raw and gzip), the
+/// header Slicer reads (checked by parsing it here), RAS files converted to
+/// LPS, and bad files refused with one message naming the file and field.
+
+#include "common/Tolerances.h"
+
+#include "volume/Errors.h"
+#include "volume/Grids.h"
+#include "volume/NrrdFile.h"
+#include "volume/SparseSlabs.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using voxhap::Vec3d;
+using voxhap::Vec3i;
+using namespace voxhap::volume;
+
+class Nrrd : public testing::Test {
+protected:
+    void SetUp() override
+    {
+        mDir = fs::temp_directory_path() /
+               ("voxhap-nrrd-" + std::to_string(::getpid()) + "-" + testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(mDir);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    /// Value at voxel (i, j, k): varied, with an air corner (i = 0) below the threshold.
+    static float value(int i, int j, int k) { return i == 0 ? -1000.0f : float(-900 + 37 * i + 11 * j - 5 * k) + 0.25f; }
+
+    /// A 11 × 9 × 10 volume (not multiples of the 8-voxel leaf) with oblique axes.
+    static Volume makeVolume()
+    {
+        Geometry g;
+        g.spacing = Vec3d(0.7, 1.3, 2.5);
+        g.origin = Vec3d(-12.5, 40.25, 101.0);
+        g.direction = (Eigen::AngleAxisd(0.3, Vec3d::UnitZ()) * Eigen::AngleAxisd(-0.2, Vec3d(1, 1, 0).normalized()))
+                          .toRotationMatrix();
+        Volume v(g, IndexBox{Vec3i::Zero(), Vec3i(10, 8, 9)});
+        SparseSlabs slabs(kAirHu, -950.0f);
+        std::vector<float> data(11 * 9 * 10);
+        for (int k = 0; k < 10; ++k)
+            for (int j = 0; j < 9; ++j)
+                for (int i = 0; i < 11; ++i) data[std::size_t((k * 9 + j) * 11 + i)] = value(i, j, k);
+        slabs.addSlab(data.data(), 11, 9, 0, 8); // slabs are one leaf (8 slices) thick
+        slabs.addSlab(data.data() + 11 * 9 * 8, 11, 9, 8, 2);
+        v.setGrid(Channel::Hu, slabs.finish());
+        v.metadata().modality = "CT";
+        return v;
+    }
+    void writeText(const fs::path& p, const std::string& header, const std::string& data = {}) const
+    {
+        std::ofstream out(p, std::ios::binary);
+        out << header << data;
+    }
+    /// Load @p p expecting an IoError whose message names the file and contains @p field.
+    static void expectRefused(const fs::path& p, const std::string& field, const RasterOptions& o = {})
+    {
+        try {
+            loadNrrd(p, o);
+            ADD_FAILURE() << p << " loaded; expected an error about " << field;
+        } catch (const voxhap::IoError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << msg;
+            EXPECT_NE(msg.find(field), std::string::npos) << msg;
+            EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+        }
+    }
+    fs::path mDir;
+};
+
+TEST_F(Nrrd, RoundTripIsExactWithObliqueDirections)
+{
+    const Volume v = makeVolume();
+    for (NrrdEncoding enc : {NrrdEncoding::Raw, NrrdEncoding::Gzip}) {
+        const fs::path p = mDir / (enc == NrrdEncoding::Raw ? "raw.nrrd" : "gz.nrrd");
+        saveNrrd(v, Channel::Hu, p, enc);
+        const Volume back = loadNrrd(p);
+        EXPECT_EQ(back.indexBox(), v.indexBox());
+        const Geometry a = v.geometry(), b = back.geometry();
+        EXPECT_TRUE(voxhap::test::nearVec(b.origin, a.origin, voxhap::test::kRoundTripMm));
+        EXPECT_TRUE(voxhap::test::nearVec(b.spacing, a.spacing, voxhap::test::kGeometryRelative * 10));
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_TRUE(voxhap::test::nearVec(b.direction.col(c), a.direction.col(c), voxhap::test::kGeometryRelative)) << c;
+        }
+        EXPECT_EQ(back.metadata().modality, "CT");
+        auto acc = huGrid(back)->getConstAccessor();
+        for (int k = 0; k < 10; ++k)
+            for (int j = 0; j < 9; ++j)
+                for (int i = 0; i < 11; ++i) {
+                    const openvdb::Coord c(i, j, k);
+                    const float expected = value(i, j, k) < -950.0f ? kAirHu : value(i, j, k);
+                    ASSERT_EQ(acc.getValue(c), expected) << c; // exact: float bits written and read back
+                    EXPECT_EQ(acc.isValueOn(c), expected != kAirHu) << c;
+                }
+    }
+}
+
+TEST_F(Nrrd, HeaderGivesSlicerTheLpsGeometry)
+{
+    const Volume v = makeVolume();
+    const fs::path p = mDir / "v.nrrd";
+    saveNrrd(v, Channel::Hu, p, NrrdEncoding::Raw);
+    std::ifstream in(p, std::ios::binary);
+    std::string line, directions, origin, space;
+    while (std::getline(in, line) && !line.empty()) {
+        if (line.rfind("space directions: ", 0) == 0) directions = line.substr(18);
+        if (line.rfind("space origin: ", 0) == 0) origin = line.substr(14);
+        if (line.rfind("space: ", 0) == 0) space = line.substr(7);
+    }
+    EXPECT_EQ(space, "left-posterior-superior");
+    // Parse "(x,y,z) (x,y,z) (x,y,z)" here, independently of the reader.
+    const auto parse = [](std::istringstream& s) {
+        Vec3d d;
+        char c;
+        s >> c >> d.x() >> c >> d.y() >> c >> d.z() >> c;
+        return d;
+    };
+    std::istringstream ds(directions), os(origin);
+    const Geometry g = v.geometry();
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_TRUE(voxhap::test::nearVec(parse(ds), g.direction.col(a) * g.spacing[a], voxhap::test::kRoundTripMm)) << a;
+    }
+    EXPECT_TRUE(voxhap::test::nearVec(parse(os), v.indexToWorld(Vec3d::Zero()), voxhap::test::kRoundTripMm))
+        << "space origin is the centre of voxel (0,0,0)";
+    // Raw data: the header plus 11·9·10 floats, nothing more.
+    const auto headerBytes = std::size_t(in.tellg());
+    EXPECT_EQ(fs::file_size(p), headerBytes + 11 * 9 * 10 * sizeof(float));
+}
+
+TEST_F(Nrrd, RasSpaceIsConvertedToLps)
+{
+    // One axis-aligned 2×1×1 float volume in RAS: +i runs to the patient's
+    // right (RAS +x), so in LPS it runs along -x, and the origin's x and y flip.
+    const float data[2] = {10.0f, 20.0f};
+    writeText(mDir / "ras.nrrd",
+              "NRRD0004\ntype: float\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 1 1\n"
+              "space directions: (1.5,0,0) (0,2,0) (0,0,3)\nkinds: domain domain domain\nendian: little\n"
+              "encoding: raw\nspace origin: (10,20,30)\n\n",
+              std::string(reinterpret_cast<const char*>(data), sizeof data));
+    const Volume v = loadNrrd(mDir / "ras.nrrd");
+    EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(0, 0, 0)), Vec3d(-10, -20, 30), voxhap::test::kRoundTripMm));
+    EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(1, 0, 0)), Vec3d(-11.5, -20, 30), voxhap::test::kRoundTripMm));
+    EXPECT_EQ(huGrid(v)->getConstAccessor().getValue(openvdb::Coord(1, 0, 0)), 20.0f);
+}
+
+TEST_F(Nrrd, BadFilesAreRefusedNamingTheField)
+{
+    const std::string good = "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 4 4 2\n"
+                             "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n"
+                             "space origin: (0,0,0)\n\n";
+    const std::string data(4 * 4 * 2 * 2, '\0');
+    const auto with = [&](const std::string& from, const std::string& to) {
+        std::string h = good;
+        h.replace(h.find(from), from.size(), to);
+        return h;
+    };
+    writeText(mDir / "ok.nrrd", good, data);
+    EXPECT_NO_THROW(loadNrrd(mDir / "ok.nrrd"));
+
+    writeText(mDir / "magic.nrrd", "NRRX0004\n" + good.substr(9), data);
+    expectRefused(mDir / "magic.nrrd", "magic");
+    writeText(mDir / "short.nrrd", good, data.substr(0, data.size() - 3));
+    expectRefused(mDir / "short.nrrd", "data");
+    writeText(mDir / "noheaderend.nrrd", good.substr(0, 60));
+    expectRefused(mDir / "noheaderend.nrrd", "header");
+    writeText(mDir / "sizes.nrrd", with("sizes: 4 4 2", "sizes: 4 4"), data);
+    expectRefused(mDir / "sizes.nrrd", "sizes");
+    writeText(mDir / "type.nrrd", with("type: short", "type: complex"), data);
+    expectRefused(mDir / "type.nrrd", "type");
+    writeText(mDir / "nospace.nrrd", with("space: left-posterior-superior\n", ""), data);
+    expectRefused(mDir / "nospace.nrrd", "space");
+    writeText(mDir / "flat.nrrd", with("(0,0,1)", "(1,0,0)"), data);
+    expectRefused(mDir / "flat.nrrd", "space directions");
+    writeText(mDir / "detached.nrrd", with("encoding: raw\n", "encoding: raw\ndata file: x.raw\n"), data);
+    expectRefused(mDir / "detached.nrrd", "data file");
+    writeText(mDir / "twice.nrrd", with("encoding: raw\n", "encoding: raw\nencoding: gzip\n"), data);
+    expectRefused(mDir / "twice.nrrd", "encoding");
+    writeText(mDir / "gz.nrrd", with("encoding: raw", "encoding: gzip"), "this is not a gzip stream at all");
+    expectRefused(mDir / "gz.nrrd", "data");
+}
+
+TEST_F(Nrrd, DimensionsOverTheMemoryCapAreRefusedBeforeReading)
+{
+    // 100000³ floats would be 4e15 bytes: refused from the header alone (no data follows).
+    writeText(mDir / "huge.nrrd", "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 100000 100000 100000\n"
+                                  "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n");
+    expectRefused(mDir / "huge.nrrd", "memory cap");
+    RasterOptions small;
+    small.memoryCapBytes = 100; // 4×4×2 floats = 128 bytes
+    writeText(mDir / "small.nrrd", "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
+                                   "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
+              std::string(128, '\0'));
+    expectRefused(mDir / "small.nrrd", "memory cap", small);
+}
+
+TEST_F(Nrrd, NanVoxelIsRefusedWithItsIndex)
+{
+    std::vector<float> data(4 * 4 * 2, 0.0f);
+    data[4 * 4 + 4 + 2] = std::numeric_limits<float>::quiet_NaN(); // voxel (2, 1, 1)
+    writeText(mDir / "nan.nrrd",
+              "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
+              "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
+              std::string(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float)));
+    expectRefused(mDir / "nan.nrrd", "voxel (2, 1, 1) is not a finite number");
+}
+
+} // namespace

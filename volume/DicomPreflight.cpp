@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file DicomPreflight.cpp
+/// @brief Element-header walk: explicit/implicit VR, little/big endian,
+/// undefined-length sequences, items and encapsulated pixel fragments.
+
+#include "volume/DicomPreflight.h"
+
+#include "volume/Errors.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+namespace voxhap::volume {
+
+namespace {
+
+constexpr std::uint32_t kUndefined = 0xFFFFFFFFu;
+constexpr int kMaxDepth = 32; // real files nest a few levels; bounds the recursion
+
+struct Tag {
+    std::uint16_t group = 0, element = 0;
+    bool is(std::uint16_t g, std::uint16_t e) const { return group == g && element == e; }
+    std::string text() const
+    {
+        char buf[16];
+        std::snprintf(buf, sizeof buf, "(%04X,%04X)", group, element);
+        return buf;
+    }
+};
+
+class Walker {
+public:
+    Walker(const std::filesystem::path& file, std::ifstream& in, std::uint64_t size) : mFile(file), mIn(in), mSize(size) {}
+
+    /// Meta header (always explicit VR little endian); returns the offset after it.
+    std::uint64_t meta(std::uint64_t pos, std::string& transferSyntax)
+    {
+        std::uint64_t groupEnd = 0;
+        for (;;) {
+            if (pos >= mSize) break;
+            unsigned char h[12]; // 8 bytes, 12 for the long VRs (length() reads the rest)
+            read(pos, h, 8, Tag{0x0002, 0x0000});
+            const Tag t{u16(h, false), u16(h + 2, false)};
+            if (t.group != 0x0002) break;
+            std::uint64_t header = 0;
+            const std::uint32_t len = length(pos, h, true, false, t, header);
+            if (len == kUndefined) fail(t, "undefined length in the meta header");
+            need(pos + header + len, t);
+            if (t.is(0x0002, 0x0010)) {
+                transferSyntax.resize(len);
+                read(pos + header, transferSyntax.data(), len, t);
+                while (!transferSyntax.empty() && (transferSyntax.back() == '\0' || transferSyntax.back() == ' '))
+                    transferSyntax.pop_back();
+            }
+            if (t.is(0x0002, 0x0000) && len == 4) {
+                unsigned char v[4];
+                read(pos + header, v, 4, t);
+                groupEnd = pos + header + len + u32(v, false);
+            }
+            pos += header + len;
+        }
+        // GDCM trusts the group length and the presence of a data set.
+        if (groupEnd && groupEnd != pos) fail(Tag{0x0002, 0x0000}, "FileMetaInformationGroupLength does not match the meta header (truncated or corrupt file)");
+        if (pos >= mSize) fail(Tag{0x0002, 0x0000}, "no data set after the meta header (truncated file)");
+        return pos;
+    }
+
+    /// Elements from @p pos to @p end, or to an item delimiter when @p end is undefined.
+    std::uint64_t dataset(std::uint64_t pos, std::uint64_t end, bool untilDelimiter, bool explicitVr, bool big, int depth)
+    {
+        if (depth > kMaxDepth) fail(Tag{}, "sequences nested deeper than " + std::to_string(kMaxDepth) + " levels");
+        while (untilDelimiter || pos < end) {
+            if (!untilDelimiter && pos + 8 > end) fail(Tag{}, "element header runs past its sequence item");
+            unsigned char h[12];
+            read(pos, h, 8, Tag{});
+            const Tag t{u16(h, big), u16(h + 2, big)};
+            if (t.is(0xFFFE, 0xE00D)) return pos + 8; // item delimiter
+            std::uint64_t header = 0;
+            const std::uint32_t len = length(pos, h, explicitVr, big, t, header);
+            pos += header;
+            if (len == kUndefined) {
+                pos = sequence(pos, explicitVr, big, depth + 1, t);
+            } else {
+                need(pos + len, t);
+                if (!untilDelimiter) {
+                    if (pos + len > end) fail(t, "element runs past its sequence item");
+                }
+                pos += len;
+            }
+        }
+        return pos;
+    }
+
+private:
+    /// Items of an undefined-length sequence or encapsulated pixel data, up to (FFFE,E0DD).
+    std::uint64_t sequence(std::uint64_t pos, bool explicitVr, bool big, int depth, const Tag& owner)
+    {
+        if (depth > kMaxDepth) fail(owner, "sequences nested deeper than " + std::to_string(kMaxDepth) + " levels");
+        for (;;) {
+            unsigned char h[8];
+            read(pos, h, 8, owner);
+            const Tag t{u16(h, big), u16(h + 2, big)};
+            const std::uint32_t len = u32(h + 4, big);
+            pos += 8;
+            if (t.is(0xFFFE, 0xE0DD)) return pos;
+            if (!t.is(0xFFFE, 0xE000)) fail(owner, "expected a sequence item, found " + t.text());
+            if (len == kUndefined) {
+                pos = dataset(pos, 0, true, explicitVr, big, depth + 1);
+            } else {
+                need(pos + len, owner);
+                pos += len;
+            }
+        }
+    }
+
+    std::uint32_t length(std::uint64_t pos, unsigned char* h, bool explicitVr, bool big, const Tag& t, std::uint64_t& header)
+    {
+        const bool item = t.group == 0xFFFE;
+        if (!explicitVr || item) {
+            header = 8;
+            return u32(h + 4, big);
+        }
+        const char vr[3] = {char(h[4]), char(h[5]), 0};
+        if (vr[0] < 'A' || vr[0] > 'Z' || vr[1] < 'A' || vr[1] > 'Z') fail(t, "invalid value representation");
+        static const char* kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV", "UC", "UN", "UR", "UT", "UV"};
+        for (const char* l : kLong) {
+            if (std::strcmp(l, vr) == 0) {
+                read(pos + 8, h + 8, 4, t);
+                header = 12;
+                return u32(h + 8, big);
+            }
+        }
+        header = 8;
+        return u16(h + 6, big);
+    }
+
+    void read(std::uint64_t pos, void* out, std::uint64_t n, const Tag& t)
+    {
+        need(pos + n, t);
+        mIn.seekg(std::streamoff(pos));
+        if (!mIn.read(static_cast<char*>(out), std::streamsize(n))) fail(t, "cannot read");
+    }
+    void need(std::uint64_t end, const Tag& t)
+    {
+        if (end > mSize) fail(t, "runs past the end of the file (truncated file)");
+    }
+    [[noreturn]] void fail(const Tag& t, const std::string& what)
+    {
+        throw IoError(mFile.string() + ": " + (t.group || t.element ? t.text() + " " : std::string("element ")) + what);
+    }
+    static std::uint16_t u16(const unsigned char* p, bool big) { return big ? std::uint16_t(p[0] << 8 | p[1]) : std::uint16_t(p[1] << 8 | p[0]); }
+    static std::uint32_t u32(const unsigned char* p, bool big)
+    {
+        return big ? std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3]
+                   : std::uint32_t(p[3]) << 24 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[1]) << 8 | p[0];
+    }
+
+    const std::filesystem::path& mFile;
+    std::ifstream& mIn;
+    std::uint64_t mSize;
+};
+
+} // namespace
+
+DicomKind preflightDicom(const std::filesystem::path& file)
+{
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(file, ec);
+    if (ec) throw IoError(file.string() + ": cannot read (" + ec.message() + ")");
+    std::ifstream in(file, std::ios::binary);
+    char magic[132] = {};
+    if (!in.read(magic, sizeof magic) || std::memcmp(magic + 128, "DICM", 4) != 0) return DicomKind::NotDicom;
+
+    Walker walk(file, in, size);
+    std::string ts;
+    const std::uint64_t start = walk.meta(132, ts);
+    if (ts == "1.2.840.10008.1.2.1.99") return DicomKind::Dicom; // deflated data set: GDCM inflates and checks
+    const bool implicitVr = ts == "1.2.840.10008.1.2";
+    const bool big = ts == "1.2.840.10008.1.2.2";
+    walk.dataset(start, size, false, !implicitVr, big, 0);
+    return DicomKind::Dicom;
+}
+
+} // namespace voxhap::volume

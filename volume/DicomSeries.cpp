@@ -1,0 +1,293 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file DicomSeries.cpp
+/// @brief Series grouping, slice geometry, memory cap, slab-wise sparse loading.
+
+#include "volume/DicomSeries.h"
+
+#include "volume/DicomHeaders.h"
+#include "volume/DicomPixels.h"
+#include "volume/Errors.h"
+#include "volume/Grids.h"
+#include "volume/SliceResample.h"
+#include "volume/SliceStack.h"
+#include "volume/SparseSlabs.h"
+
+#include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+namespace voxhap::volume {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One 2D slice: a frame of a file, with its rescale.
+struct Slice {
+    std::size_t file = 0;   ///< index into the series' headers
+    int frame = 0;
+    Vec3d position{0, 0, 0};
+    double slope = 1, intercept = 0;
+};
+
+std::string mib(std::uint64_t bytes)
+{
+    std::ostringstream os;
+    os.precision(1);
+    os << std::fixed << double(bytes) / double(1 << 20) << " MiB";
+    return os.str();
+}
+
+const DicomSeriesInfo& chooseSeries(const std::vector<DicomSeriesInfo>& all, const std::string& wanted)
+{
+    if (wanted.empty()) {
+        // Largest CT, else the largest series (the list is sorted largest first).
+        for (const auto& s : all) {
+            if (s.modality == "CT") return s;
+        }
+        return all.front();
+    }
+    for (const auto& s : all) {
+        if (s.uid == wanted) return s;
+    }
+    if (std::all_of(wanted.begin(), wanted.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
+        const std::size_t n = std::stoul(wanted);
+        if (n >= 1 && n <= all.size()) return all[n - 1];
+    }
+    throw ValueError("series '" + wanted + "': not found (" + std::to_string(all.size()) +
+                     " series present; give a SeriesInstanceUID or a number from 1 to " + std::to_string(all.size()) + ")");
+}
+
+/// Frames of a file decoded on demand; multi-frame files are decoded once.
+class FrameSource {
+public:
+    explicit FrameSource(const std::vector<DicomHeader>& headers) : mHeaders(headers), mCache(headers.size()) {}
+
+    /// Copy one frame, rescaled, into @p out (rows × columns floats); padding becomes @p air.
+    void read(const Slice& s, float* out, float air)
+    {
+        std::shared_ptr<const DicomFrames> cached;
+        const DicomFrames* frames = nullptr;
+        const DicomHeader& h = mHeaders[s.file];
+        if (h.frames > 1) {
+            std::lock_guard<std::mutex> lock(mMutex);
+            if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file, h.padding));
+            cached = mCache[s.file];
+            frames = cached.get();
+        } else {
+            thread_local DicomFrames scratch; // one per decoding thread, buffers reused slice after slice
+            decodeDicomFrames(h.file, h.padding, scratch);
+            frames = &scratch;
+        }
+        if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {
+            throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
+                          "pixel data dimensions differ from the header");
+        }
+        const std::size_t plane = std::size_t(h.rows) * std::size_t(h.columns);
+        const float* in = frames->values.data() + plane * std::size_t(s.frame);
+        const std::uint8_t* pad = frames->padding.empty() ? nullptr : frames->padding.data() + plane * std::size_t(s.frame);
+        for (std::size_t n = 0; n < plane; ++n) {
+            // Rescale in double: slope·stored + intercept is exact for integer
+            // stored values and integer slope/intercept, as CT has.
+            out[n] = (pad && pad[n]) ? air : float(s.slope * double(in[n]) + s.intercept);
+        }
+    }
+
+private:
+    const std::vector<DicomHeader>& mHeaders;
+    std::vector<std::shared_ptr<const DicomFrames>> mCache;
+    std::mutex mMutex;
+};
+
+} // namespace
+
+bool looksLikeDicom(const fs::path& path)
+{
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) return true;
+    std::ifstream in(path, std::ios::binary);
+    char magic[132] = {};
+    if (!in.read(magic, sizeof magic)) return false;
+    return std::string(magic + 128, 4) == "DICM";
+}
+
+namespace {
+
+std::vector<DicomSeriesInfo> groupSeries(const std::vector<DicomHeader>& headers)
+{
+    std::map<std::string, DicomSeriesInfo> byUid;
+    for (const DicomHeader& h : headers) {
+        DicomSeriesInfo& s = byUid[h.seriesUid];
+        if (s.files.empty()) {
+            s.uid = h.seriesUid;
+            s.modality = h.modality;
+            s.description = h.seriesDescription;
+            s.number = h.seriesNumber;
+            s.rows = h.rows;
+            s.columns = h.columns;
+        }
+        s.files.push_back(h.file);
+        s.slices += h.frames;
+    }
+    std::vector<DicomSeriesInfo> all;
+    for (auto& [uid, s] : byUid) all.push_back(std::move(s));
+    std::stable_sort(all.begin(), all.end(), [](const DicomSeriesInfo& a, const DicomSeriesInfo& b) {
+        return a.slices * a.rows * a.columns > b.slices * b.rows * b.columns;
+    });
+    return all;
+}
+
+} // namespace
+
+std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs)
+{
+    return groupSeries(scanDicomHeaders(inputs));
+}
+
+Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& options, DicomLoadReport* report)
+{
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<DicomHeader> scanned = scanDicomHeaders(inputs);
+    const std::vector<DicomSeriesInfo> all = groupSeries(scanned);
+    const DicomSeriesInfo& series = chooseSeries(all, options.series);
+
+    std::vector<DicomHeader> headers;
+    for (DicomHeader& h : scanned) {
+        if (h.seriesUid == series.uid) headers.push_back(std::move(h));
+    }
+    for (DicomHeader& h : headers) completeDicomHeader(h);
+    const DicomHeader& first = headers.front();
+    const bool isMr = first.modality == "MR";
+
+    // Every slice must share the first one's grid: orientation, size, pixel spacing.
+    for (const DicomHeader& h : headers) checkSameGrid(first, h);
+    const Vec3d row = first.rowDirection, col = first.columnDirection;
+    const Vec3d normal = row.cross(col).normalized();
+
+    std::vector<Slice> slices;
+    std::vector<SlicePlacement> placements;
+    for (std::size_t f = 0; f < headers.size(); ++f) {
+        const DicomHeader& h = headers[f];
+        for (int k = 0; k < h.frames; ++k) {
+            placements.push_back({h.framePositions[std::size_t(k)], slices.size()});
+            slices.push_back({f, k, h.framePositions[std::size_t(k)], h.slope, h.intercept});
+        }
+    }
+    SliceStackGeometry stack;
+    try {
+        stack = orderSlices(placements, normal);
+    } catch (const ValueError& e) {
+        throw IoError(series.files.front().parent_path().string() + ": (0020,0032) ImagePositionPatient: " + e.what());
+    }
+    if (!stack.problem.empty() && first.gantryTilt != 0.0 && stack.tilted) {
+        stack.problem += " ((0018,1120) GantryDetectorTilt " + std::to_string(first.gantryTilt) + " deg)";
+    }
+    const bool resample = !stack.problem.empty();
+    if (resample && options.irregular == IrregularSlices::Refuse) {
+        throw IoError(series.files.front().parent_path().string() + ": (0020,0032) ImagePositionPatient: " +
+                      stack.problem + "; refusing (ask for resampling to load it on a uniform grid)");
+    }
+
+    Geometry geo;
+    geo.spacing = Vec3d(first.pixelSpacing[1], first.pixelSpacing[0], 1.0);
+    if (slices.size() > 1) geo.spacing[2] = stack.step;
+    else if (first.sliceThickness > 0) geo.spacing[2] = first.sliceThickness; // one slice: nothing else to go by
+    geo.direction.col(0) = row;
+    geo.direction.col(1) = col;
+    geo.direction.col(2) = normal;
+    geo.origin = stack.slices.front().position;
+
+    const int nx = first.columns, ny = first.rows;
+    int nz = int(slices.size());
+    if (resample) {
+        const double length = (stack.slices.back().position - stack.slices.front().position).dot(normal);
+        nz = int(std::lround(length / stack.step)) + 1;
+    }
+    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+    // Worst case: every voxel active in the float grid (leaf overhead is ~1%),
+    // plus one slab, plus the whole input stack when resampling.
+    const std::uint64_t need = std::uint64_t(plane) * std::uint64_t(nz) * sizeof(float) +
+                               std::uint64_t(plane) * SparseSlabs::kSlabSlices * sizeof(float) +
+                               (resample ? std::uint64_t(plane) * slices.size() * sizeof(float) : 0);
+    if (need > options.memoryCapBytes) {
+        throw IoError(series.files.front().parent_path().string() + ": (0028,0010) Rows × (0028,0011) Columns × slices = " +
+                      std::to_string(nx) + "×" + std::to_string(ny) + "×" + std::to_string(nz) + " voxels may need " +
+                      mib(need) + ", over the memory cap of " + mib(options.memoryCapBytes));
+    }
+
+    const float background = isMr ? kAirT1 : kAirHu;
+    const float airBelow = isMr ? options.airT1 : options.airHu;
+    SparseSlabs sparse(background, airBelow);
+    FrameSource source(headers);
+    std::vector<float> slab(plane * SparseSlabs::kSlabSlices);
+    const auto readSlice = [&](std::size_t sorted, float* out) {
+        source.read(slices[stack.slices[sorted].source], out, background);
+    };
+
+    if (!resample) {
+        for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
+            const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);
+            tbb::parallel_for(0, n, [&](int k) { readSlice(std::size_t(k0 + k), slab.data() + plane * std::size_t(k)); });
+            sparse.addSlab(slab.data(), nx, ny, k0, n);
+            if (options.progress) options.progress(double(k0 + n) / nz);
+        }
+    } else {
+        std::vector<float> input(plane * slices.size());
+        tbb::parallel_for(std::size_t(0), slices.size(), [&](std::size_t k) { readSlice(k, input.data() + plane * k); });
+        SliceResampler resampler(stack, input.data(), nx, ny, row, col, geo.spacing.head<2>(), background);
+        for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
+            const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);
+            tbb::parallel_for(0, n, [&](int k) {
+                resampler.sample(geo.origin + double(k0 + k) * geo.spacing[2] * normal, slab.data() + plane * std::size_t(k));
+            });
+            sparse.addSlab(slab.data(), nx, ny, k0, n);
+            if (options.progress) options.progress(double(k0 + n) / nz);
+        }
+    }
+
+    Volume v(geo, IndexBox{Vec3i::Zero(), Vec3i(nx - 1, ny - 1, nz - 1)});
+    Volume::GridPtr grid;
+    try {
+        grid = sparse.finish();
+    } catch (const ValueError& e) {
+        throw IoError(series.files.front().parent_path().string() + ": " + e.what());
+    }
+    v.setGrid(isMr ? Channel::T1 : Channel::Hu, grid);
+
+    VolumeMetadata& md = v.metadata();
+    md.modality = first.modality.empty() ? "unknown" : first.modality;
+    md.source = "DICOM series " + series.uid;
+    md.description = first.seriesDescription;
+    if (isMr) {
+        const bool map = options.t1Map || first.looksLikeT1Map();
+        md.t1Units = map ? "ms" : "T1-weighted intensity (arbitrary units, not normalised)";
+        md.extra["t1_kind"] = map ? "T1 map" : "T1-weighted";
+    }
+    md.extra["series_uid"] = series.uid;
+    md.extra["slices"] = std::to_string(slices.size());
+    std::ostringstream air;
+    air << airBelow;
+    md.extra["air_below"] = air.str();
+    if (resample) md.extra["resampled"] = stack.problem;
+
+    if (report) {
+        report->series = series;
+        report->allSeries = all;
+        report->denseVoxels = v.indexBox().voxelCount();
+        report->activeVoxels = std::int64_t(grid->activeVoxelCount());
+        report->memoryBytes = grid->memUsage();
+        report->resampled = resample;
+        report->irregularity = stack.problem;
+        report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    return v;
+}
+
+} // namespace voxhap::volume

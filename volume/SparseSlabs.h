@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file SparseSlabs.h
+/// @brief Build a sparse float grid from a dense volume delivered slab by slab
+/// (a few slices at a time), so that the dense volume never exists whole.
+///
+/// Values are copied exactly (tolerance 0: a tolerance would collapse soft
+/// tissue into constant tiles); voxels below the air threshold become the
+/// inactive background. Memory stays at the sparse result plus one slab.
+#pragma once
+
+#include "volume/Volume.h"
+
+#include <cstdint>
+#include <memory>
+
+namespace voxhap::volume {
+
+/// @brief Collects z-slabs of a dense array (x fastest, then y, then z) into a
+/// FloatGrid whose background is @p background.
+/// @note Not thread-safe; addSlab itself runs in parallel (TBB).
+class SparseSlabs {
+public:
+    /// @param background the inactive value (kAirHu or kAirT1)
+    /// @param airBelow   values below this become inactive background (air)
+    SparseSlabs(float background, float airBelow);
+    ~SparseSlabs();
+    SparseSlabs(const SparseSlabs&) = delete;
+    SparseSlabs& operator=(const SparseSlabs&) = delete;
+
+    /// @brief Slab thickness in slices that keeps slabs aligned with OpenVDB leaves.
+    static constexpr int kSlabSlices = 8;
+
+    /// @brief Add slices k0 .. k0+nz-1 of an nx × ny image stack.
+    /// @param data nx·ny·nz values, x fastest (read only)
+    /// @param k0   a multiple of kSlabSlices; nz at most kSlabSlices; each slab added once
+    /// @throw ValueError on a non-finite value (naming its index) or a misaligned slab
+    void addSlab(float* data, int nx, int ny, int k0, int nz);
+
+    /// @brief The grid built so far (the builder is empty afterwards).
+    Volume::GridPtr finish();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
+
+} // namespace voxhap::volume
