@@ -7,7 +7,7 @@
 
 #include "volume/Errors.h"
 #include "volume/Phantoms.h"
-#include "volume/VdbFile.h"
+#include "volume/VolumeFile.h"
 
 #include <nlohmann/json.hpp>
 
@@ -300,7 +300,7 @@ std::vector<std::string> builtinSceneNames()
 
 std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, const volume::TissueTable& table)
 {
-    if (!s.file.empty()) return std::make_shared<const volume::Volume>(volume::loadVdb(s.file));
+    if (!s.file.empty()) return std::make_shared<const volume::Volume>(volume::loadVolume(s.file));
     volume::GridSpec grid;
     grid.spacing = Vec3d::Constant(s.spacingMm);
     volume::PhantomModel m;
@@ -334,6 +334,11 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
                              const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
     : mScene(scene), mVolume(vol ? std::move(vol) : makeSourceVolume(scene.volume, table))
 {
+    const bool needLabels = !scene.fixedTable || scene.terms.critical;
+    if (needLabels && !mVolume->has(volume::Channel::Label)) {
+        throw ValueError(scene.origin + ": the volume has no tissue labels, which this scene's layers and critical-structure "
+                                        "rule read: give a labelled volume (a phantom, or a segmented scan)");
+    }
     const auto pick = [&](std::optional<Vec3d> given, std::optional<Vec3d> fromScene, const std::string& mark,
                           const char* what) {
         if (given) return *given;
@@ -347,7 +352,6 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
     if (!(dir.norm() > 1e-6)) throw ValueError(scene.origin + ": path: entry and target coincide");
 
     // Only the grids the named terms read (architecture.md "Sparse by default").
-    const bool needLabels = !scene.fixedTable || scene.terms.critical;
     if (scene.terms.damping.on || needLabels) {
         MaterialOptions mo;
         mo.needs.damping = scene.terms.damping.on;

@@ -43,7 +43,7 @@ haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSou
         if (colon != std::string::npos) s.preset = input.substr(colon + 1);
         return s;
     }
-    if (!fs::exists(input)) throw IoError(input + ": no such volume file (or phantom: lumbar[:preset], torso)");
+    if (!fs::exists(input)) throw IoError(input + ": no such volume (or phantom: lumbar[:preset], torso)");
     s.file = input;
     return s;
 }
@@ -100,7 +100,8 @@ Action registerSimulate(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "simulate", "Insert a needle through a scene's force model: CSV, force-depth PNG and a summary");
     cmd->add_option("volume", o->input,
-                    "A .vdb volume, or a phantom: lumbar[:average|overweight|calcified], torso (default: the scene's)");
+                    "A labelled volume (.vdb, .nrrd, .nii, .mha, DICOM folder), or a phantom: lumbar[:average|overweight|calcified], "
+                    "torso (default: the scene's)");
     cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name (" + names + ")")->required();
     cmd->add_option("--entry", o->entry, "Entry point on the skin x,y,z [mm, LPS] (default: the scene's)");
     cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS] (default: the scene's)");
