@@ -6,6 +6,8 @@
 
 #include "common/DicomWriter.h"
 
+#include "common/SharedData.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -21,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kCtDir = fs::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
+const fs::path kCtDir = voxhap::test::realCtDir();
 
 struct Result {
     int exitCode = -1;
@@ -84,7 +86,7 @@ void expectFailure(const Result& r, int code, const std::string& fragment)
 
 TEST_F(CliConvert, RealCtToVdbAndNrrd)
 {
-    if (!fs::is_directory(kCtDir)) GTEST_SKIP() << "real CT not found at " << kCtDir;
+    VOXHAP_REQUIRE_DIR(kCtDir);
     const Result vdb = run("convert '" + kCtDir.string() + "' ct.vdb --json");
     ASSERT_EQ(vdb.exitCode, 0) << vdb.err;
     EXPECT_TRUE(vdb.err.empty()) << "no progress bar when stderr is not a terminal: " << vdb.err;

@@ -5,6 +5,7 @@
 /// through GDCM, apart from the reader), exact HU, anatomy (spine posterior
 /// and midline, reads as bone). Skipped, with a message, where the data is absent.
 
+#include "common/SharedData.h"
 #include "common/Tolerances.h"
 
 #include "volume/DicomSeries.h"
@@ -23,7 +24,7 @@ namespace fs = std::filesystem;
 using voxhap::Vec3d;
 using namespace voxhap::volume;
 
-const fs::path kCtDir = fs::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
+const fs::path kCtDir = voxhap::test::realCtDir();
 
 /// Positions and spacings are DICOM decimal strings ("1.07421875", "484.91"):
 /// parsed into doubles they carry ~1e-13 mm of rounding; differences of them
@@ -45,7 +46,8 @@ protected:
     }
     void SetUp() override
     {
-        if (!sVolume) GTEST_SKIP() << "real CT not found at " << kCtDir << " (the shared data folder is absent)";
+        VOXHAP_REQUIRE_DIR(kCtDir);
+        ASSERT_TRUE(sVolume) << "the real CT did not load";
     }
     /// One file through GDCM's image reader: origin and rescaled pixels.
     struct Slice {
