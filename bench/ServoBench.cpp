@@ -149,7 +149,7 @@ IgtlRoundTrip igtlRoundTrip(const haptic::SceneInstance& inst, double seconds)
 
 } // namespace
 
-ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std::string&))
+ServoReport runServoBench(const ServoBenchOptions& o, const std::function<void(const std::string&)>& progress)
 {
     ServoReport report;
     report.machine = machineDescription();

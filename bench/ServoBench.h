@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -43,7 +44,7 @@ struct ServoReport {
     IgtlRoundTrip igtl;             ///< at 1 kHz on the first scene
 };
 
-ServoReport runServoBench(const ServoBenchOptions& o, void (*progress)(const std::string&) = nullptr);
+ServoReport runServoBench(const ServoBenchOptions& o, const std::function<void(const std::string&)>& progress = {});
 void printServoReport(std::ostream& os, const ServoReport& r);
 nlohmann::json servoReportJson(const ServoReport& r);
 

@@ -2,6 +2,7 @@
 /// @file Insertion.cpp
 #include "haptic/Insertion.h"
 
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 
 #include <algorithm>
@@ -128,10 +129,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
 
 void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layers, const std::filesystem::path& file)
 {
-    const std::filesystem::path tmp = file.string() + ".part";
-    {
-        std::ofstream o(tmp);
-        if (!o) throw IoError(file.string() + ": cannot write");
+    volume::writeStreamAtomically(file, [&](std::ostream& o) {
         o << "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n";
         o << std::setprecision(9);
         for (const InsertionRow& row : r.rows) {
@@ -142,9 +140,7 @@ void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layer
             for (int k = 0; k < row.eventCount; ++k) o << (k ? ";" : "") << eventName(r.events[std::size_t(row.firstEvent + k)].type);
             o << '\n';
         }
-        if (!o.flush()) throw IoError(file.string() + ": write failed");
-    }
-    std::filesystem::rename(tmp, file);
+    });
 }
 
 std::string insertionSummaryText(const InsertionResult& r, const std::vector<Layer>& layers)

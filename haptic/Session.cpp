@@ -2,11 +2,13 @@
 /// @file Session.cpp
 #include "haptic/Session.h"
 
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 
@@ -16,18 +18,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-template <typename Fill>
-void writeAtomically(const fs::path& file, Fill&& fill)
+/// A CSV written whole or not at all, 10 significant digits.
+void writeCsv(const fs::path& file, const std::function<void(std::ostream&)>& fill)
 {
-    const fs::path tmp = file.string() + ".part";
-    {
-        std::ofstream o(tmp);
-        if (!o) throw IoError(file.string() + ": cannot write");
+    volume::writeStreamAtomically(file, [&](std::ostream& o) {
         o << std::setprecision(10);
         fill(o);
-        if (!o.flush()) throw IoError(file.string() + ": write failed");
-    }
-    fs::rename(tmp, file);
+    });
 }
 
 } // namespace
@@ -36,7 +33,7 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
 {
     fs::create_directories(dir);
     const auto layerName = [&](int i) { return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : ""; };
-    writeAtomically(dir / "session.csv", [&](std::ostream& o) {
+    writeCsv(dir / "session.csv", [&](std::ostream& o) {
         o << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
              "fault,critical,plunger_fraction\n";
         for (const ServoRecord& r : s.records) {
@@ -47,7 +44,7 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
               << int(r.critical) << ',' << r.plungerFraction << '\n';
         }
     });
-    writeAtomically(dir / "events.csv", [&](std::ostream& o) {
+    writeCsv(dir / "events.csv", [&](std::ostream& o) {
         o << "t_s,depth_mm,event,layer\n";
         for (const Event& e : s.events) o << e.timeS << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
     });

@@ -6,8 +6,10 @@
 
 #include "bench/SamplerBench.h"
 #include "bench/ServoBench.h"
+#include "volume/AtomicFile.h"
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -24,6 +26,22 @@ struct BenchOptions {
     std::string json, png;
 };
 
+/// A progress line on a terminal, overwritten in place; nothing otherwise.
+std::function<void(const std::string&)> progressLine()
+{
+    const bool tty = stderrIsTerminal();
+    return [tty](const std::string& stage) {
+        if (tty) std::cerr << "\r\033[K" << stage << std::flush;
+    };
+}
+
+void writeJson(const std::string& file, const nlohmann::json& j)
+{
+    if (file.empty()) return;
+    volume::writeStreamAtomically(file, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    std::cout << "json: " << file << '\n';
+}
+
 int runSampler(BenchOptions o)
 {
     if (o.quick) {
@@ -32,18 +50,11 @@ int runSampler(BenchOptions o)
         o.sampler.repetitions = 2;
     }
     o.sampler.vtk = !o.noVtk;
-    const bool tty = stderrIsTerminal();
-    const auto report = bench::runSamplerBench(o.sampler, [tty](const std::string& stage) {
-        if (tty) std::cerr << "\r\033[K" << stage << std::flush;
-    });
-    if (tty) std::cerr << "\r\033[K";
+    const auto progress = progressLine();
+    const auto report = bench::runSamplerBench(o.sampler, progress);
+    progress("");
     bench::printSamplerReport(std::cout, report);
-    if (!o.json.empty()) {
-        const std::string tmp = o.json + ".tmp";
-        std::ofstream(tmp) << bench::samplerReportJson(report).dump(2) << '\n';
-        std::filesystem::rename(tmp, o.json);
-        std::cout << "json: " << o.json << '\n';
-    }
+    writeJson(o.json, bench::samplerReportJson(report));
     if (!o.png.empty()) {
         std::string why;
         if (!bench::plotSamplerReport(report, o.png, why)) throw std::runtime_error(o.png + ": " + why);
@@ -59,19 +70,11 @@ int runServo(BenchOptions o)
         o.servo.ladderSeconds = 1.0;
         o.servo.igtlSeconds = 3.0;
     }
-    static bool tty = false;
-    tty = stderrIsTerminal();
-    const auto report = bench::runServoBench(o.servo, [](const std::string& stage) {
-        if (tty) std::cerr << "\r\033[K" << stage << std::flush;
-    });
-    if (tty) std::cerr << "\r\033[K";
+    const auto progress = progressLine();
+    const auto report = bench::runServoBench(o.servo, progress);
+    progress("");
     bench::printServoReport(std::cout, report);
-    if (!o.json.empty()) {
-        const std::string tmp = o.json + ".tmp";
-        std::ofstream(tmp) << bench::servoReportJson(report).dump(2) << '\n';
-        std::filesystem::rename(tmp, o.json);
-        std::cout << "json: " << o.json << '\n';
-    }
+    writeJson(o.json, bench::servoReportJson(report));
     return 0;
 }
 

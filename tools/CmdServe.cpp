@@ -10,6 +10,7 @@
 #include "haptic/ServoLoop.h"
 #include "haptic/Session.h"
 #include "haptic/SimulatedDevices.h"
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 
 #include <nlohmann/json.hpp>
@@ -149,14 +150,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
                         {"overruns", loop.overruns()},
                         {"dropped_records", loop.droppedRecords()},
                         {"interrupted", bool(gInterrupted)}};
-    {
-        const fs::path f = fs::path(o.out) / "metrics.json";
-        std::ofstream out(f.string() + ".part");
-        out << j.dump(2) << '\n';
-        if (!out.flush()) throw IoError(f.string() + ": write failed");
-        out.close();
-        fs::rename(f.string() + ".part", f);
-    }
+    volume::writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
     if (o.common.json) {
         std::cout << j.dump(2) << '\n';
         return 0;

@@ -3,7 +3,7 @@
 #include "tools/SimulationOutputs.h"
 
 #include "tools/ForcePlot.h"
-#include "volume/Errors.h"
+#include "volume/AtomicFile.h"
 
 #include <cmath>
 #include <filesystem>
@@ -57,12 +57,7 @@ SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::
     f.plotted = plot && plotForceDepth(r, inst.layers(), scene.name + ": " + scene.description, png, f.plotWhy);
     if (f.plotted) f.png = png;
     f.summary = summaryJson(r, scene, f.csv, f.png);
-    {
-        std::ofstream out(f.json + ".part");
-        out << f.summary.dump(2) << '\n';
-        if (!out.flush()) throw IoError(f.json + ": write failed");
-    }
-    fs::rename(f.json + ".part", f.json);
+    volume::writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });
     return f;
 }
 

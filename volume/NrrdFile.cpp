@@ -6,6 +6,7 @@
 
 #include "volume/NrrdFile.h"
 
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
 
@@ -21,7 +22,6 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
-#include <unistd.h> // for getpid: a per-process temporary name
 
 namespace voxhap::volume {
 
@@ -32,7 +32,7 @@ static_assert(std::endian::native == std::endian::little, "the header says \"end
 /// Streams bytes to a file, raw or through a gzip deflater.
 class Sink {
 public:
-    Sink(std::ofstream& out, NrrdEncoding enc) : mOut(out), mGzip(enc == NrrdEncoding::Gzip)
+    Sink(std::ostream& out, NrrdEncoding enc) : mOut(out), mGzip(enc == NrrdEncoding::Gzip)
     {
         // windowBits 15 + 16: a gzip wrapper, which NRRD's "gzip" encoding means.
         // Level 1: about 5x faster than the default on CT, files ~10% larger.
@@ -67,7 +67,7 @@ private:
         } while (mZ.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
     }
 
-    std::ofstream& mOut;
+    std::ostream& mOut;
     bool mGzip;
     z_stream mZ{};
 };
@@ -118,25 +118,14 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
     if (!v.metadata().modality.empty()) h << "voxhap_modality:=" << v.metadata().modality << "\n";
     h << "\n";
 
-    std::filesystem::path tmp = file;
-    tmp += ".tmp." + std::to_string(::getpid());
-    try {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error("cannot create the file");
+    writeStreamAtomically(file, [&](std::ostream& out) {
         const std::string header = h.str();
         out.write(header.data(), std::streamsize(header.size()));
         Sink sink(out, encoding);
         if (c == Channel::Label) writeVoxels(*labelGrid(v), box, sink);
         else writeVoxels(c == Channel::Hu ? *huGrid(v) : *t1Grid(v), box, sink);
         sink.finish();
-        out.close();
-        if (!out) throw std::runtime_error("write failed (disk full?)");
-        std::filesystem::rename(tmp, file);
-    } catch (const std::exception& e) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw IoError(file.string() + ": cannot write (" + e.what() + ")");
-    }
+    });
 }
 
 namespace {

@@ -4,13 +4,13 @@
 
 #include "volume/VdbFile.h"
 
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/io/File.h>
 
 #include <fstream>
-#include <unistd.h> // for getpid: a per-process temporary name
 
 namespace voxhap::volume {
 
@@ -54,18 +54,11 @@ void saveVdb(const Volume& v, const std::filesystem::path& file)
     meta.insertMeta("voxhap.index_min", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().min.data())));
     meta.insertMeta("voxhap.index_max", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().max.data())));
 
-    std::filesystem::path tmp = file;
-    tmp += ".tmp." + std::to_string(::getpid());
-    try {
+    writeAtomically(file, [&](const std::filesystem::path& tmp) {
         openvdb::io::File out(tmp.string());
         out.write(grids, meta);
         out.close();
-        std::filesystem::rename(tmp, file);
-    } catch (const std::exception& e) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw IoError(file.string() + ": cannot write (" + e.what() + ")");
-    }
+    });
 }
 
 Volume loadVdb(const std::filesystem::path& file)

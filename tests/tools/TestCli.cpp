@@ -3,6 +3,8 @@
 /// @brief The voxhap command line: exit codes, one-line errors, no partial
 /// output, and the acceptance check (overweight lumbar phantom layers).
 
+#include "common/CliRunner.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -18,59 +20,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-    int exitCode = -1;
-    std::string out, err;
-    std::size_t errLines() const { return std::size_t(std::count(err.begin(), err.end(), '\n')); }
-};
-
-class Cli : public testing::Test {
-protected:
-    void SetUp() override
-    {
-        mDir = fs::temp_directory_path() /
-               ("voxhap-cli-" + std::to_string(::getpid()) + "-" +
-                testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
-
-    /// Run `voxhap <args>` in the test's directory.
-    Result run(const std::string& args) const
-    {
-        const fs::path out = mDir / "stdout.txt", err = mDir / "stderr.txt";
-        const std::string cmd = "cd '" + mDir.string() + "' && '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args + " >'" +
-                                out.string() + "' 2>'" + err.string() + "'";
-        const int status = std::system(cmd.c_str());
-        Result r;
-        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        fs::remove(out);
-        fs::remove(err);
-        return r;
-    }
-    static std::string slurp(const fs::path& p)
-    {
-        std::ifstream in(p);
-        std::ostringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
-    fs::path mDir;
-};
-
-/// Exit @p code with exactly one line on stderr that contains @p fragment.
-void expectError(const Result& r, int code, const std::string& fragment)
-{
-    EXPECT_EQ(r.exitCode, code) << r.err;
-    EXPECT_EQ(r.errLines(), 1u) << r.err;
-    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
-}
-/// A usage error (exit 2).
-void expectUsageError(const Result& r, const std::string& fragment) { expectError(r, 2, fragment); }
-/// A failure of the work, such as a bad file (exit 1).
-void expectFailure(const Result& r, const std::string& fragment) { expectError(r, 1, fragment); }
+using Result = voxhap::test::CliResult;
+using Cli = voxhap::test::CliTest;
+using voxhap::test::expectFailure;
+using voxhap::test::expectUsageError;
+using voxhap::test::slurp;
 
 TEST_F(Cli, HelpExplainsTheCommands)
 {

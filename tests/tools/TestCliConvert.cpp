@@ -4,8 +4,8 @@
 /// run as a user would: outputs, series listing, quiet stderr when not on a
 /// terminal, and one-line failures that leave no output behind.
 
+#include "common/CliRunner.h"
 #include "common/DicomWriter.h"
-
 #include "common/SharedData.h"
 
 #include <gtest/gtest.h>
@@ -25,43 +25,10 @@ namespace fs = std::filesystem;
 
 const fs::path kCtDir = voxhap::test::realCtDir();
 
-struct Result {
-    int exitCode = -1;
-    std::string out, err;
-    std::size_t errLines() const { return std::size_t(std::count(err.begin(), err.end(), '\n')); }
-};
+using Result = voxhap::test::CliResult;
 
-class CliConvert : public testing::Test {
+class CliConvert : public voxhap::test::CliTest {
 protected:
-    void SetUp() override
-    {
-        mDir = fs::temp_directory_path() / ("voxhap-convert-" + std::to_string(::getpid()) + "-" +
-                                            testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
-
-    Result run(const std::string& args) const
-    {
-        const fs::path out = mDir / "stdout.txt", err = mDir / "stderr.txt";
-        const std::string cmd = "cd '" + mDir.string() + "' && '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args + " >'" +
-                                out.string() + "' 2>'" + err.string() + "'";
-        const int status = std::system(cmd.c_str());
-        Result r;
-        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        fs::remove(out);
-        fs::remove(err);
-        return r;
-    }
-    static std::string slurp(const fs::path& p)
-    {
-        std::ifstream in(p);
-        std::ostringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
     /// A small CT series of @p n slices in folder @p dir, series @p uid.
     void writeSeries(const fs::path& dir, int n, const std::string& uid, double step = 2.0) const
     {
@@ -74,15 +41,9 @@ protected:
             voxhap::test::writeSyntheticSlice(s, dir / (uid.substr(uid.size() - 1) + "-" + std::to_string(k) + ".dcm"));
         }
     }
-    fs::path mDir;
 };
 
-void expectFailure(const Result& r, int code, const std::string& fragment)
-{
-    EXPECT_EQ(r.exitCode, code) << r.err;
-    EXPECT_EQ(r.errLines(), 1u) << r.err;
-    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
-}
+void expectFailure(const Result& r, int code, const std::string& fragment) { voxhap::test::expectError(r, code, fragment); }
 
 TEST_F(CliConvert, RealCtToVdbAndNrrd)
 {

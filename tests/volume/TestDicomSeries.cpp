@@ -5,6 +5,7 @@
 /// uneven step, tilt) refused or resampled, series choice, bad files.
 
 #include "common/DicomWriter.h"
+#include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
 #include "volume/DicomSeries.h"
@@ -40,16 +41,8 @@ constexpr double kLinearResampleHu = 1e-2;
 /// Column 0 is air (0 → HU = intercept, far below the air threshold).
 std::int16_t storedValue(int i, int j, int k) { return i == 0 ? std::int16_t(0) : std::int16_t(900 + 7 * i + 13 * j + 31 * k); }
 
-class DicomSeries : public testing::Test {
+class DicomSeries : public voxhap::test::TempDirTest {
 protected:
-    void SetUp() override
-    {
-        mDir = fs::temp_directory_path() / ("voxhap-dicom-" + std::to_string(::getpid()) + "-" +
-                                            testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(mDir);
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
 
     /// A slice k of the standard series at position base + k·step·normal.
     static SyntheticSlice slice(int k, double step = 2.5)
@@ -75,7 +68,6 @@ protected:
             voxhap::test::writeSyntheticSlice(slices[n], mDir / (prefix + std::to_string(100 + names[n]) + ".dcm"));
         }
     }
-    fs::path mDir;
 };
 
 TEST_F(DicomSeries, ShuffledFilesLoadInPositionOrderWithPerSliceRescale)

@@ -4,6 +4,7 @@
 /// TransformMatrix in LPS, inline raw and zlib data, a separate .raw file,
 /// big-endian samples, and bad headers refused naming the file and field.
 
+#include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
 #include "volume/Errors.h"
@@ -26,15 +27,8 @@ using voxhap::Mat3d;
 using voxhap::Vec3d;
 using namespace voxhap::volume;
 
-class MetaImage : public testing::Test {
+class MetaImage : public voxhap::test::TempDirTest {
 protected:
-    void SetUp() override
-    {
-        mDir = fs::temp_directory_path() /
-               ("voxhap-mha-" + std::to_string(::getpid()) + "-" + testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
 
     static constexpr int kNx = 9, kNy = 6, kNz = 5;
     static std::int16_t stored(int i, int j, int k) { return i == 0 ? std::int16_t(-1000) : std::int16_t(-300 + 41 * i + 17 * j + 3 * k); }
@@ -83,18 +77,11 @@ protected:
                     ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), e) << i << "," << j << "," << k;
                 }
     }
+    /// Load @p p expecting an IoError whose one-line message names the file and contains @p field.
     static void expectRefused(const fs::path& p, const std::string& field, const RasterOptions& o = {})
     {
-        try {
-            loadMetaImage(p, o);
-            ADD_FAILURE() << p << " loaded; expected an error about " << field;
-        } catch (const voxhap::IoError& e) {
-            const std::string msg = e.what();
-            EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << msg;
-            EXPECT_NE(msg.find(field), std::string::npos) << msg;
-        }
+        voxhap::test::expectRefused<voxhap::IoError>([&](const fs::path& f) { loadMetaImage(f, o); }, p, field);
     }
-    fs::path mDir;
 };
 
 TEST_F(MetaImage, InlineRawDataWithObliqueTransform)

@@ -4,6 +4,7 @@
 /// gzip, scaled int16) read back in LPS with exact values; bad files refused
 /// with one message naming the file and the field.
 
+#include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
 #include "volume/Errors.h"
@@ -31,16 +32,13 @@ using namespace voxhap::volume;
 /// three floats. 1e-4 mm is well above that and far below a voxel.
 constexpr double kNiftiFloatMm = 1e-4;
 
-class Nifti : public testing::Test {
+class Nifti : public voxhap::test::TempDirTest {
 protected:
     void SetUp() override
     {
-        mDir = fs::temp_directory_path() /
-               ("voxhap-nifti-" + std::to_string(::getpid()) + "-" + testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(mDir);
+        TempDirTest::SetUp();
         nifti_set_debug_level(0);
     }
-    void TearDown() override { fs::remove_all(mDir); }
 
     static constexpr int kNx = 10, kNy = 7, kNz = 9;
     static float value(int i, int j, int k) { return i == 0 ? -1000.0f : float(-500 + 29 * i + 13 * j + 7 * k) + 0.5f; }
@@ -99,18 +97,11 @@ protected:
                 for (int i = 1; i < kNx; ++i) ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), value(i, j, k)) << i << j << k;
         EXPECT_FALSE(acc.isValueOn(openvdb::Coord(0, 3, 3))) << "air is inactive";
     }
+    /// Load @p p expecting an IoError whose one-line message names the file and contains @p field.
     static void expectRefused(const fs::path& p, const std::string& field, const RasterOptions& o = {})
     {
-        try {
-            loadNifti(p, o);
-            ADD_FAILURE() << p << " loaded; expected an error about " << field;
-        } catch (const voxhap::IoError& e) {
-            const std::string msg = e.what();
-            EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << msg;
-            EXPECT_NE(msg.find(field), std::string::npos) << msg;
-        }
+        voxhap::test::expectRefused<voxhap::IoError>([&](const fs::path& f) { loadNifti(f, o); }, p, field);
     }
-    fs::path mDir;
 };
 
 TEST_F(Nifti, ObliqueSformReadsInLps) { expectLoadedInLps(write("sform.nii", true, false)); }

@@ -4,6 +4,7 @@
 /// header Slicer reads (checked by parsing it here), RAS files converted to
 /// LPS, and bad files refused with one message naming the file and field.
 
+#include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
 #include "volume/Errors.h"
@@ -27,15 +28,8 @@ using voxhap::Vec3d;
 using voxhap::Vec3i;
 using namespace voxhap::volume;
 
-class Nrrd : public testing::Test {
+class Nrrd : public voxhap::test::TempDirTest {
 protected:
-    void SetUp() override
-    {
-        mDir = fs::temp_directory_path() /
-               ("voxhap-nrrd-" + std::to_string(::getpid()) + "-" + testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
 
     /// Value at voxel (i, j, k): varied, with an air corner (i = 0) below the threshold.
     static float value(int i, int j, int k) { return i == 0 ? -1000.0f : float(-900 + 37 * i + 11 * j - 5 * k) + 0.25f; }
@@ -65,20 +59,11 @@ protected:
         std::ofstream out(p, std::ios::binary);
         out << header << data;
     }
-    /// Load @p p expecting an IoError whose message names the file and contains @p field.
+    /// Load @p p expecting an IoError whose one-line message names the file and contains @p field.
     static void expectRefused(const fs::path& p, const std::string& field, const RasterOptions& o = {})
     {
-        try {
-            loadNrrd(p, o);
-            ADD_FAILURE() << p << " loaded; expected an error about " << field;
-        } catch (const voxhap::IoError& e) {
-            const std::string msg = e.what();
-            EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << msg;
-            EXPECT_NE(msg.find(field), std::string::npos) << msg;
-            EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
-        }
+        voxhap::test::expectRefused<voxhap::IoError>([&](const fs::path& f) { loadNrrd(f, o); }, p, field);
     }
-    fs::path mDir;
 };
 
 TEST_F(Nrrd, RoundTripIsExactWithObliqueDirections)
