@@ -37,34 +37,37 @@ struct SyntheticSlice {
     std::vector<std::int16_t> pixels;    ///< rows × columns stored values, column fastest
 };
 
-/// @brief Write @p s as a CT or MR Image Storage file (explicit VR little endian).
-inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::path& file)
+/// @brief The image fields a single slice and a multi-frame file share: pixel format,
+/// geometry of @p s with slice step @p step, rescale and the pixel data @p pixels.
+inline void setImage(gdcm::Image& img, const SyntheticSlice& s, unsigned frames, double step,
+                     const std::vector<std::int16_t>& pixels)
 {
-    gdcm::ImageWriter w;
-    gdcm::Image& img = w.GetImage();
-    img.SetNumberOfDimensions(2);
+    img.SetNumberOfDimensions(frames > 1 ? 3 : 2); // 3: GDCM writes Enhanced CT with per-frame groups
     img.SetDimension(0, unsigned(s.columns));
     img.SetDimension(1, unsigned(s.rows));
+    if (frames > 1) img.SetDimension(2, frames);
     img.SetPixelFormat(gdcm::PixelFormat::INT16);
     img.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
     img.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
     const double origin[3] = {s.position.x(), s.position.y(), s.position.z()};
     const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(),
                               s.columnDirection.x(), s.columnDirection.y(), s.columnDirection.z()};
-    const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], 1.0}; // GDCM: x (between columns), y
+    const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], step}; // GDCM: x (between columns), y
     img.SetOrigin(origin);
     img.SetDirectionCosines(dircos);
     img.SetSpacing(spacing);
     img.SetSlope(s.slope);
     img.SetIntercept(s.intercept);
     gdcm::DataElement pixel(gdcm::Tag(0x7fe0, 0x0010));
-    pixel.SetByteValue(reinterpret_cast<const char*>(s.pixels.data()), std::uint32_t(s.pixels.size() * 2));
+    pixel.SetByteValue(reinterpret_cast<const char*>(pixels.data()), std::uint32_t(pixels.size() * 2));
     img.SetDataElement(pixel);
+}
 
-    gdcm::DataSet& ds = w.GetFile().GetDataSet();
-    const bool mr = s.modality == "MR";
+/// @brief SOP class @p sopClass, modality and series UID of @p s.
+inline void setIdentity(gdcm::DataSet& ds, const SyntheticSlice& s, gdcm::UIDs::TSName sopClass)
+{
     gdcm::Attribute<0x0008, 0x0016> sop;
-    sop.SetValue(gdcm::UIDs::GetUIDString(mr ? gdcm::UIDs::MRImageStorage : gdcm::UIDs::CTImageStorage));
+    sop.SetValue(gdcm::UIDs::GetUIDString(sopClass));
     ds.Replace(sop.GetAsDataElement());
     gdcm::Attribute<0x0008, 0x0060> modality;
     modality.SetValue(s.modality);
@@ -72,6 +75,29 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
     gdcm::Attribute<0x0020, 0x000e> uid;
     uid.SetValue(s.seriesUid);
     ds.Replace(uid.GetAsDataElement());
+}
+
+/// @brief Read @p file, let @p edit change it, write it back.
+template <typename Edit>
+void rewrite(const std::filesystem::path& file, Edit&& edit)
+{
+    gdcm::Reader r;
+    r.SetFileName(file.string().c_str());
+    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
+    edit(r.GetFile());
+    gdcm::Writer w;
+    w.SetFile(r.GetFile());
+    w.SetFileName(file.string().c_str());
+    if (!w.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+}
+
+/// @brief Write @p s as a CT or MR Image Storage file (explicit VR little endian).
+inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::path& file)
+{
+    gdcm::ImageWriter w;
+    setImage(w.GetImage(), s, 1, 1.0, s.pixels);
+    gdcm::DataSet& ds = w.GetFile().GetDataSet();
+    setIdentity(ds, s, s.modality == "MR" ? gdcm::UIDs::MRImageStorage : gdcm::UIDs::CTImageStorage);
     gdcm::Attribute<0x0008, 0x103e> description;
     description.SetValue(s.seriesDescription);
     ds.Replace(description.GetAsDataElement());
@@ -84,29 +110,17 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
 
     // GDCM writes a 2D image's ImagePositionPatient with z = 0: put the true
     // position back with a plain reader/writer pass.
-    gdcm::Reader r;
-    r.SetFileName(file.string().c_str());
-    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
-    gdcm::Attribute<0x0020, 0x0032> ipp = {{s.position.x(), s.position.y(), s.position.z()}};
-    r.GetFile().GetDataSet().Replace(ipp.GetAsDataElement());
-    gdcm::Writer again;
-    again.SetFile(r.GetFile());
-    again.SetFileName(file.string().c_str());
-    if (!again.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+    rewrite(file, [&](gdcm::File& f) {
+        gdcm::Attribute<0x0020, 0x0032> ipp = {{s.position.x(), s.position.y(), s.position.z()}};
+        f.GetDataSet().Replace(ipp.GetAsDataElement());
+    });
 }
 
 /// @brief Rewrite @p file declaring transfer syntax @p ts while its data
 /// stays plain little-endian: a header that contradicts its pixel data.
 inline void relabelTransferSyntax(const std::filesystem::path& file, gdcm::TransferSyntax::TSType ts)
 {
-    gdcm::Reader r;
-    r.SetFileName(file.string().c_str());
-    if (!r.Read()) throw std::runtime_error("GDCM could not read back " + file.string());
-    r.GetFile().GetHeader().SetDataSetTransferSyntax(gdcm::TransferSyntax(ts));
-    gdcm::Writer w;
-    w.SetFile(r.GetFile());
-    w.SetFileName(file.string().c_str());
-    if (!w.Write()) throw std::runtime_error("GDCM could not rewrite " + file.string());
+    rewrite(file, [&](gdcm::File& f) { f.GetHeader().SetDataSetTransferSyntax(gdcm::TransferSyntax(ts)); });
 }
 
 /// @brief Write @p frames (one slice each, same grid, positions along the
@@ -114,39 +128,11 @@ inline void relabelTransferSyntax(const std::filesystem::path& file, gdcm::Trans
 inline void writeSyntheticMultiFrame(const std::vector<SyntheticSlice>& frames, double step, const std::filesystem::path& file)
 {
     const SyntheticSlice& s = frames.front();
-    gdcm::ImageWriter w;
-    gdcm::Image& img = w.GetImage();
-    img.SetNumberOfDimensions(3); // GDCM then writes Enhanced CT with per-frame functional groups
-    img.SetDimension(0, unsigned(s.columns));
-    img.SetDimension(1, unsigned(s.rows));
-    img.SetDimension(2, unsigned(frames.size()));
-    img.SetPixelFormat(gdcm::PixelFormat::INT16);
-    img.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
-    img.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
-    const double origin[3] = {s.position.x(), s.position.y(), s.position.z()};
-    const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(),
-                              s.columnDirection.x(), s.columnDirection.y(), s.columnDirection.z()};
-    const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], step};
-    img.SetOrigin(origin);
-    img.SetDirectionCosines(dircos);
-    img.SetSpacing(spacing);
-    img.SetSlope(s.slope);
-    img.SetIntercept(s.intercept);
     std::vector<std::int16_t> all;
     for (const auto& f : frames) all.insert(all.end(), f.pixels.begin(), f.pixels.end());
-    gdcm::DataElement pixel(gdcm::Tag(0x7fe0, 0x0010));
-    pixel.SetByteValue(reinterpret_cast<const char*>(all.data()), std::uint32_t(all.size() * 2));
-    img.SetDataElement(pixel);
-    gdcm::DataSet& ds = w.GetFile().GetDataSet();
-    gdcm::Attribute<0x0008, 0x0016> sop;
-    sop.SetValue(gdcm::UIDs::GetUIDString(gdcm::UIDs::EnhancedCTImageStorage));
-    ds.Replace(sop.GetAsDataElement());
-    gdcm::Attribute<0x0008, 0x0060> modality;
-    modality.SetValue(s.modality);
-    ds.Replace(modality.GetAsDataElement());
-    gdcm::Attribute<0x0020, 0x000e> uid;
-    uid.SetValue(s.seriesUid);
-    ds.Replace(uid.GetAsDataElement());
+    gdcm::ImageWriter w;
+    setImage(w.GetImage(), s, unsigned(frames.size()), step, all);
+    setIdentity(w.GetFile().GetDataSet(), s, gdcm::UIDs::EnhancedCTImageStorage);
     w.SetFileName(file.string().c_str());
     if (!w.Write()) throw std::runtime_error("GDCM could not write " + file.string());
 }
