@@ -317,18 +317,6 @@ std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, co
     return std::make_shared<const volume::Volume>(volume::makePhantom(m, grid, table));
 }
 
-namespace {
-
-std::optional<Vec3d> landmark(const volume::Volume& v, const std::string& name)
-{
-    const auto it = v.metadata().extra.find(volume::kLandmarksKey);
-    if (it == v.metadata().extra.end() || name.empty()) return std::nullopt;
-    const Json marks = Json::parse(it->second, nullptr, false);
-    if (!marks.is_object() || !marks.contains(name) || !marks[name].is_array() || marks[name].size() != 3) return std::nullopt;
-    return Vec3d(marks[name][0].get<double>(), marks[name][1].get<double>(), marks[name][2].get<double>());
-}
-
-} // namespace
 
 SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::Volume> vol,
                              const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
@@ -343,7 +331,7 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
                           const char* what) {
         if (given) return *given;
         if (fromScene) return *fromScene;
-        if (auto p = landmark(*mVolume, mark)) return *p;
+        if (auto p = mark.empty() ? std::nullopt : volume::phantomLandmark(*mVolume, mark)) return *p;
         throw ValueError(scene.origin + ": path." + what + ": not given, and the volume has no landmark '" + mark + "'");
     };
     mEntry = pick(entry, scene.entry, scene.entryLandmark, "entry");

@@ -17,10 +17,10 @@ using Json = nlohmann::json;
 
 Json toJson(const Vec3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
-Vec3d vecFrom(const Json& j, const std::string& what)
+Vec3d vecFrom(const Json& j, const std::string& what, const char* key = kLayersKey)
 {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number()) {
-        throw ValueError("metadata 'voxhap." + std::string(kLayersKey) + "': '" + what + "' is not [x, y, z]");
+        throw ValueError("metadata 'voxhap." + std::string(key) + "': '" + what + "' is not [x, y, z]");
     }
     return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
 }
@@ -77,6 +77,16 @@ std::optional<PhantomLayers> phantomLayers(const Volume& v)
         out.layers.push_back(std::move(s));
     }
     return out;
+}
+
+std::optional<Vec3d> phantomLandmark(const Volume& v, const std::string& name)
+{
+    const auto it = v.metadata().extra.find(kLandmarksKey);
+    if (it == v.metadata().extra.end()) return std::nullopt;
+    const Json marks = Json::parse(it->second, nullptr, /*allow_exceptions=*/false);
+    if (!marks.is_object()) throw ValueError("metadata 'voxhap." + std::string(kLandmarksKey) + "' is not a JSON object");
+    if (!marks.contains(name)) return std::nullopt;
+    return vecFrom(marks[name], name, kLandmarksKey);
 }
 
 } // namespace voxhap::volume

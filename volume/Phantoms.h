@@ -113,4 +113,8 @@ struct PhantomLayers {
 };
 std::optional<PhantomLayers> phantomLayers(const Volume& v);
 
+/// @brief The named point @p name stored in a volume's metadata (kLandmarksKey), or
+/// nothing if the volume has no such landmark. @throw ValueError if malformed
+std::optional<Vec3d> phantomLandmark(const Volume& v, const std::string& name);
+
 } // namespace voxhap::volume

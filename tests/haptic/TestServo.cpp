@@ -209,6 +209,8 @@ TEST(Session, RecordWriteReadReplay)
     ASSERT_EQ(replayed.events.size(), original.events.size());
     for (std::size_t i = 0; i < original.events.size(); ++i) {
         EXPECT_EQ(replayed.events[i].type, original.events[i].type) << i;
+        // Poses are written with 10 significant digits (1e-8 mm at 100 mm); 1e-5 mm leaves room
+        // for the replay's interpolation between them and stays far below any layer scale.
         EXPECT_NEAR(replayed.events[i].depthMm, original.events[i].depthMm, 1e-5) << i;
     }
     // [S19] metrics: the reckless hand punctured the dura.
