@@ -34,6 +34,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests, benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # libFuzzer targets of the parsers (clang's runtime: fuzzer, address, undefined)
+  clang libclang-rt-14-dev
   # benchmark plots (pngcairo, no X needed)
   gnuplot-nox
 )

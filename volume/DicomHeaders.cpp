@@ -33,7 +33,8 @@ const gdcm::Tag kSeriesUid(0x0020, 0x000e), kModality(0x0008, 0x0060), kSeriesDe
     kFrames(0x0028, 0x0008), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037), kPixelSpacing(0x0028, 0x0030),
     kThickness(0x0018, 0x0050), kSlope(0x0028, 0x1053), kIntercept(0x0028, 0x1052), kTilt(0x0018, 0x1120),
     kPadding(0x0028, 0x0120), kPixelRepresentation(0x0028, 0x0103), kSamplesPerPixel(0x0028, 0x0002),
-    kBitsAllocated(0x0028, 0x0100), kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102);
+    kBitsAllocated(0x0028, 0x0100), kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102),
+    kFieldStrength(0x0018, 0x0087);
 
 std::string tagName(const gdcm::Tag& t, const char* name)
 {
@@ -199,7 +200,7 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
     gdcm::Scanner scanner;
     for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames,
                           kPosition, kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding,
-                          kPixelRepresentation, kSamplesPerPixel, kBitsAllocated, kBitsStored, kHighBit}) {
+                          kPixelRepresentation, kSamplesPerPixel, kBitsAllocated, kBitsStored, kHighBit, kFieldStrength}) {
         scanner.AddTag(t);
     }
     scanner.Scan(names(files));
@@ -272,6 +273,7 @@ void completeDicomHeader(DicomHeader& h)
         h.imageType = trim(get(kImageType));
         h.gantryTilt = optionalNumber(get(kTilt), f, kTilt, "GantryDetectorTilt").value_or(0.0);
         h.sliceThickness = optionalNumber(get(kThickness), f, kThickness, "SliceThickness").value_or(0.0);
+        h.fieldStrength = optionalNumber(get(kFieldStrength), f, kFieldStrength, "MagneticFieldStrength");
         h.padding = optionalNumber(get(kPadding), f, kPadding, "PixelPaddingValue");
         if (h.padding && trim(get(kPixelRepresentation)) == "1" && *h.padding >= 32768) {
             *h.padding -= 65536; // the scanner shows US/SS padding values unsigned

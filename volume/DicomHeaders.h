@@ -28,6 +28,7 @@ struct DicomHeader {
     double slope = 1, intercept = 0;    ///< (0028,1053), (0028,1052)
     double gantryTilt = 0;              ///< (0018,1120) [deg]
     std::optional<double> padding;      ///< (0028,0120) in stored units
+    std::optional<double> fieldStrength; ///< (0018,0087) MagneticFieldStrength [T], MR only
     /// The scanned values, keyed by (group << 16 | element), parsed by completeDicomHeader.
     std::map<std::uint32_t, std::string> tags;
 

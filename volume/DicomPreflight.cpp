@@ -77,7 +77,10 @@ public:
             unsigned char h[12];
             read(pos, h, 8, Tag{});
             const Tag t{u16(h, big), u16(h + 2, big)};
-            if (t.is(0xFFFE, 0xE00D)) return pos + 8; // item delimiter
+            if (t.is(0xFFFE, 0xE00D) && untilDelimiter) return pos + 8; // end of an undefined-length item
+            // Item tags anywhere else: GDCM would re-read the rest with other
+            // lengths than this walk checked (found by fuzz/FuzzDicomPreflight).
+            if (t.group == 0xFFFE) fail(t, "item tag outside a sequence");
             std::uint64_t header = 0;
             const std::uint32_t len = length(pos, h, explicitVr, big, t, header);
             pos += header;

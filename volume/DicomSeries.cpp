@@ -11,6 +11,7 @@
 #include "volume/SliceResample.h"
 #include "volume/SliceStack.h"
 #include "volume/SparseSlabs.h"
+#include "volume/T1Normalisation.h"
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -144,6 +145,21 @@ std::vector<DicomSeriesInfo> groupSeries(const std::vector<DicomHeader>& headers
     return all;
 }
 
+/// T1-weighted intensities → T1 [ms] (physics.md §5.1); the raw values stay,
+/// labelled "not normalised" with the reason, when the scan does not allow it.
+void normaliseT1Weighted(Volume& v, const DicomHeader& first, const DicomOptions& options, const fs::path& dir)
+{
+    const FieldStrength field = first.fieldStrength ? nearestFieldStrength(*first.fieldStrength) : options.assumedField;
+    try {
+        applyT1wNormalisation(v, fitT1wNormalisation(v, TissueTable::builtin(), field, dir.string()));
+        v.metadata().extra["t1_norm_field_source"] =
+            first.fieldStrength ? "(0018,0087) MagneticFieldStrength" : "assumed: (0018,0087) absent";
+    } catch (const ValueError& e) {
+        v.metadata().t1Units = "T1-weighted intensity (arbitrary units, not normalised)";
+        v.metadata().extra["t1_norm_refused"] = e.what();
+    }
+}
+
 } // namespace
 
 std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs)
@@ -269,6 +285,7 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
         const bool map = options.t1Map || first.looksLikeT1Map();
         md.t1Units = map ? "ms" : "T1-weighted intensity (arbitrary units, not normalised)";
         md.extra["t1_kind"] = map ? "T1 map" : "T1-weighted";
+        if (!map && options.normaliseT1Weighted) normaliseT1Weighted(v, first, options, series.files.front().parent_path());
     }
     md.extra["series_uid"] = series.uid;
     md.extra["slices"] = std::to_string(slices.size());

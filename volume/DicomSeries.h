@@ -10,6 +10,7 @@
 /// the `t1` grid. Air is deactivated; every other value is exact.
 #pragma once
 
+#include "volume/TissueTable.h"
 #include "volume/Volume.h"
 
 #include <cstdint>
@@ -53,6 +54,13 @@ struct DicomOptions {
     std::uint64_t memoryCapBytes = std::uint64_t(4) << 30;
     /// MR only: the series holds T1 maps [ms] even if its headers do not say so.
     bool t1Map = false;
+    /// MR only: T1-weighted intensities become T1 [ms] by the per-scan rule of
+    /// physics.md §5.1 (T1Normalisation.h). If the scan shows no fat and muscle
+    /// classes, or this is off, the raw intensities stay, labelled as such,
+    /// and the force models do not read them as T1.
+    bool normaliseT1Weighted = true;
+    /// MR only: the field strength when (0018,0087) is absent.
+    FieldStrength assumedField = FieldStrength::T1_5;
     /// Called with the fraction done (0..1) as slices load; may be empty.
     std::function<void(double)> progress;
 };

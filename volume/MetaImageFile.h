@@ -8,6 +8,7 @@
 /// which the volume library must not depend on.
 #pragma once
 
+#include "volume/MetaImageHeader.h"
 #include "volume/RasterReader.h"
 #include "volume/Volume.h"
 
@@ -15,20 +16,6 @@
 #include <string_view>
 
 namespace voxhap::volume {
-
-/// @brief The checked header of a MetaImage file.
-struct MetaImageHeader {
-    RasterLayout layout;
-    Geometry geometry;
-    bool compressed = false;
-    std::filesystem::path dataFile;  ///< the file holding the voxels
-    std::uint64_t dataOffset = 0;    ///< where they start in it [bytes]
-};
-
-/// @brief Parse a header; @p text is the file's first bytes (up to 64 KiB),
-/// @p file names it in errors and locates a separate data file.
-/// @throw IoError "<file>: <field>: ..."
-MetaImageHeader parseMetaImageHeader(std::string_view text, const std::filesystem::path& file);
 
 /// @brief Read a .mha or .mhd volume into @p options.channel.
 /// @throw IoError naming the file and the field

@@ -6,6 +6,7 @@
 /// attached-header NRRD volumes (raw or gzip; LPS, RAS or LAS space).
 #pragma once
 
+#include "volume/NrrdHeader.h"
 #include "volume/RasterReader.h"
 #include "volume/Volume.h"
 
@@ -26,21 +27,6 @@ enum class NrrdEncoding {
 /// take the grid's background (air). The file appears only when complete.
 /// @throw IoError naming the file; ValueError if the channel is absent
 void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding = NrrdEncoding::Gzip);
-
-/// @brief The fields of a NRRD header that voxhap uses, checked.
-struct NrrdHeader {
-    RasterLayout layout;
-    bool gzip = false;
-    Geometry geometry;                          ///< LPS, converted from the file's space
-    std::map<std::string, std::string> keyValues; ///< "key:=value" lines
-    std::size_t dataOffset = 0;                 ///< bytes from the start of the file to the data
-};
-
-/// @brief Parse the header at the start of @p text (the file's first bytes,
-/// up to and including the blank line that ends the header).
-/// @throw IoError "<file>: <field>: ..." on a wrong magic, a missing or
-///        malformed field, or an unsupported feature (detached data, skips)
-NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file);
 
 /// @brief Read a .nrrd volume; the channel comes from the voxhap_channel
 /// key (files voxhap wrote) or else from @p options.

@@ -30,13 +30,21 @@ void initializeOpenVdb()
 
 openvdb::math::Transform::Ptr makeTransform(const Geometry& g)
 {
+    // Bounds far outside any scanner's (voxels from 1 nm to 10 m, origins within
+    // 1 km): beyond them OpenVDB's map arithmetic loses the small terms and
+    // throws its own errors (found by fuzz/FuzzNrrdHeader).
+    constexpr double kMinSpacingMm = 1e-6, kMaxSpacingMm = 1e4, kMaxOriginMm = 1e6;
     for (int i = 0; i < 3; ++i) {
-        if (!std::isfinite(g.spacing[i]) || g.spacing[i] <= 0.0) {
-            throw ValueError("geometry: spacing[" + std::to_string(i) + "] = " +
-                             std::to_string(g.spacing[i]) + " must be positive and finite");
+        if (!std::isfinite(g.spacing[i]) || g.spacing[i] < kMinSpacingMm || g.spacing[i] > kMaxSpacingMm) {
+            throw ValueError("geometry: spacing[" + std::to_string(i) + "] = " + std::to_string(g.spacing[i]) +
+                             " mm is outside 1e-6 to 1e4 mm");
         }
         if (!g.origin.allFinite() || !g.direction.allFinite()) {
             throw ValueError("geometry: origin and direction must be finite");
+        }
+        if (std::abs(g.origin[i]) > kMaxOriginMm) {
+            throw ValueError("geometry: origin[" + std::to_string(i) + "] = " + std::to_string(g.origin[i]) +
+                             " mm is more than 1 km from the scanner's origin");
         }
         if (std::abs(g.direction.col(i).norm() - 1.0) > 1e-6) {
             throw ValueError("geometry: direction column " + std::to_string(i) + " is not a unit vector");
@@ -53,7 +61,11 @@ openvdb::math::Transform::Ptr makeTransform(const Geometry& g)
         for (int c = 0; c < 3; ++c) m(r, c) = a(c, r);
         m(3, r) = g.origin[r];
     }
-    return openvdb::math::Transform::createLinearTransform(m);
+    try {
+        return openvdb::math::Transform::createLinearTransform(m);
+    } catch (const openvdb::Exception& e) {
+        throw ValueError(std::string("geometry: OpenVDB refuses the transform (") + e.what() + ")");
+    }
 }
 
 Geometry geometryOf(const openvdb::math::Transform& xform)

@@ -34,6 +34,7 @@ struct SyntheticSlice {
     double pixelSpacing[2] = {0.75, 0.5}; ///< between rows, between columns [mm]
     double slope = 1.0, intercept = -1024.0;
     double gantryTilt = 0.0;             ///< written to (0018,1120) [deg]
+    double fieldStrength = 0.0;          ///< written to (0018,0087) [T] if > 0
     std::vector<std::int16_t> pixels;    ///< rows × columns stored values, column fastest
 };
 
@@ -104,6 +105,11 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
     gdcm::Attribute<0x0018, 0x1120> tilt;
     tilt.SetValue(s.gantryTilt);
     ds.Replace(tilt.GetAsDataElement());
+    if (s.fieldStrength > 0) {
+        gdcm::Attribute<0x0018, 0x0087> field;
+        field.SetValue(s.fieldStrength);
+        ds.Replace(field.GetAsDataElement());
+    }
 
     w.SetFileName(file.string().c_str());
     if (!w.Write()) throw std::runtime_error("GDCM could not write " + file.string());

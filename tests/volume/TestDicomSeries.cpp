@@ -11,14 +11,17 @@
 #include "volume/DicomSeries.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
+#include "volume/T1Normalisation.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <numeric>
 #include <random>
+#include <tuple>
 #include <unistd.h>
 
 namespace {
@@ -306,7 +309,9 @@ TEST_F(DicomSeries, MrBecomesTheT1ChannelLabelledByKind)
         slices.push_back(s);
     }
     writeShuffled(slices);
-    const Volume weighted = loadDicom({mDir});
+    DicomOptions raw;
+    raw.normaliseT1Weighted = false;
+    const Volume weighted = loadDicom({mDir}, raw);
     EXPECT_FALSE(weighted.has(Channel::Hu));
     ASSERT_TRUE(weighted.has(Channel::T1));
     EXPECT_EQ(weighted.metadata().extra.at("t1_kind"), "T1-weighted");
@@ -320,6 +325,80 @@ TEST_F(DicomSeries, MrBecomesTheT1ChannelLabelledByKind)
     const Volume map = loadDicom({mDir});
     EXPECT_EQ(map.metadata().extra.at("t1_kind"), "T1 map");
     EXPECT_EQ(map.metadata().t1Units, "ms");
+}
+
+/// A T1-weighted MR series of four regions: background, fat (brightest),
+/// muscle and a dark fluid, written at field strength @p tesla (0: absent).
+std::vector<SyntheticSlice> fourRegionMr(double tesla)
+{
+    std::vector<SyntheticSlice> out;
+    for (int k = 0; k < 3; ++k) {
+        SyntheticSlice s;
+        s.modality = "MR";
+        s.seriesDescription = "T1 TSE sag";
+        s.slope = 1.0;
+        s.intercept = 0.0;
+        s.fieldStrength = tesla;
+        s.position = Vec3d(-20.0, -30.0, 10.0 + 2.5 * k);
+        s.pixels.resize(std::size_t(s.rows * s.columns));
+        for (int j = 0; j < s.rows; ++j)
+            for (int i = 0; i < s.columns; ++i)
+                s.pixels[std::size_t(j * s.columns + i)] = i == 0 ? 0 : i <= 5 ? 800 : i <= 11 ? 300 : 100;
+        out.push_back(s);
+    }
+    return out;
+}
+
+TEST_F(DicomSeries, T1WeightedIntensityIsNormalisedPerScanFromFatAndMuscle)
+{
+    // physics.md §5.1/§5.4: fat and muscle of the scan take the table's T1 at
+    // its field strength; between them intensity is linear in 1/T1.
+    const auto t1At = [](const Volume& v, int i) { return double(t1Grid(v)->getConstAccessor().getValue(openvdb::Coord(i, 4, 1))); };
+    // Float storage of values of order 1e3 ms: relative rounding 6e-8.
+    constexpr double kFloatMs = 1e-3;
+    for (const auto& [tesla, fatMs, muscleMs] : {std::tuple{1.5, 290.0, 856.0}, std::tuple{3.0, 382.0, 898.0}}) {
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+        writeShuffled(fourRegionMr(tesla));
+        const Volume v = loadDicom({mDir});
+        EXPECT_EQ(v.metadata().t1Units, "ms");
+        EXPECT_EQ(v.metadata().extra.at("t1_kind"), "T1-weighted, normalised per scan");
+        EXPECT_EQ(v.metadata().extra.at("t1_norm_field"), tesla > 2 ? "3T" : "1.5T");
+        EXPECT_NEAR(t1At(v, 3), fatMs, kFloatMs);
+        EXPECT_NEAR(t1At(v, 8), muscleMs, kFloatMs);
+        // R1 = R1_fat + (s - 800)·(R1_muscle - R1_fat)/(300 - 800), T1 = 1/R1 up to the clamp.
+        const auto expected = [&](double s) {
+            const double rate = 1 / fatMs + (s - 800.0) * (1 / muscleMs - 1 / fatMs) / (300.0 - 800.0);
+            return rate > 1 / kMaxT1Ms ? 1 / rate : kMaxT1Ms;
+        };
+        EXPECT_NEAR(t1At(v, 14), expected(100), kFloatMs * 5); // the dark fluid
+        EXPECT_NEAR(t1At(v, 0), expected(0), kFloatMs * 5);    // background
+    }
+    {
+        // At 1.5 T the background lies beyond the rate model's zero: the upper clamp.
+        const double rate = 1 / 290.0 + (0 - 800.0) * (1 / 856.0 - 1 / 290.0) / (300.0 - 800.0);
+        EXPECT_LT(rate, 0.0);
+    }
+    // No (0018,0087): the assumed field, and the metadata says it was assumed.
+    fs::remove_all(mDir);
+    fs::create_directories(mDir);
+    writeShuffled(fourRegionMr(0.0));
+    DicomOptions o;
+    o.assumedField = FieldStrength::T3;
+    const Volume v = loadDicom({mDir}, o);
+    EXPECT_NEAR(t1At(v, 3), 382.0, kFloatMs);
+    EXPECT_EQ(v.metadata().extra.at("t1_norm_field_source"), "assumed: (0018,0087) absent");
+}
+
+TEST_F(DicomSeries, T1WeightedScanWithoutFatAndMuscleStaysRawAndSaysWhy)
+{
+    std::vector<SyntheticSlice> slices = fourRegionMr(1.5);
+    for (auto& s : slices) std::fill(s.pixels.begin(), s.pixels.end(), std::int16_t(500)); // one grey: no classes
+    writeShuffled(slices);
+    const Volume v = loadDicom({mDir});
+    EXPECT_NE(v.metadata().t1Units, "ms"); // so the force models will not read it as T1
+    EXPECT_NE(v.metadata().extra.at("t1_norm_refused").find(mDir.string()), std::string::npos);
+    EXPECT_EQ(t1Grid(v)->getConstAccessor().getValue(openvdb::Coord(3, 4, 1)), 500.0f);
 }
 
 TEST_F(DicomSeries, MemoryCapRefusesBeforeLoading)
@@ -347,6 +426,30 @@ TEST_F(DicomSeries, TruncatedPixelDataNamesTheFileAndField)
         const std::string msg = e.what();
         EXPECT_NE(msg.find("s1.dcm"), std::string::npos) << msg;
         EXPECT_NE(msg.find("PixelData"), std::string::npos) << msg;
+    }
+}
+
+TEST_F(DicomSeries, ItemDelimiterOutsideASequenceIsRefusedBeforeGdcmReadsIt)
+{
+    // A fuzzing finding: GDCM re-reads the rest of such a file with other
+    // lengths (one of 2.4 GB), so the preflight walk must refuse it.
+    const fs::path file = mDir / "stray.dcm";
+    voxhap::test::writeSyntheticSlice(slice(0), file);
+    std::string bytes;
+    {
+        std::ifstream in(file, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::size_t pixel = bytes.rfind(std::string("\xe0\x7f\x10\x00", 4));
+    ASSERT_NE(pixel, std::string::npos);
+    bytes.insert(pixel, std::string("\xfe\xff\x0d\xe0\x00\x00\x00\x00", 8));
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+        loadDicom({file});
+        FAIL() << "a file with a stray item delimiter loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (FFFE,E00D)", 0), 0u) << msg;
     }
 }
 

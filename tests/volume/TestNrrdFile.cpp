@@ -173,6 +173,9 @@ TEST_F(Nrrd, BadFilesAreRefusedNamingTheField)
     expectRefused(mDir / "detached.nrrd", "data file");
     writeText(mDir / "twice.nrrd", with("encoding: raw\n", "encoding: raw\nencoding: gzip\n"), data);
     expectRefused(mDir / "twice.nrrd", "encoding");
+    // Finite but far outside any scanner: OpenVDB's own error must not escape (a fuzzing finding).
+    writeText(mDir / "far.nrrd", with("space origin: (0,0,0)", "space origin: (0,0,1e34)"), data);
+    expectRefused(mDir / "far.nrrd", "space origin");
     writeText(mDir / "gz.nrrd", with("encoding: raw", "encoding: gzip"), "this is not a gzip stream at all");
     expectRefused(mDir / "gz.nrrd", "data");
 }

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file FuzzInput.h
+/// @brief What every fuzz target checks beyond "no crash": a refused input is
+/// refused with voxhap's one-line message that names the file first.
+#pragma once
+
+#include "volume/Errors.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <unistd.h>
+
+namespace voxhap::fuzz {
+
+/// @brief Abort (a finding) unless @p e reads "<file>: ..." on one line.
+inline void checkRefusal(const Error& e, const std::string& file)
+{
+    const std::string_view m = e.what();
+    if (m.rfind(file + ": ", 0) != 0 || m.find('\n') != std::string_view::npos) {
+        std::fprintf(stderr, "refusal message breaks the convention: %s\n", e.what());
+        std::abort();
+    }
+}
+
+/// @brief A scratch file for parsers that read from a path, one per process,
+/// named with @p suffix (readers look at extensions), removed at exit.
+class ScratchFile {
+public:
+    explicit ScratchFile(const std::string& suffix)
+    {
+        const auto dir = std::filesystem::temp_directory_path();
+        mPath = dir / ("voxhap-fuzz-" + std::to_string(::getpid()) + suffix);
+    }
+    ~ScratchFile()
+    {
+        std::error_code ec;
+        std::filesystem::remove(mPath, ec);
+    }
+    const std::filesystem::path& write(const std::uint8_t* data, std::size_t size)
+    {
+        std::ofstream out(mPath, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+        return mPath;
+    }
+
+private:
+    std::filesystem::path mPath;
+};
+
+} // namespace voxhap::fuzz

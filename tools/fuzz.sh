@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Runs voxhap's libFuzzer targets (fuzz/), built by the main build with clang.
+#
+#   tools/fuzz.sh                       every target, 10 minutes each
+#   tools/fuzz.sh --minutes 60 NrrdHeader
+#   tools/fuzz.sh --seconds 8 ...        what the test suite runs
+#
+# Each target starts from fuzz/seeds/<target> and fuzz/regressions/<target>
+# (inputs that once broke it) and keeps what it learns in
+# <build>/fuzz/corpus/<target>. A crash, a leak, an uncaught exception or a
+# refusal that is not "<file>: ..." on one line stops it with a non-zero
+# exit; the input is saved under <build>/fuzz/artifacts/ — add it to
+# fuzz/regressions/<target>/ once fixed.
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build_dir=${VOXHAP_BUILD_DIR:-$here/build}
+seconds=600
+targets=()
+while (($#)); do
+  case "$1" in
+    --minutes) seconds=$(($2 * 60)); shift 2 ;;
+    --seconds) seconds=$2; shift 2 ;;
+    --build-dir) build_dir=$2; shift 2 ;;
+    -h|--help) sed -n '3,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "voxhap fuzz: unknown option $1 (see --help)" >&2; exit 2 ;;
+    *) targets+=("$1"); shift ;;
+  esac
+done
+if ((${#targets[@]} == 0)); then targets=(NrrdHeader MetaImageHeader NiftiHeader DicomPreflight); fi
+
+bin=$build_dir/fuzz/bin
+for t in "${targets[@]}"; do
+  if [ ! -x "$bin/fuzz_$t" ]; then
+    echo "voxhap fuzz: $bin/fuzz_$t not built (tools/setup.sh builds it when clang++ is installed)" >&2
+    exit 2
+  fi
+done
+
+for t in "${targets[@]}"; do
+  corpus=$build_dir/fuzz/corpus/$t
+  artifacts=$build_dir/fuzz/artifacts/$t
+  mkdir -p "$corpus" "$artifacts"
+  inputs=("$corpus" "$here/fuzz/seeds/$t")
+  if [ -d "$here/fuzz/regressions/$t" ]; then inputs+=("$here/fuzz/regressions/$t"); fi
+  echo "voxhap fuzz: $t for ${seconds} s"
+  # 4 KiB inputs reach every header field; rss 2 GiB: a parser asking for more is a finding.
+  "$bin/fuzz_$t" -max_total_time="$seconds" -max_len=4096 -rss_limit_mb=2048 -timeout=10 \
+    -print_final_stats=1 -artifact_prefix="$artifacts/" "${inputs[@]}" 2>&1 |
+    grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|==[0-9]+==|SUMMARY|INFO: seed corpus)|ERROR|refusal' || true
+  # grep hides libFuzzer's progress lines; its exit status is what counts.
+  status=${PIPESTATUS[0]}
+  if ((status != 0)); then
+    echo "voxhap fuzz: $t failed (exit $status); inputs in $artifacts" >&2
+    exit 1
+  fi
+done
