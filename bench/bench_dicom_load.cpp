@@ -130,7 +130,7 @@ int main(int argc, char** argv)
         std::uint64_t fileBytes = 0;
         for (const auto& f : files) fileBytes += fs::file_size(f);
 
-        std::vector<double> tSerial, tParallel, tLoad;
+        std::vector<double> tSerial, tParallel, tLoad, tScan, tDecode, tSparse;
         voxhap::volume::DicomLoadReport report;
         (void)bareDecode(files, false); // warm the page cache for every contender
         for (int r = 0; r < repeat; ++r) { // interleaved: each round runs all three
@@ -143,6 +143,9 @@ int main(int argc, char** argv)
             t0 = Clock::now();
             { const auto v = voxhap::volume::loadDicom({dir}, {}, &report); }
             tLoad.push_back(seconds(t0));
+            tScan.push_back(report.scanSeconds);
+            tDecode.push_back(report.decodeSeconds);
+            tSparse.push_back(report.sparseSeconds);
             (void)pixelBytes;
         }
         const double serial = median(tSerial), parallel = median(tParallel), load = median(tLoad);
@@ -156,6 +159,8 @@ int main(int argc, char** argv)
         std::printf("%-34s %8.3f %8.1f %8s\n", "bare GDCM decode, one thread", serial, double(fileBytes) / 1e6 / serial, "1.00");
         std::printf("%-34s %8.3f %8.1f %8.2f\n", "bare GDCM decode, TBB threads", parallel, double(fileBytes) / 1e6 / parallel, parallel / serial);
         std::printf("%-34s %8.3f %8.1f %8.2f\n", "voxhap loadDicom (sparse Volume)", load, double(fileBytes) / 1e6 / load, load / serial);
+        std::printf("  of which: header scan %.3f s, decode %.3f s, sparse conversion %.3f s\n", median(tScan),
+                    median(tDecode), median(tSparse));
         std::printf("load / bare decode with the same threads: %.2f (target <= 1.5)\n", load / parallel);
         std::printf("active: %.1f %% of voxels; grid %.1f MiB; load peak %.1f MiB; dense float %.1f MiB\n",
                     100.0 * double(report.activeVoxels) / double(report.denseVoxels), double(report.memoryBytes) / 1048576.0,
@@ -168,7 +173,8 @@ int main(int argc, char** argv)
             nlohmann::json j{{"files", files.size()},          {"file_bytes", fileBytes},
                              {"dense_voxels", report.denseVoxels}, {"active_voxels", report.activeVoxels},
                              {"bare_decode_serial_s", serial},  {"bare_decode_parallel_s", parallel},
-                             {"load_s", load},                  {"load_vs_parallel_decode", load / parallel},
+                             {"load_s", load},                  {"load_scan_s", median(tScan)},
+                             {"load_decode_s", median(tDecode)}, {"load_sparse_s", median(tSparse)},                  {"load_vs_parallel_decode", load / parallel},
                              {"grid_bytes", report.memoryBytes}, {"load_peak_bytes", peak},
                              {"load_peak_warm_bytes", peakWarm},
                              {"dense_float_bytes", dense},      {"hardware_threads", std::thread::hardware_concurrency()},

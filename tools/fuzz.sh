@@ -46,11 +46,13 @@ for t in "${targets[@]}"; do
   if [ -d "$here/fuzz/regressions/$t" ]; then inputs+=("$here/fuzz/regressions/$t"); fi
   echo "voxhap fuzz: $t for ${seconds} s"
   # 4 KiB inputs reach every header field; rss 2 GiB: a parser asking for more is a finding.
+  # grep hides libFuzzer's progress lines; the fuzzer's exit status is what counts.
+  set +e
   "$bin/fuzz_$t" -max_total_time="$seconds" -max_len=4096 -rss_limit_mb=2048 -timeout=10 \
     -print_final_stats=1 -artifact_prefix="$artifacts/" "${inputs[@]}" 2>&1 |
-    grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|==[0-9]+==|SUMMARY|INFO: seed corpus)|ERROR|refusal' || true
-  # grep hides libFuzzer's progress lines; its exit status is what counts.
+    grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|==[0-9]+==|SUMMARY|INFO: seed corpus)|ERROR|refusal|^ +#[0-9]+ .* in [a-zA-Z_:]+voxhap'
   status=${PIPESTATUS[0]}
+  set -e
   if ((status != 0)); then
     echo "voxhap fuzz: $t failed (exit $status); inputs in $artifacts" >&2
     exit 1

@@ -9,7 +9,9 @@
 #include <gdcmImageReader.h>
 #include <gdcmTrace.h>
 
+#include <algorithm>
 #include <cstring>
+#include <type_traits>
 #include <fstream>
 #include <mutex>
 #include <string>
@@ -18,28 +20,48 @@ namespace voxhap::volume {
 
 namespace {
 
-/// Stored values → float. Unused high bits (BitsStored < BitsAllocated) may
-/// hold overlays: mask them off, sign-extending signed data.
+/// Stored samples → rescaled floats in one pass. Unused high bits
+/// (BitsStored < BitsAllocated) may hold overlays: masked off, sign-extended
+/// for signed data. The four variants keep the per-sample loop branch-free.
 template <typename T>
-void convert(const char* raw, std::size_t count, int bitsStored, float* out)
+void toFloat(const char* raw, std::size_t count, int bitsStored, double slope, double intercept,
+             std::optional<double> padding, float air, float* out)
 {
     constexpr int bits = int(sizeof(T) * 8);
-    for (std::size_t n = 0; n < count; ++n) {
-        T v;
-        std::memcpy(&v, raw + n * sizeof(T), sizeof(T));
-        if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) {
-            if (bitsStored > 0 && bitsStored < bits) {
-                using U = std::make_unsigned_t<T>;
-                const U mask = U((std::uint64_t(1) << bitsStored) - 1);
+    const auto run = [&](auto masked, auto padded) {
+        using U = std::make_unsigned_t<std::conditional_t<std::is_integral_v<T>, T, int>>;
+        const U mask = U((std::uint64_t(1) << std::min(bitsStored, 63)) - 1);
+        const U sign = U(U(1) << std::max(bitsStored - 1, 0));
+        const double pad = padding.value_or(0.0);
+        for (std::size_t n = 0; n < count; ++n) {
+            T v;
+            std::memcpy(&v, raw + n * sizeof(T), sizeof(T));
+            if constexpr (decltype(masked)::value) {
                 U u = U(v) & mask;
                 if constexpr (std::is_signed_v<T>) {
-                    if (u & (U(1) << (bitsStored - 1))) u = U(u | U(~mask)); // sign-extend
+                    if (u & sign) u = U(u | U(~mask));
                 }
                 v = T(u);
             }
+            const double d = double(v);
+            if constexpr (decltype(padded)::value) {
+                out[n] = d == pad ? air : float(slope * d + intercept);
+            } else {
+                out[n] = float(slope * d + intercept);
+            }
         }
-        out[n] = float(v);
+    };
+    bool masked = false;
+    if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) masked = bitsStored > 0 && bitsStored < bits;
+    using Yes = std::true_type;
+    using No = std::false_type;
+    if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) {
+        if (masked) {
+            padding ? run(Yes{}, Yes{}) : run(Yes{}, No{});
+            return;
+        }
     }
+    padding ? run(No{}, Yes{}) : run(No{}, No{});
 }
 
 } // namespace
@@ -54,14 +76,14 @@ void quietGdcm()
     });
 }
 
-DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue)
+DicomFrames decodeDicomFrames(const std::filesystem::path& file)
 {
     DicomFrames f;
-    decodeDicomFrames(file, paddingValue, f);
+    decodeDicomFrames(file, f);
     return f;
 }
 
-void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue, DicomFrames& f)
+void decodeDicomFrames(const std::filesystem::path& file, DicomFrames& f)
 {
     quietGdcm();
     const std::string name = file.string();
@@ -109,28 +131,40 @@ void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> 
     if (!img.GetBuffer(raw.data())) {
         throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid + ": cannot decode the pixel data (unsupported or corrupt)");
     }
-    f.values.resize(count);
-    const int bs = pf.GetBitsStored();
+    f.bitsStored = pf.GetBitsStored();
     switch (pf.GetScalarType()) {
-    case gdcm::PixelFormat::UINT8: convert<std::uint8_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::INT8: convert<std::int8_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::UINT16: convert<std::uint16_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::INT16: convert<std::int16_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::UINT32: convert<std::uint32_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::INT32: convert<std::int32_t>(raw.data(), count, bs, f.values.data()); break;
-    case gdcm::PixelFormat::FLOAT32: convert<float>(raw.data(), count, 0, f.values.data()); break;
-    case gdcm::PixelFormat::FLOAT64: convert<double>(raw.data(), count, 0, f.values.data()); break;
+    case gdcm::PixelFormat::UINT8: f.type = SampleType::UInt8; break;
+    case gdcm::PixelFormat::INT8: f.type = SampleType::Int8; break;
+    case gdcm::PixelFormat::UINT16: f.type = SampleType::UInt16; break;
+    case gdcm::PixelFormat::INT16: f.type = SampleType::Int16; break;
+    case gdcm::PixelFormat::UINT32: f.type = SampleType::UInt32; break;
+    case gdcm::PixelFormat::INT32: f.type = SampleType::Int32; break;
+    case gdcm::PixelFormat::FLOAT32: f.type = SampleType::Float32; break;
+    case gdcm::PixelFormat::FLOAT64: f.type = SampleType::Float64; break;
     default:
         throw IoError(name + ": (0028,0100) BitsAllocated " + std::to_string(pf.GetBitsAllocated()) +
                       ": unsupported pixel type " + pf.GetScalarTypeAsString());
     }
-    if (paddingValue) {
-        // Compare in the stored domain, where the padding value is defined.
-        f.padding.resize(count);
-        const float pad = float(*paddingValue);
-        for (std::size_t n = 0; n < count; ++n) f.padding[n] = f.values[n] == pad;
-    } else {
-        f.padding.clear();
+    if (sampleBytes(f.type) * count != expected) {
+        throw IoError(name + ": (0028,0100) BitsAllocated " + std::to_string(pf.GetBitsAllocated()) +
+                      ": the decoded buffer does not match the pixel type");
+    }
+}
+
+void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
+                  float air, float* out)
+{
+    const std::size_t plane = std::size_t(f.rows) * std::size_t(f.columns);
+    const char* raw = f.raw.data() + plane * std::size_t(frame) * sampleBytes(f.type);
+    switch (f.type) {
+    case SampleType::UInt8: toFloat<std::uint8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::Int8: toFloat<std::int8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::UInt16: toFloat<std::uint16_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::Int16: toFloat<std::int16_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::UInt32: toFloat<std::uint32_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::Int32: toFloat<std::int32_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
+    case SampleType::Float32: toFloat<float>(raw, plane, 0, slope, intercept, padding, air, out); break;
+    case SampleType::Float64: toFloat<double>(raw, plane, 0, slope, intercept, padding, air, out); break;
     }
 }
 

@@ -5,6 +5,8 @@
 /// padding).
 #pragma once
 
+#include "volume/RasterLayout.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -12,28 +14,32 @@
 
 namespace voxhap::volume {
 
-/// @brief Stored pixel values of every frame of a file, as float, before
-/// rescaling: frames × rows × columns, column fastest.
+/// @brief The stored samples of every frame of a file, as GDCM decoded them:
+/// frames × rows × columns, column fastest, in the file's sample type.
 struct DicomFrames {
     int rows = 0, columns = 0, frames = 0;
-    std::vector<float> values;
-    /// Stored values equal to PixelPaddingValue (0028,0120), flagged so that
-    /// the caller can make them air; empty when the file has no padding value.
-    std::vector<std::uint8_t> padding;
-    std::vector<char> raw; ///< decoding scratch, kept so that a reused instance does not reallocate
+    SampleType type = SampleType::Int16;
+    int bitsStored = 0;    ///< (0028,0101); higher bits may hold overlays
+    std::vector<char> raw; ///< kept between calls so that a reused instance does not reallocate
 };
+
+/// @brief Frame @p frame of @p f as rescaled floats: slope·stored + intercept
+/// (computed in double: exact for the integer values and rescales CT has),
+/// stored values equal to @p padding (PixelPaddingValue) become @p air.
+/// One pass over the samples; unused high bits are masked (sign-extended).
+void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
+                  float air, float* out);
 
 /// @brief Silence GDCM's own warnings and errors: voxhap reports its own, one line each.
 void quietGdcm();
 
 /// @brief Decode @p file.
-/// @param paddingValue PixelPaddingValue from the header, if any (stored units)
 /// @throw IoError naming the file and the field: unreadable file, unsupported
 ///        transfer syntax, colour images, truncated pixel data
-DicomFrames decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue);
+DicomFrames decodeDicomFrames(const std::filesystem::path& file);
 
 /// @brief As above, into @p out, reusing its buffers: a thread that decodes
 /// many slices keeps one instance and avoids fresh page-faulting allocations.
-void decodeDicomFrames(const std::filesystem::path& file, std::optional<double> paddingValue, DicomFrames& out);
+void decodeDicomFrames(const std::filesystem::path& file, DicomFrames& out);
 
 } // namespace voxhap::volume

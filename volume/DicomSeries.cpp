@@ -79,26 +79,19 @@ public:
         const DicomHeader& h = mHeaders[s.file];
         if (h.frames > 1) {
             std::lock_guard<std::mutex> lock(mMutex);
-            if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file, h.padding));
+            if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file));
             cached = mCache[s.file];
             frames = cached.get();
         } else {
             thread_local DicomFrames scratch; // one per decoding thread, buffers reused slice after slice
-            decodeDicomFrames(h.file, h.padding, scratch);
+            decodeDicomFrames(h.file, scratch);
             frames = &scratch;
         }
         if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {
             throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
                           "pixel data dimensions differ from the header");
         }
-        const std::size_t plane = std::size_t(h.rows) * std::size_t(h.columns);
-        const float* in = frames->values.data() + plane * std::size_t(s.frame);
-        const std::uint8_t* pad = frames->padding.empty() ? nullptr : frames->padding.data() + plane * std::size_t(s.frame);
-        for (std::size_t n = 0; n < plane; ++n) {
-            // Rescale in double: slope·stored + intercept is exact for integer
-            // stored values and integer slope/intercept, as CT has.
-            out[n] = (pad && pad[n]) ? air : float(s.slope * double(in[n]) + s.intercept);
-        }
+        frameToFloat(*frames, s.frame, s.slope, s.intercept, h.padding, air, out);
     }
 
 private:
@@ -170,6 +163,9 @@ std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs
 Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& options, DicomLoadReport* report)
 {
     const auto start = std::chrono::steady_clock::now();
+    const auto since = [](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    };
     std::vector<DicomHeader> scanned = scanDicomHeaders(inputs);
     const std::vector<DicomSeriesInfo> all = groupSeries(scanned);
     const DicomSeriesInfo& series = chooseSeries(all, options.series);
@@ -179,6 +175,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
         if (h.seriesUid == series.uid) headers.push_back(std::move(h));
     }
     for (DicomHeader& h : headers) completeDicomHeader(h);
+    const double scanSeconds = since(start);
+    double decodeSeconds = 0, sparseSeconds = 0;
     const DicomHeader& first = headers.front();
     const bool isMr = first.modality == "MR";
 
@@ -250,8 +248,12 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
     if (!resample) {
         for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
             const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);
+            auto t = std::chrono::steady_clock::now();
             tbb::parallel_for(0, n, [&](int k) { readSlice(std::size_t(k0 + k), slab.data() + plane * std::size_t(k)); });
+            decodeSeconds += since(t);
+            t = std::chrono::steady_clock::now();
             sparse.addSlab(slab.data(), nx, ny, k0, n);
+            sparseSeconds += since(t);
             if (options.progress) options.progress(double(k0 + n) / nz);
         }
     } else {
@@ -303,6 +305,9 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
         report->resampled = resample;
         report->irregularity = stack.problem;
         report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        report->scanSeconds = scanSeconds;
+        report->decodeSeconds = decodeSeconds;
+        report->sparseSeconds = sparseSeconds;
     }
     return v;
 }

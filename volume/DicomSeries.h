@@ -70,6 +70,9 @@ struct DicomLoadReport {
     DicomSeriesInfo series;
     std::vector<DicomSeriesInfo> allSeries; ///< every series found among the inputs
     double seconds = 0;                     ///< wall time of the whole load [s]
+    double scanSeconds = 0;                 ///< of which: preflight walk and header scan [s]
+    double decodeSeconds = 0;               ///< of which: GDCM decode and rescale to float [s]
+    double sparseSeconds = 0;               ///< of which: dense slabs into the sparse grid [s]
     std::int64_t denseVoxels = 0;
     std::int64_t activeVoxels = 0;
     std::uint64_t memoryBytes = 0;          ///< the grid's memory [bytes]

@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 #include <string>
@@ -43,38 +44,45 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
     const float air = mImpl->airBelow, bg = mImpl->background;
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
     const std::size_t plane = std::size_t(nx) * std::size_t(ny);
-    // One leaf per 8 × 8 column block of the slab, built in parallel straight
-    // from the dense values (exact, no tolerance); all-air blocks make no leaf.
-    // This avoids copyFromDense's probing of the growing tree and its
-    // whole-tree prune after every slab.
+    // One leaf per 8 × 8 column block of the slab, built straight from the
+    // dense values (exact, no tolerance); all-air blocks make no leaf. This
+    // avoids copyFromDense's probing of the growing tree and its whole-tree
+    // prune after every slab. Each task takes one row of blocks and reads its
+    // 8 image rows of every slice front to back, so the slab streams through
+    // the cache once while the row's leaves (bx × 2 KiB) stay in it.
     std::vector<LeafT*> leaves(std::size_t(bx) * std::size_t(by), nullptr);
+    const auto fail = [&](int x, int y, int z) {
+        throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(k0 + z) +
+                         ") is not a finite number");
+    };
     try {
-        tbb::parallel_for(0, bx * by, [&](int b) {
-            const int x0 = (b % bx) * kDim, y0 = (b / bx) * kDim;
-            std::unique_ptr<LeafT> leaf;
-            float* values = nullptr; // the leaf's buffer, fetched once (each access checks delayed loading)
+        tbb::parallel_for(0, by, [&](int yb) {
+            const int y0 = yb * kDim;
+            LeafT** row = leaves.data() + std::size_t(yb) * std::size_t(bx);
+            // Each leaf's buffer, fetched once (every buffer access checks delayed loading).
+            std::vector<float*> values(std::size_t(bx), nullptr);
             for (int z = 0; z < nz; ++z) {
                 for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
-                    const float* row = data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx);
-                    for (int x = x0; x < std::min(x0 + kDim, nx); ++x) {
-                        const float v = row[x];
-                        if (!std::isfinite(v)) {
-                            throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " +
-                                             std::to_string(k0 + z) + ") is not a finite number");
+                    const float* in = data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx);
+                    for (int x = 0; x < nx; ++x) {
+                        const float v = in[x];
+                        if (v < air) { // air: the inactive background
+                            if (v == -std::numeric_limits<float>::infinity()) fail(x, y, z);
+                            continue;
                         }
-                        if (v < air) continue; // air: the inactive background
-                        if (!leaf) {
-                            leaf = std::make_unique<LeafT>(openvdb::Coord(x0, y0, k0), bg, false);
-                            values = leaf->buffer().data();
+                        if (!(v <= std::numeric_limits<float>::max())) fail(x, y, z); // NaN, +inf
+                        const int b = x / kDim;
+                        if (!row[b]) {
+                            row[b] = new LeafT(openvdb::Coord(x - x % kDim, y0, k0), bg, false);
+                            values[std::size_t(b)] = row[b]->buffer().data();
                         }
                         // LeafNode offsets: x slowest, z fastest, within the 8³ block.
-                        const openvdb::Index n = openvdb::Index(((x - x0) << 6) | ((y - y0) << 3) | z);
-                        values[n] = v;
-                        leaf->getValueMask().setOn(n);
+                        const openvdb::Index n = openvdb::Index(((x % kDim) << 6) | ((y - y0) << 3) | z);
+                        values[std::size_t(b)][n] = v;
+                        row[b]->getValueMask().setOn(n);
                     }
                 }
             }
-            leaves[std::size_t(b)] = leaf.release();
         });
     } catch (...) {
         for (LeafT* l : leaves) delete l;
