@@ -60,5 +60,6 @@ Action registerDemo(CLI::App& app);
 Action registerBench(CLI::App& app);
 Action registerSimulate(CLI::App& app);
 Action registerServe(CLI::App& app);
+Action registerRender(CLI::App& app);
 
 } // namespace voxhap::tools

@@ -34,16 +34,7 @@ int run(const ConvertOptions& o)
     }
     const auto start = std::chrono::steady_clock::now();
     volume::DicomLoadReport dicom;
-    const volume::Volume v = [&] {
-        try {
-            auto loaded = volume::loadVolume(o.in, loadOptions(o.reader, stderrIsTerminal() && !o.common.json), &dicom);
-            clearProgress();
-            return loaded;
-        } catch (...) {
-            clearProgress();
-            throw;
-        }
-    }();
+    const volume::Volume v = loadVolumeWithProgress(o.in, o.reader, stderrIsTerminal() && !o.common.json, &dicom);
     const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     volume::saveVolume(v, o.out);
     const auto info = volume::describe(v, tissueTable(o.common));

@@ -35,16 +35,7 @@ int run(const InfoOptions& o)
 {
     const volume::TissueTable& table = tissueTable(o.common);
     volume::DicomLoadReport dicom;
-    const volume::Volume v = [&] {
-        try {
-            auto loaded = volume::loadVolume(o.file, loadOptions(o.reader, stderrIsTerminal() && !o.common.json), &dicom);
-            clearProgress();
-            return loaded;
-        } catch (...) {
-            clearProgress();
-            throw;
-        }
-    }();
+    const volume::Volume v = loadVolumeWithProgress(o.file, o.reader, stderrIsTerminal() && !o.common.json, &dicom);
     const auto info = volume::describe(v, table);
     if (o.common.json) {
         nlohmann::json j = infoJson(info, o.file);

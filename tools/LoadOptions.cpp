@@ -58,4 +58,17 @@ void clearProgress()
     gBarDrawn = false;
 }
 
+volume::Volume loadVolumeWithProgress(const std::string& path, const ReaderOptions& opts, bool showProgress,
+                                      volume::DicomLoadReport* report)
+{
+    try {
+        auto loaded = volume::loadVolume(path, loadOptions(opts, showProgress), report);
+        clearProgress();
+        return loaded;
+    } catch (...) {
+        clearProgress();
+        throw;
+    }
+}
+
 } // namespace voxhap::tools

@@ -32,4 +32,9 @@ volume::LoadOptions loadOptions(const ReaderOptions& opts, bool showProgress);
 /// @brief Erase the progress bar line, if one was drawn.
 void clearProgress();
 
+/// @brief volume::loadVolume() with the progress bar when @p showProgress, erased
+/// afterwards whether the load succeeds or throws.
+volume::Volume loadVolumeWithProgress(const std::string& path, const ReaderOptions& opts, bool showProgress,
+                                      volume::DicomLoadReport* report = nullptr);
+
 } // namespace voxhap::tools

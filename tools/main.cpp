@@ -21,6 +21,7 @@ int main(int argc, char** argv)
         {"convert", registerConvert(app)},
         {"simulate", registerSimulate(app)},
         {"serve", registerServe(app)},
+        {"render", registerRender(app)},
         {"bench", registerBench(app)},
     };
 

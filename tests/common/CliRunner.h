@@ -30,12 +30,13 @@ inline std::string slurp(const std::filesystem::path& p)
 
 class CliTest : public TempDirTest {
 protected:
-    /// Run `voxhap <args>` in the test's directory.
-    CliResult run(const std::string& args) const
+    /// Run `voxhap <args>` in the test's directory; @p env prefixes the command
+    /// (e.g. "env -u DISPLAY PATH=/nonexistent").
+    CliResult run(const std::string& args, const std::string& env = "") const
     {
         const std::filesystem::path out = mDir / "stdout.txt", err = mDir / "stderr.txt";
-        const std::string cmd = "cd '" + mDir.string() + "' && '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args + " >'" +
-                                out.string() + "' 2>'" + err.string() + "'";
+        const std::string cmd = "cd '" + mDir.string() + "' && " + env + " '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args +
+                                " >'" + out.string() + "' 2>'" + err.string() + "'";
         const int status = std::system(cmd.c_str());
         CliResult r;
         r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Plan.h
+/// @brief Planned needle paths to draw (plan.json), until planning (issue 9)
+/// writes its own: entry and target points and, optionally, a needle pose.
+///
+/// plan.json, all points in patient LPS millimetres:
+/// @code
+/// {"schema": "voxhap-plan/1",
+///  "paths": [{"name": "L3 biopsy", "entry": [x, y, z], "target": [x, y, z],
+///             "needle": {"tip": [x, y, z], "direction": [x, y, z], "length_mm": 90}}]}
+/// @endcode
+/// "name" and "needle" are optional; "direction" points from hub to tip.
+/// 3D Slicer markups (.mrk.json) are accepted too: each Line markup with two
+/// control points becomes a path (first point the entry); RAS coordinates are
+/// converted to LPS.
+#pragma once
+
+#include "volume/Math.h"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace voxhap::render {
+
+/// @brief Where the needle is: tip and shaft direction.
+struct NeedlePose {
+    Vec3d tip{0, 0, 0};        ///< [mm, LPS]
+    Vec3d direction{0, 0, 1};  ///< unit, hub to tip
+    double lengthMm = 90.0;    ///< shaft length drawn behind the tip [mm] (haptic::Needle's default)
+    Vec3d hub() const { return tip - lengthMm * direction; }
+};
+
+struct PlannedPath {
+    std::string name;
+    Vec3d entry{0, 0, 0};   ///< skin entry [mm, LPS]
+    Vec3d target{0, 0, 0};  ///< [mm, LPS]
+    std::optional<NeedlePose> needle;
+};
+
+struct Plan {
+    std::vector<PlannedPath> paths;
+};
+
+/// @brief Read plan.json or a Slicer .mrk.json.
+/// @throw IoError if unreadable; ValueError naming the file and the field
+Plan loadPlan(const std::filesystem::path& file);
+
+/// @brief Parse plan JSON text; @p origin names it in error messages.
+Plan parsePlan(std::string_view json, const std::string& origin);
+
+} // namespace voxhap::render

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Snapshot.h
+/// @brief The planning views of one volume, built for what a request names:
+/// a view that is not requested is not set up, and the volume is handed to
+/// VTK once (RenderVolume) for all of them. Also the four-view contact sheet.
+#pragma once
+
+#include "render/Image.h"
+#include "render/Overlays.h"
+#include "render/Plan.h"
+#include "render/ViewFrame.h"
+#include "render/ViewTypes.h"
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace voxhap::volume {
+class TissueTable;
+class Volume;
+} // namespace voxhap::volume
+
+namespace voxhap::render {
+
+class RenderVolume;
+
+struct RenderRequest {
+    std::vector<ViewKind> views{ViewKind::Axial, ViewKind::Sagittal, ViewKind::Coronal, ViewKind::ThreeD};
+    BlendMode mode = BlendMode::Colour;   ///< of the 3D view
+    /// Slices' window; default soft tissue on CT, the value range on T1. The 3D
+    /// grey and MIP modes default to soft tissue and bone.
+    std::optional<WindowLevel> window;
+    /// Where the slices cut and the crosshair sits [mm, LPS]; default the first
+    /// path's target, else the centre of the volume.
+    std::optional<Vec3d> point;
+    Plan plan;
+    std::optional<NeedlePose> needle;
+    double pixelMm = 0.0;      ///< pixel size [mm]; 0: the finest voxel size
+    int maxPixels = 768;       ///< largest side of a view [px] (the pixel size grows to fit)
+    bool labels = true;        ///< tissue colours on the slices (when the volume has labels)
+    bool criticalSurfaces = true; ///< critical structures as surfaces in 3D (when it has labels)
+};
+
+class Snapshot {
+public:
+    /// @brief Copy what the requested views need to VTK (labels only when a
+    /// slice shows them or the 3D view draws critical surfaces).
+    /// @throw ValueError on an empty view list or a volume without image values
+    Snapshot(const volume::Volume& v, const RenderRequest& request, const volume::TissueTable& table);
+    ~Snapshot();
+    Snapshot(const Snapshot&) = delete;
+    Snapshot& operator=(const Snapshot&) = delete;
+
+    const std::vector<ViewKind>& views() const { return mRequest.views; }
+    /// @brief The slice position and crosshair actually used [mm, LPS].
+    const Vec3d& point() const { return mPoint; }
+    const RenderVolume& volume() const { return *mVolume; }
+    /// @brief The pixel frame of a requested view.
+    const ViewFrame& frame(ViewKind v) const;
+
+    /// @brief Render one requested view. Slices need no display; the 3D view
+    /// needs one (DisplayGuard) and keeps its pipeline, so that a second call
+    /// measures a steady frame. @throw ValueError for a view not requested or
+    /// a 3D view without a display
+    Image render(ViewKind v);
+
+private:
+    RenderRequest mRequest;
+    const volume::TissueTable& mTable;
+    std::unique_ptr<RenderVolume> mVolume;
+    Vec3d mPoint{0, 0, 0};
+    std::vector<std::pair<ViewKind, ViewFrame>> mFrames;
+    struct View3d;
+    std::unique_ptr<View3d> m3d;
+};
+
+/// @brief The views side by side, two to a row in the order given (axial,
+/// sagittal / coronal, 3d for the four), each centred in an equal cell.
+Image contactSheet(const std::vector<Image>& views);
+
+} // namespace voxhap::render

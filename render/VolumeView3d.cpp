@@ -1,0 +1,329 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file VolumeView3d.cpp
+/// @brief The VTK pipeline of the 3D view (vtkGPUVolumeRayCastMapper: under
+/// Xvfb, Mesa's llvmpipe runs all four blend modes).
+#include "render/VolumeView3d.h"
+
+#include "render/Display.h"
+#include "render/detail/VtkVolume.h"
+#include "volume/Errors.h"
+#include "volume/TissueTable.h"
+
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkColorTransferFunction.h>
+#include <vtkDiscreteFlyingEdges3D.h>
+#include <vtkGPUVolumeRayCastMapper.h>
+#include <vtkLookupTable.h>
+#include <vtkPiecewiseFunction.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkVolume.h>
+#include <vtkVolumeProperty.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <map>
+
+namespace voxhap::render {
+
+namespace {
+
+/// Opacity per millimetre in the composite modes, by kind of tissue [chosen]:
+/// bone dominates, critical organs show through soft tissue, and 300 mm of soft
+/// tissue still let a third of the light through (exp(−300 · 0.004) ≈ 0.3).
+constexpr double kBoneOpacity = 0.3;
+constexpr double kCriticalOpacity = 0.05;
+constexpr double kSoftOpacity = 0.004;
+/// Grey mode: bone is what lies above this CT number [HU].
+constexpr double kBoneHu = 1000.0;
+/// Tissue whose typical CT number is below this is air-like (lung): transparent [HU].
+constexpr double kAirLikeHu = -400.0;
+/// The summed projection maps a ray through the whole depth of average tissue to this grey.
+constexpr double kSumDepthGrey = 0.8;
+
+void colourTransfer(const volume::TissueTable& table, const RenderVolume::Impl& v, vtkColorTransferFunction* colour,
+                    vtkPiecewiseFunction* opacity)
+{
+    // One control point per tissue at its typical CT number; tissues sharing a
+    // number keep the first (bone before soft tissue, as the table lists them).
+    std::map<double, const volume::Tissue*> byHu;
+    for (const volume::Tissue& t : table.tissues()) {
+        if (t.id != 0) byHu.emplace(t.huTypical, &t);
+    }
+    opacity->AddPoint(v.lo, 0.0);
+    opacity->AddPoint(std::max(v.lo, v.background) + 1.0, 0.0);
+    for (const auto& [hu, t] : byHu) {
+        colour->AddRGBPoint(hu, t->colour[0] / 255.0, t->colour[1] / 255.0, t->colour[2] / 255.0);
+        const double a = hu < kAirLikeHu ? 0.0 : t->rigid ? kBoneOpacity : t->critical ? kCriticalOpacity : kSoftOpacity;
+        opacity->AddPoint(hu, a);
+    }
+}
+
+void greyRamp(const WindowLevel& w, vtkColorTransferFunction* colour)
+{
+    colour->AddRGBPoint(w.level - 0.5 * w.width, 0.0, 0.0, 0.0);
+    colour->AddRGBPoint(w.level + 0.5 * w.width, 1.0, 1.0, 1.0);
+}
+
+vtkSmartPointer<vtkActor> lineActor(const std::vector<std::pair<Vec3d, Vec3d>>& segments, Rgb colour, double widthPx)
+{
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    auto lines = vtkSmartPointer<vtkCellArray>::New();
+    for (const auto& [a, b] : segments) {
+        const vtkIdType ids[2] = {points->InsertNextPoint(a.data()), points->InsertNextPoint(b.data())};
+        lines->InsertNextCell(2, ids);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetLines(lines);
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    auto actor = vtkSmartPointer<vtkActor>::New();
+    actor->SetMapper(mapper);
+    actor->GetProperty()->SetColor(colour.r / 255.0, colour.g / 255.0, colour.b / 255.0);
+    actor->GetProperty()->SetLineWidth(float(widthPx));
+    actor->GetProperty()->SetLighting(false);
+    return actor;
+}
+
+vtkSmartPointer<vtkActor> pointActor(const std::vector<Vec3d>& pts, Rgb colour, double sizePx)
+{
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    for (const Vec3d& p : pts) {
+        const vtkIdType id = points->InsertNextPoint(p.data());
+        verts->InsertNextCell(1, &id);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetVerts(verts);
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    auto actor = vtkSmartPointer<vtkActor>::New();
+    actor->SetMapper(mapper);
+    actor->GetProperty()->SetColor(colour.r / 255.0, colour.g / 255.0, colour.b / 255.0);
+    actor->GetProperty()->SetPointSize(float(sizePx));
+    actor->GetProperty()->SetRenderPointsAsSpheres(true);
+    return actor;
+}
+
+} // namespace
+
+struct VolumeView3d::Impl {
+    ViewFrame frame;
+    Overlays overlays;
+    OverlayStyle style;
+    vtkSmartPointer<vtkRenderWindow> window;
+    vtkSmartPointer<vtkRenderer> renderer;
+    vtkSmartPointer<vtkRenderer> lines; ///< where paths and needles go: the scene, or a layer above it
+    vtkSmartPointer<vtkActor> needle;
+};
+
+VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style,
+                           const volume::TissueTable& table, const Overlays& overlays)
+    : mImpl(std::make_unique<Impl>())
+{
+    // VTK's X11 window aborts the process when it cannot connect: check first.
+    const char* display = std::getenv("DISPLAY");
+    if (!display || !displayReachable(display)) throw ValueError("3d view: no X display (start one, or install xvfb)");
+    Impl& m = *mImpl;
+    m.frame = frame;
+    m.overlays = overlays;
+    const RenderVolume::Impl& d = v.impl();
+
+    // The volume: the RenderVolume's array itself, placed in the world by a matrix.
+    auto mapper = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
+    mapper->SetInputData(d.scalars);
+    mapper->SetAutoAdjustSampleDistances(false);
+    const double step = std::max(1e-3, style.sampleVoxels) * d.spacing.minCoeff();
+    mapper->SetSampleDistance(float(step));
+    auto colour = vtkSmartPointer<vtkColorTransferFunction>::New();
+    auto opacity = vtkSmartPointer<vtkPiecewiseFunction>::New();
+    auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+    property->SetInterpolationTypeToLinear();
+    const double depthMm = (d.bounds.max - d.bounds.min).cwiseAbs().dot(frame.normal.cwiseAbs());
+    switch (style.mode) {
+    case BlendMode::Colour:
+        mapper->SetBlendModeToComposite();
+        if (d.channel == ScalarChannel::Hu) {
+            colourTransfer(table, d, colour, opacity);
+        } else { // T1-weighted values do not follow the table's CT numbers: grey
+            greyRamp(style.window, colour);
+            opacity->AddPoint(style.window.level - 0.5 * style.window.width, 0.0);
+            opacity->AddPoint(style.window.level + 0.5 * style.window.width, kCriticalOpacity);
+        }
+        property->ShadeOn();
+        break;
+    case BlendMode::Grey:
+        // Opacity follows the grey ramp (a soft-tissue haze), then rises to bone.
+        mapper->SetBlendModeToComposite();
+        greyRamp(style.window, colour);
+        opacity->AddPoint(style.window.level - 0.5 * style.window.width, 0.0);
+        opacity->AddPoint(style.window.level + 0.5 * style.window.width, kSoftOpacity);
+        opacity->AddPoint(std::max(kBoneHu, style.window.level + 0.5 * style.window.width + 1.0), kBoneOpacity);
+        property->ShadeOn();
+        break;
+    case BlendMode::Mip:
+        mapper->SetBlendModeToMaximumIntensity();
+        greyRamp(style.window, colour);
+        opacity->AddPoint(d.lo, 1.0);
+        opacity->AddPoint(d.hi, 1.0);
+        break;
+    case BlendMode::Sum: {
+        // The mapper sums opacity × value along the ray, the value scaled to
+        // 0..1 over the array's range, the opacity per unit length: a constant
+        // opacity makes the sum a line integral. Scale it so that a ray through
+        // the whole depth of average tissue reaches kSumDepthGrey.
+        mapper->SetBlendModeToAdditive();
+        const double range = std::max(1e-9, d.hi - d.lo);
+        const double tissue = std::max(1e-6, (d.tissueMean - d.lo) / range);
+        const double a = std::clamp(kSumDepthGrey / (tissue * std::max(1.0, depthMm)), 0.0, 1.0);
+        opacity->AddPoint(d.lo, a);
+        opacity->AddPoint(d.hi, a);
+        greyRamp(WindowLevel{range, 0.5 * (d.lo + d.hi)}, colour);
+        break;
+    }
+    }
+    property->SetColor(colour);
+    property->SetScalarOpacity(opacity);
+    property->SetScalarOpacityUnitDistance(1.0); // opacities are per millimetre
+    property->SetAmbient(0.4);
+    property->SetDiffuse(0.6);
+    property->SetSpecular(0.1);
+    auto volumeProp = vtkSmartPointer<vtkVolume>::New();
+    volumeProp->SetMapper(mapper);
+    volumeProp->SetProperty(property);
+    volumeProp->SetUserMatrix(d.dataToWorld());
+
+    m.renderer = vtkSmartPointer<vtkRenderer>::New();
+    m.renderer->SetBackground(0.0, 0.0, 0.0);
+    m.renderer->AddVolume(volumeProp);
+    // A projection (MIP, sum) has no depth order and writes over any geometry
+    // inside the volume: its lines go on a layer above, as on a CT console.
+    // Composite modes keep them in the scene, hidden by what lies in front.
+    const bool projection = style.mode == BlendMode::Mip || style.mode == BlendMode::Sum;
+    m.lines = m.renderer;
+    if (projection) {
+        m.lines = vtkSmartPointer<vtkRenderer>::New();
+        m.lines->SetLayer(1);
+        m.lines->SetActiveCamera(m.renderer->GetActiveCamera());
+    }
+
+    // Critical structures: one surface pass over the label map for all of them.
+    if (style.criticalSurfaces && d.labels) {
+        auto surfaces = vtkSmartPointer<vtkDiscreteFlyingEdges3D>::New();
+        surfaces->SetInputData(d.labels);
+        int n = 0;
+        auto lut = vtkSmartPointer<vtkLookupTable>::New();
+        lut->SetNumberOfTableValues(table.maxId() + 1);
+        lut->SetTableRange(-0.5, table.maxId() + 0.5);
+        lut->Build();
+        for (const volume::Tissue& t : table.tissues()) {
+            if (!t.critical || t.id == 0) continue;
+            surfaces->SetValue(n++, t.id);
+            lut->SetTableValue(t.id, t.colour[0] / 255.0, t.colour[1] / 255.0, t.colour[2] / 255.0, 1.0);
+        }
+        if (n > 0) {
+            surfaces->ComputeNormalsOn();
+            surfaces->ComputeScalarsOn();
+            auto mapperS = vtkSmartPointer<vtkPolyDataMapper>::New();
+            mapperS->SetInputConnection(surfaces->GetOutputPort());
+            mapperS->SetLookupTable(lut);
+            mapperS->SetScalarRange(-0.5, table.maxId() + 0.5);
+            mapperS->SetScalarModeToUsePointData();
+            mapperS->ScalarVisibilityOn();
+            auto actor = vtkSmartPointer<vtkActor>::New();
+            actor->SetMapper(mapperS);
+            actor->SetUserMatrix(d.dataToWorld());
+            actor->GetProperty()->SetOpacity(0.6);
+            m.renderer->AddActor(actor);
+        }
+    }
+
+    // Paths and needles as 3D lines; entry and target as points.
+    std::vector<std::pair<Vec3d, Vec3d>> paths, needles;
+    std::vector<Vec3d> entries, targets;
+    for (const PlannedPath& p : overlays.paths) {
+        paths.emplace_back(p.entry, p.target);
+        entries.push_back(p.entry);
+        targets.push_back(p.target);
+        if (p.needle) needles.emplace_back(p.needle->hub(), p.needle->tip);
+    }
+    if (!paths.empty()) {
+        m.lines->AddActor(lineActor(paths, m.style.path, 2.0));
+        m.lines->AddActor(pointActor(entries, m.style.entry, 10.0));
+        m.lines->AddActor(pointActor(targets, m.style.target, 10.0));
+    }
+    if (!needles.empty()) m.lines->AddActor(lineActor(needles, m.style.needle, 3.0));
+    setNeedle(overlays.needle);
+
+    // A parallel projection onto the frame: pixel (x, y) shows the ray through frame.toWorld(x, y).
+    vtkCamera* cam = m.renderer->GetActiveCamera();
+    cam->ParallelProjectionOn();
+    const Vec3d centre = frame.centre();
+    const double far = (d.bounds.max - d.bounds.min).norm() + 1.0;
+    const Vec3d eye = centre - far * frame.normal;
+    cam->SetFocalPoint(centre.data());
+    cam->SetPosition(eye.data());
+    const Vec3d up = -frame.down;
+    cam->SetViewUp(up.data());
+    cam->SetParallelScale(0.5 * frame.height * frame.pixelMm);
+    cam->SetClippingRange(0.5, 3.0 * far);
+
+    m.window = vtkSmartPointer<vtkRenderWindow>::New();
+    m.window->SetOffScreenRendering(1);
+    m.window->SetMultiSamples(0);
+    m.window->SetSize(frame.width, frame.height);
+    m.window->AddRenderer(m.renderer);
+    if (m.lines != m.renderer) {
+        m.window->SetNumberOfLayers(2);
+        m.window->AddRenderer(m.lines);
+    }
+}
+
+VolumeView3d::~VolumeView3d()
+{
+    if (mImpl && mImpl->window) mImpl->window->Finalize(); // release the GL context while the display is up
+}
+
+void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
+{
+    Impl& m = *mImpl;
+    if (m.needle) m.lines->RemoveActor(m.needle);
+    m.needle = nullptr;
+    if (!needle) return;
+    m.needle = lineActor({{needle->hub(), needle->tip}}, m.style.needle, 3.0);
+    m.lines->AddActor(m.needle);
+}
+
+Image VolumeView3d::render()
+{
+    Impl& m = *mImpl;
+    m.window->Render();
+    auto grab = vtkSmartPointer<vtkWindowToImageFilter>::New();
+    grab->SetInput(m.window);
+    grab->SetInputBufferTypeToRGB();
+    grab->ReadFrontBufferOff();
+    grab->Update();
+    vtkImageData* shot = grab->GetOutput();
+    int dims[3];
+    shot->GetDimensions(dims);
+    const auto* p = static_cast<const std::uint8_t*>(shot->GetScalarPointer());
+    Image img(dims[0], dims[1]);
+    for (int y = 0; y < dims[1]; ++y) { // VTK's rows start at the bottom
+        const std::uint8_t* row = p + std::size_t(dims[1] - 1 - y) * std::size_t(dims[0]) * 3;
+        for (int x = 0; x < dims[0]; ++x) img.at(x, y) = {row[3 * x], row[3 * x + 1], row[3 * x + 2]};
+    }
+    drawAnnotations(img, m.frame, m.overlays, m.style);
+    return img;
+}
+
+} // namespace voxhap::render

@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestPlan.cpp
+/// @brief plan.json and Slicer line markups: what is read, and one-line
+/// errors naming the file and the field for what is refused.
+
+#include "common/TempDirTest.h"
+#include "common/Tolerances.h"
+
+#include "render/Plan.h"
+#include "volume/Errors.h"
+
+#include <fstream>
+
+namespace voxhap::render {
+namespace {
+
+using test::nearVec;
+
+class PlanFiles : public test::TempDirTest {
+protected:
+    std::filesystem::path write(const std::string& name, const std::string& text) const
+    {
+        const auto p = mDir / name;
+        std::ofstream(p) << text;
+        return p;
+    }
+};
+
+TEST_F(PlanFiles, ReadsPathsAndNeedle)
+{
+    const Plan plan = loadPlan(write("plan.json", R"({"schema": "voxhap-plan/1", "paths": [
+        {"name": "L3", "entry": [10, -5, 3], "target": [0, -60, 3],
+         "needle": {"tip": [8, -20, 3], "direction": [0, -2, 0], "length_mm": 120}},
+        {"entry": [1, 2, 3], "target": [4, 5, 6]}]})"));
+    ASSERT_EQ(plan.paths.size(), 2u);
+    EXPECT_EQ(plan.paths[0].name, "L3");
+    EXPECT_TRUE(nearVec(plan.paths[0].entry, Vec3d(10, -5, 3), 0.0));
+    ASSERT_TRUE(plan.paths[0].needle);
+    EXPECT_TRUE(nearVec(plan.paths[0].needle->direction, Vec3d(0, -1, 0), 1e-15)); // normalised
+    EXPECT_TRUE(nearVec(plan.paths[0].needle->hub(), Vec3d(8, 100, 3), 1e-12));
+    EXPECT_EQ(plan.paths[1].name, "path 2");
+    EXPECT_FALSE(plan.paths[1].needle);
+}
+
+TEST_F(PlanFiles, RefusesWithFileAndField)
+{
+    const auto refused = [&](const std::string& text, const std::string& field) {
+        test::expectRefused<ValueError>([](const auto& p) { loadPlan(p); }, write("bad.json", text), field);
+    };
+    refused(R"({"schema": "voxhap-plan/2", "paths": []})", "schema");
+    refused(R"({"schema": "voxhap-plan/1"})", "paths");
+    refused(R"({"schema": "voxhap-plan/1", "paths": []})", "paths");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2], "target": [0, 0, 0]}]})", "paths[0].entry");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3]}]})", "paths[0].target");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [1, 2, 3]}]})", "paths[0].target");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [0, 0, 0], "colour": 1}]})",
+            "paths[0].colour");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [0, 0, 0],
+              "needle": {"tip": [0, 0, 0], "direction": [0, 0, 0]}}]})", "paths[0].needle.direction");
+    refused(R"({"schema": "voxhap-plan/1", "paths": [)", "not valid JSON");
+    test::expectRefused<IoError>([](const auto& p) { loadPlan(p); }, mDir / "absent.json", "cannot open");
+}
+
+TEST_F(PlanFiles, SlicerLineMarkupsInRasBecomeLps)
+{
+    const Plan plan = loadPlan(write("line.mrk.json", R"({
+        "@schema": "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/markups-schema-v1.0.3.json#",
+        "markups": [
+          {"type": "Fiducial", "coordinateSystem": "LPS", "controlPoints": [{"position": [0, 0, 0]}]},
+          {"type": "Line", "name": "biopsy", "coordinateSystem": "RAS", "coordinateUnits": "mm",
+           "controlPoints": [{"id": "1", "position": [10, 20, 30]}, {"id": "2", "position": [-5, -6, 7]}],
+           "measurements": [{"name": "length", "value": 1.0}]}]})"));
+    ASSERT_EQ(plan.paths.size(), 1u);
+    EXPECT_EQ(plan.paths[0].name, "biopsy");
+    EXPECT_TRUE(nearVec(plan.paths[0].entry, Vec3d(-10, -20, 30), 0.0));
+    EXPECT_TRUE(nearVec(plan.paths[0].target, Vec3d(5, 6, 7), 0.0));
+    test::expectRefused<ValueError>([](const auto& p) { loadPlan(p); },
+                                    write("none.mrk.json", R"({"markups": [{"type": "Fiducial"}]})"), "markups");
+}
+
+} // namespace
+} // namespace voxhap::render

@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CmdRender.cpp
+/// @brief `voxhap render <volume>`: axial, sagittal, coronal and 3D snapshots
+/// as PNGs, with paths, crosshair, scale bar and orientation letters, plus a
+/// contact sheet. Slices need no display; the 3D view uses $DISPLAY or an
+/// Xvfb started for the run, and says so on stderr.
+
+#include "tools/Cli.h"
+#include "tools/LoadOptions.h"
+
+#include "render/Display.h"
+#include "render/ImageFile.h"
+#include "render/Plan.h"
+#include "render/RenderVolume.h"
+#include "render/Snapshot.h"
+#include "volume/Errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+namespace voxhap::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RenderOptions {
+    CommonOptions common;
+    ReaderOptions reader;
+    std::string input, views = "axial,sagittal,coronal,3d", mode = "colour", window, path, point, out = "voxhap-render";
+    double pixelMm = 0.0;
+    int size = 768;
+    bool noLabels = false, noSurfaces = false;
+};
+
+render::RenderRequest request(const RenderOptions& o)
+{
+    render::RenderRequest r;
+    try {
+        r.views = render::parseViews(o.views);
+        r.mode = render::parseBlendMode(o.mode);
+        if (!o.window.empty()) r.window = render::parseWindow(o.window);
+    } catch (const ValueError& e) {
+        throw UsageError(e.what());
+    }
+    if (!o.point.empty()) r.point = parseVec3(o.point, "--point");
+    r.pixelMm = o.pixelMm;
+    r.maxPixels = o.size;
+    r.labels = !o.noLabels;
+    r.criticalSurfaces = !o.noSurfaces;
+    return r;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+int run(const RenderOptions& o)
+{
+    render::RenderRequest req = request(o);
+    // Cheap inputs first: a bad plan fails before the volume loads.
+    if (!o.path.empty()) req.plan = render::loadPlan(o.path);
+    const volume::TissueTable& table = tissueTable(o.common);
+    const bool threeD = std::find(req.views.begin(), req.views.end(), render::ViewKind::ThreeD) != req.views.end();
+    // Before any thread starts: the guard may set $DISPLAY for this process.
+    std::optional<render::DisplayGuard> display;
+    if (threeD) display.emplace();
+
+    const auto start = std::chrono::steady_clock::now();
+    const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
+    const double loadS = secondsSince(start);
+    if (req.point) {
+        const auto b = v.worldBounds();
+        if ((req.point->array() < b[0].array()).any() || (req.point->array() > b[1].array()).any()) {
+            throw UsageError("--point lies outside the volume's bounds");
+        }
+    }
+    const auto setUp = std::chrono::steady_clock::now();
+    render::Snapshot snap(v, req, table);
+    const double setUpS = secondsSince(setUp);
+
+    fs::create_directories(o.out);
+    std::vector<render::Image> images;
+    nlohmann::json files = nlohmann::json::array();
+    std::string failure;
+    for (render::ViewKind k : snap.views()) {
+        if (k == render::ViewKind::ThreeD && !display->available()) {
+            failure = "3d view: " + display->why() + "; the slices were written";
+            continue;
+        }
+        const auto t = std::chrono::steady_clock::now();
+        render::Image img = snap.render(k);
+        const double s = secondsSince(t);
+        const std::string name = k == render::ViewKind::ThreeD
+                                     ? "3d-" + std::string(render::blendModeName(req.mode)) + ".png"
+                                     : std::string(render::viewName(k)) + ".png";
+        render::writePng(img, fs::path(o.out) / name);
+        files.push_back({{"view", render::viewName(k)}, {"file", (fs::path(o.out) / name).string()},
+                         {"width", img.width()}, {"height", img.height()}, {"seconds", s}});
+        images.push_back(std::move(img));
+    }
+    const fs::path sheet = fs::path(o.out) / "sheet.png";
+    if (!images.empty()) render::writePng(render::contactSheet(images), sheet);
+
+    const Vec3d p = snap.point();
+    if (o.common.json) {
+        nlohmann::json j;
+        j["input"] = o.input;
+        j["views"] = files;
+        j["sheet"] = sheet.string();
+        j["point_mm"] = {p.x(), p.y(), p.z()};
+        j["display"] = !display ? "none needed" : display->description();
+        j["load_seconds"] = loadS;
+        j["setup_seconds"] = setUpS;
+        j["dense_bytes"] = snap.volume().denseBytes();
+        std::cout << j.dump(2) << '\n';
+    } else {
+        std::cout << std::fixed << std::setprecision(3) << "read   " << o.input << " in " << loadS << " s; handed to VTK in "
+                  << setUpS << " s (" << snap.volume().denseBytes() / (1 << 20) << " MiB)\n"
+                  << std::setprecision(1) << "point  " << p.x() << ", " << p.y() << ", " << p.z() << " mm (LPS)\n";
+        for (const auto& f : files) {
+            std::cout << "wrote  " << f["file"].get<std::string>() << "  " << f["width"] << " x " << f["height"] << ", "
+                      << std::setprecision(3) << f["seconds"].get<double>() << " s\n";
+        }
+        if (!images.empty()) std::cout << "wrote  " << sheet.string() << "  (contact sheet)\n";
+    }
+    // Which path the views took, on stderr (one line): slices never need GL.
+    if (display && display->available()) std::cerr << "voxhap render: slices without GL; " << display->description() << '\n';
+    if (!failure.empty()) throw IoError(failure);
+    return 0;
+}
+
+} // namespace
+
+Action registerRender(CLI::App& app)
+{
+    auto o = std::make_shared<RenderOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "render", "Snapshots of a volume: axial, sagittal, coronal and 3D views with paths, as PNGs and a contact sheet");
+    cmd->add_option("volume", o->input, "A volume: .vdb, .nrrd, .nii, .mha or a DICOM folder")->required();
+    cmd->add_option("--views", o->views, "Comma-separated views: axial, sagittal, coronal, 3d (default all four)");
+    cmd->add_option("--mode", o->mode, "3D blend mode: colour (tissue colours), grey, mip or sum (default colour)");
+    cmd->add_option("--window", o->window, "Window: bone, soft, lung or WIDTH,LEVEL in HU (default soft; MIP: bone)");
+    cmd->add_option("--path", o->path, "Planned paths: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--point", o->point, "Slice position and crosshair x,y,z [mm, LPS] (default: the path's target, else the centre)");
+    cmd->add_option("--pixel", o->pixelMm, "Pixel size [mm] (default: the finest voxel size)")->check(CLI::PositiveNumber);
+    cmd->add_option("--size", o->size, "Largest side of a view [px] (default 768)")->check(CLI::Range(32, 4096));
+    cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
+    cmd->add_flag("--no-surfaces", o->noSurfaces, "3D view without the critical-structure surfaces");
+    cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-render)");
+    addReaderOptions(*cmd, o->reader);
+    addCommonOptions(*cmd, o->common);
+    return [o] { return run(*o); };
+}
+
+} // namespace voxhap::tools

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file JsonFields.h
+/// @brief Strict reading of one JSON object for the project's data files
+/// (scenes, plans): unknown keys and wrong types are refused with one line
+/// "origin: field.path: why" (architecture.md "Errors").
+#pragma once
+
+#include "volume/Errors.h"
+#include "volume/Math.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <exception>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+
+namespace voxhap::volume {
+
+/// @brief Reads one JSON object, refusing unknown keys (checked when it goes out
+/// of scope) and wrong types with "origin: field: why".
+class JsonFields {
+public:
+    using Json = nlohmann::json;
+
+    JsonFields(const Json& j, std::string origin, std::string path) : mJ(j), mOrigin(std::move(origin)), mPath(std::move(path))
+    {
+        if (!j.is_object()) fail("", "must be an object");
+    }
+    ~JsonFields() noexcept(false)
+    {
+        if (std::uncaught_exceptions()) return;
+        for (const auto& [k, v] : mJ.items()) {
+            if (!mSeen.count(k)) fail(k, "unknown field");
+        }
+    }
+    [[noreturn]] void fail(const std::string& key, const std::string& why) const
+    {
+        throw ValueError(mOrigin + ": " + (mPath.empty() ? key : key.empty() ? mPath : mPath + "." + key) + ": " + why);
+    }
+    bool has(const std::string& k)
+    {
+        mSeen.insert(k);
+        return mJ.contains(k) && !mJ.at(k).is_null();
+    }
+    const Json& raw(const std::string& k)
+    {
+        mSeen.insert(k);
+        return mJ.at(k);
+    }
+    double number(const std::string& k, double def, bool positive = false)
+    {
+        if (!has(k)) return def;
+        const Json& v = mJ.at(k);
+        if (!v.is_number() || !std::isfinite(v.get<double>())) fail(k, "must be a finite number");
+        const double x = v.get<double>();
+        if (positive ? !(x > 0.0) : x < 0.0) fail(k, positive ? "must be positive" : "must not be negative");
+        return x;
+    }
+    std::optional<double> optNumber(const std::string& k, bool positive = false)
+    {
+        if (!has(k)) return std::nullopt;
+        return number(k, 0.0, positive);
+    }
+    bool boolean(const std::string& k, bool def)
+    {
+        if (!has(k)) return def;
+        if (!mJ.at(k).is_boolean()) fail(k, "must be true or false");
+        return mJ.at(k).get<bool>();
+    }
+    std::string string(const std::string& k, const std::string& def)
+    {
+        if (!has(k)) return def;
+        if (!mJ.at(k).is_string()) fail(k, "must be a string");
+        return mJ.at(k).get<std::string>();
+    }
+    Vec3d vec3(const std::string& k)
+    {
+        const Json& v = raw(k);
+        if (!v.is_array() || v.size() != 3) fail(k, "must be [x, y, z] in mm");
+        Vec3d p;
+        for (int i = 0; i < 3; ++i) {
+            if (!v[std::size_t(i)].is_number()) fail(k, "must be [x, y, z] in mm");
+            p[i] = v[std::size_t(i)].get<double>();
+        }
+        if (!p.allFinite()) fail(k, "must be finite");
+        return p;
+    }
+    JsonFields sub(const std::string& k) { return JsonFields(raw(k), mOrigin, mPath.empty() ? k : mPath + "." + k); }
+    /// A term: absent → off; true or an object → on; false → off.
+    bool term(const std::string& k)
+    {
+        if (!has(k)) return false;
+        const Json& v = mJ.at(k);
+        if (v.is_boolean()) return v.get<bool>();
+        if (!v.is_object()) fail(k, "must be true, false or an object of parameters");
+        return true;
+    }
+    bool isObject(const std::string& k) { return has(k) && mJ.at(k).is_object(); }
+
+private:
+    const Json& mJ;
+    std::string mOrigin, mPath;
+    std::set<std::string> mSeen;
+};
+
+} // namespace voxhap::volume
