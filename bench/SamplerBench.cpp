@@ -5,7 +5,7 @@
 #include "bench/SamplerBench.h"
 
 #include "bench/DenseField.h"
-#include "bench/Gnuplot.h"
+#include "render/Gnuplot.h"
 #include "bench/VtkProbe.h"
 #include "haptic/ShaftIntegration.h"
 #include "haptic/TrajectoryProfile.h"
@@ -415,7 +415,7 @@ nlohmann::json samplerReportJson(const SamplerReport& r)
 
 bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why)
 {
-    const PlotDir dir;
+    const render::PlotDir dir;
     std::ostringstream script;
     script << "set logscale xy\nset grid\nset key outside right\n"
            << "set xlabel 'max force error at " << r.options.speedMmPerS
@@ -438,7 +438,7 @@ bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::
                 "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
     }
     script << plot.substr(0, plot.size() - 2) << '\n';
-    return runGnuplot(dir, script.str(), pngFile, 1200, 800, why);
+    return render::runGnuplot(dir, script.str(), pngFile, 1200, 800, why);
 }
 
 } // namespace voxhap::bench

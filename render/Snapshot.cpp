@@ -89,6 +89,7 @@ Image Snapshot::render(ViewKind v)
     if (!m3d) {
         View3dStyle style;
         style.mode = mRequest.mode;
+        style.caster = mRequest.caster;
         style.criticalSurfaces = mRequest.criticalSurfaces;
         const WindowPreset preset = mRequest.mode == BlendMode::Mip ? WindowPreset::Bone : WindowPreset::SoftTissue;
         style.window = mRequest.window ? *mRequest.window : ct ? windowLevel(preset) : valueRange;

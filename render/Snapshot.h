@@ -10,6 +10,7 @@
 #include "render/Plan.h"
 #include "render/ViewFrame.h"
 #include "render/ViewTypes.h"
+#include "render/VolumeView3d.h"
 
 #include <memory>
 #include <optional>
@@ -27,6 +28,7 @@ class RenderVolume;
 struct RenderRequest {
     std::vector<ViewKind> views{ViewKind::Axial, ViewKind::Sagittal, ViewKind::Coronal, ViewKind::ThreeD};
     BlendMode mode = BlendMode::Colour;   ///< of the 3D view
+    RayCaster caster = RayCaster::Auto;   ///< of the 3D view
     /// Slices' window; default soft tissue on CT, the value range on T1. The 3D
     /// grey and MIP modes default to soft tissue and bone.
     std::optional<WindowLevel> window;

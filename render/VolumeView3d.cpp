@@ -14,6 +14,7 @@
 #include <vtkCellArray.h>
 #include <vtkColorTransferFunction.h>
 #include <vtkDiscreteFlyingEdges3D.h>
+#include <vtkFixedPointVolumeRayCastMapper.h>
 #include <vtkGPUVolumeRayCastMapper.h>
 #include <vtkLookupTable.h>
 #include <vtkPiecewiseFunction.h>
@@ -125,6 +126,7 @@ struct VolumeView3d::Impl {
     vtkSmartPointer<vtkRenderer> renderer;
     vtkSmartPointer<vtkRenderer> lines; ///< where paths and needles go: the scene, or a layer above it
     vtkSmartPointer<vtkActor> needle;
+    RayCaster caster = RayCaster::Gpu;
 };
 
 VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style,
@@ -140,11 +142,26 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     const RenderVolume::Impl& d = v.impl();
 
     // The volume: the RenderVolume's array itself, placed in the world by a matrix.
-    auto mapper = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
-    mapper->SetInputData(d.scalars);
-    mapper->SetAutoAdjustSampleDistances(false);
+    m.caster = style.caster;
+    if (m.caster == RayCaster::Auto) m.caster = style.mode == BlendMode::Sum ? RayCaster::Gpu : RayCaster::Cpu;
+    if (m.caster == RayCaster::Cpu && style.mode == BlendMode::Sum) {
+        throw ValueError("3d view: the CPU ray caster has no summed projection (use the GPU one)");
+    }
     const double step = std::max(1e-3, style.sampleVoxels) * d.spacing.minCoeff();
-    mapper->SetSampleDistance(float(step));
+    vtkSmartPointer<vtkVolumeMapper> mapper;
+    if (m.caster == RayCaster::Gpu) {
+        auto gpu = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
+        gpu->SetAutoAdjustSampleDistances(false);
+        gpu->SetSampleDistance(float(step));
+        mapper = gpu;
+    } else {
+        auto cpu = vtkSmartPointer<vtkFixedPointVolumeRayCastMapper>::New();
+        cpu->SetAutoAdjustSampleDistances(false);
+        cpu->SetSampleDistance(float(step));
+        cpu->SetImageSampleDistance(1.0f); // one ray per pixel
+        mapper = cpu;
+    }
+    mapper->SetInputData(d.scalars);
     auto colour = vtkSmartPointer<vtkColorTransferFunction>::New();
     auto opacity = vtkSmartPointer<vtkPiecewiseFunction>::New();
     auto property = vtkSmartPointer<vtkVolumeProperty>::New();
@@ -293,6 +310,8 @@ VolumeView3d::~VolumeView3d()
 {
     if (mImpl && mImpl->window) mImpl->window->Finalize(); // release the GL context while the display is up
 }
+
+RayCaster VolumeView3d::caster() const { return mImpl->caster; }
 
 void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
 {

@@ -23,8 +23,16 @@ namespace voxhap::render {
 
 class RenderVolume;
 
+/// @brief Which VTK ray caster draws the volume.
+enum class RayCaster {
+    Auto, ///< the faster one for the mode (measured by bench_render): CPU, except GPU for the sum
+    Gpu,  ///< vtkGPUVolumeRayCastMapper (Mesa llvmpipe under Xvfb): all four modes
+    Cpu,  ///< vtkFixedPointVolumeRayCastMapper (multi-threaded): composite and MIP only
+};
+
 struct View3dStyle {
     BlendMode mode = BlendMode::Colour;
+    RayCaster caster = RayCaster::Auto;
     WindowLevel window;             ///< grey ramp of the grey and MIP modes
     bool criticalSurfaces = true;   ///< surfaces of the table's critical tissues (needs labels)
     double sampleVoxels = 1.0;      ///< ray step in units of the finest voxel size
@@ -43,6 +51,8 @@ public:
 
     /// @brief Render one frame and read it back (the first frame also compiles the shaders).
     Image render();
+    /// @brief The ray caster in use (Auto resolved).
+    RayCaster caster() const;
     /// @brief Move (or remove) the live needle drawn in the view.
     void setNeedle(const std::optional<NeedlePose>& needle);
 

@@ -61,5 +61,6 @@ Action registerBench(CLI::App& app);
 Action registerSimulate(CLI::App& app);
 Action registerServe(CLI::App& app);
 Action registerRender(CLI::App& app);
+Action registerPlot(CLI::App& app);
 
 } // namespace voxhap::tools

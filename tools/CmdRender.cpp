@@ -34,7 +34,7 @@ namespace fs = std::filesystem;
 struct RenderOptions {
     CommonOptions common;
     ReaderOptions reader;
-    std::string input, views = "axial,sagittal,coronal,3d", mode = "colour", window, path, point, out = "voxhap-render";
+    std::string input, views = "axial,sagittal,coronal,3d", mode = "colour", caster = "auto", window, path, point, out = "voxhap-render";
     double pixelMm = 0.0;
     int size = 768;
     bool noLabels = false, noSurfaces = false;
@@ -49,6 +49,10 @@ render::RenderRequest request(const RenderOptions& o)
         if (!o.window.empty()) r.window = render::parseWindow(o.window);
     } catch (const ValueError& e) {
         throw UsageError(e.what());
+    }
+    r.caster = o.caster == "gpu" ? render::RayCaster::Gpu : o.caster == "cpu" ? render::RayCaster::Cpu : render::RayCaster::Auto;
+    if (r.caster == render::RayCaster::Cpu && r.mode == render::BlendMode::Sum) {
+        throw UsageError("--caster cpu: the CPU ray caster has no summed projection");
     }
     if (!o.point.empty()) r.point = parseVec3(o.point, "--point");
     r.pixelMm = o.pixelMm;
@@ -148,6 +152,8 @@ Action registerRender(CLI::App& app)
     cmd->add_option("volume", o->input, "A volume: .vdb, .nrrd, .nii, .mha or a DICOM folder")->required();
     cmd->add_option("--views", o->views, "Comma-separated views: axial, sagittal, coronal, 3d (default all four)");
     cmd->add_option("--mode", o->mode, "3D blend mode: colour (tissue colours), grey, mip or sum (default colour)");
+    cmd->add_option("--caster", o->caster, "3D ray caster: auto (the faster for the mode), gpu or cpu")
+        ->check(CLI::IsMember({"auto", "gpu", "cpu"}));
     cmd->add_option("--window", o->window, "Window: bone, soft, lung or WIDTH,LEVEL in HU (default soft; MIP: bone)");
     cmd->add_option("--path", o->path, "Planned paths: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
         ->check(CLI::ExistingFile);

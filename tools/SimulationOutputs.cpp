@@ -2,7 +2,7 @@
 /// @file SimulationOutputs.cpp
 #include "tools/SimulationOutputs.h"
 
-#include "tools/ForcePlot.h"
+#include "render/ForcePlot.h"
 #include "volume/AtomicFile.h"
 
 #include <cmath>
@@ -54,7 +54,8 @@ SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::
     f.json = (fs::path(outDir) / "summary.json").string();
     const std::string png = (fs::path(outDir) / "force-depth.png").string();
     haptic::writeInsertionCsv(r, inst.layers(), f.csv);
-    f.plotted = plot && plotForceDepth(r, inst.layers(), scene.name + ": " + scene.description, png, f.plotWhy);
+    f.plotted = plot && render::plotForceDepth(render::forceTrace(r, inst.layers(), scene.name + ": " + scene.description),
+                                                png, f.plotWhy);
     if (f.plotted) f.png = png;
     f.summary = summaryJson(r, scene, f.csv, f.png);
     volume::writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });

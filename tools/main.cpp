@@ -22,6 +22,7 @@ int main(int argc, char** argv)
         {"simulate", registerSimulate(app)},
         {"serve", registerServe(app)},
         {"render", registerRender(app)},
+        {"plot", registerPlot(app)},
         {"bench", registerBench(app)},
     };
 

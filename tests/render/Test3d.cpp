@@ -51,11 +51,12 @@ protected:
         mBox = {b[0], b[1]};
         mFrame = viewFrame(ViewKind::ThreeD, mBox, 0.5 * (mBox.min + mBox.max), 0.5);
     }
-    Image render(BlendMode mode, bool labels = false)
+    Image render(BlendMode mode, bool labels = false, RayCaster caster = RayCaster::Auto)
     {
         const RenderVolume rv(*mVolume, labels);
         View3dStyle style;
         style.mode = mode;
+        style.caster = caster;
         style.window = {2000.0, 900.0}; // the core (1850 HU) near white, the shells darker
         style.criticalSurfaces = labels;
         VolumeView3d view(rv, mFrame, style, volume::TissueTable::builtin(), Overlays{{}, {}, {}, "", false, false});
@@ -82,14 +83,16 @@ Vec2d peak(const Image& img)
 
 TEST_F(View3d, MipPeaksAtTheProjectedCentre)
 {
-    const Image img = render(BlendMode::Mip);
-    ASSERT_EQ(img.width(), mFrame.width);
-    ASSERT_EQ(img.height(), mFrame.height);
-    EXPECT_GT(test::greySpread(img), 5.0) << "blank image";
     const Vec2d expected = expectedPixel("3d", mPhantom.centre, mBox.min, mBox.max, mFrame.pixelMm);
-    const Vec2d got = peak(img);
-    EXPECT_NEAR(got.x(), expected.x(), kPeakPx);
-    EXPECT_NEAR(got.y(), expected.y(), kPeakPx);
+    for (const RayCaster caster : {RayCaster::Cpu, RayCaster::Gpu}) {
+        const Image img = render(BlendMode::Mip, false, caster);
+        ASSERT_EQ(img.width(), mFrame.width);
+        ASSERT_EQ(img.height(), mFrame.height);
+        EXPECT_GT(test::greySpread(img), 5.0) << "blank image";
+        const Vec2d got = peak(img);
+        EXPECT_NEAR(got.x(), expected.x(), kPeakPx) << (caster == RayCaster::Cpu ? "cpu" : "gpu");
+        EXPECT_NEAR(got.y(), expected.y(), kPeakPx) << (caster == RayCaster::Cpu ? "cpu" : "gpu");
+    }
 }
 
 TEST_F(View3d, SummedProjectionPeaksAtTheProjectedCentre)
@@ -107,7 +110,7 @@ TEST_F(View3d, SummedProjectionPeaksAtTheProjectedCentre)
 TEST_F(View3d, CompositeModesAreNotBlank)
 {
     for (const BlendMode m : {BlendMode::Colour, BlendMode::Grey}) {
-        const Image img = render(m, true);
+        const Image img = render(m, true, RayCaster::Gpu);
         EXPECT_EQ(img.width(), mFrame.width);
         EXPECT_GT(test::greySpread(img), 5.0) << blendModeName(m);
     }

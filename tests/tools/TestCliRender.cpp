@@ -93,3 +93,33 @@ TEST_F(CliRender, RefusesWithOneLine)
 }
 
 } // namespace
+
+namespace {
+
+using CliPlot = voxhap::test::CliTest;
+
+TEST_F(CliPlot, ForceDepthFromSimulateAndFromASession)
+{
+    const Result sim = run("simulate --scene senac-average --no-plot -o sim");
+    ASSERT_EQ(sim.exitCode, 0) << sim.err;
+    const Result a = run("plot sim --json");
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    const auto j = nlohmann::json::parse(a.out);
+    EXPECT_GT(j["layers"].get<int>(), 3);
+    EXPECT_GT(j["events"].get<int>(), 0);
+    EXPECT_EQ(pngSize(mDir / "sim" / "force-depth.png"), (std::array<int, 2>{1200, 700}));
+    // A served session: session.csv and events.csv as `voxhap serve` writes them.
+    fs::create_directories(mDir / "srv");
+    std::ofstream(mDir / "srv" / "session.csv")
+        << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,fault,"
+           "critical,plunger_fraction\n0,0,1,0,0,-1,0,0,0,0,0,-1,0,,outside,0,0,nan\n"
+           "0.1,0,-2,0,0,-1,0,0,1,0,0,2,1,skin,punctured,0,0,nan\n";
+    std::ofstream(mDir / "srv" / "events.csv") << "t_s,depth_mm,event,layer\n0.1,2,pop,skin\n";
+    const Result b = run("plot srv/session.csv -o s.png");
+    ASSERT_EQ(b.exitCode, 0) << b.err;
+    EXPECT_EQ(pngSize(mDir / "s.png"), (std::array<int, 2>{1200, 700}));
+    std::ofstream(mDir / "bad.csv") << "t_s,depth_mm\n";
+    voxhap::test::expectFailure(run("plot bad.csv"), "bad.csv: line 1");
+}
+
+} // namespace

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Gnuplot.cpp
-#include "bench/Gnuplot.h"
+#include "render/Gnuplot.h"
 
 #include <atomic>
 #include <cstdlib>
 #include <fstream>
 #include <unistd.h>
 
-namespace voxhap::bench {
+namespace voxhap::render {
 
 namespace fs = std::filesystem;
 
@@ -53,4 +53,4 @@ bool runGnuplot(const PlotDir& dir, const std::string& commands, const std::stri
     return false;
 }
 
-} // namespace voxhap::bench
+} // namespace voxhap::render

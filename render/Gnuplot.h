@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Gnuplot.h
 /// @brief Draw a PNG with gnuplot (Debian's gnuplot-nox, pngcairo terminal):
-/// the benchmark plots and the force–depth plot of `voxhap simulate`.
+/// the benchmark plots and the force–depth plots.
 #pragma once
 
 #include <filesystem>
 #include <string>
 
-namespace voxhap::bench {
+namespace voxhap::render {
 
 /// @brief A scratch directory for data files, removed on destruction.
 class PlotDir {
@@ -28,4 +28,4 @@ private:
 bool runGnuplot(const PlotDir& dir, const std::string& commands, const std::string& pngFile, int width, int height,
                 std::string& why);
 
-} // namespace voxhap::bench
+} // namespace voxhap::render
