@@ -27,6 +27,19 @@ inline void checkRefusal(const Error& e, const std::string& file)
     }
 }
 
+/// @brief Run @p parse on the input as text named @p file; a refusal must
+/// follow the message convention, anything else thrown is a finding.
+template <typename Parse>
+int parseText(const std::uint8_t* data, std::size_t size, const std::string& file, Parse parse)
+{
+    try {
+        parse(std::string_view(reinterpret_cast<const char*>(data), size), file);
+    } catch (const Error& e) {
+        checkRefusal(e, file);
+    }
+    return 0;
+}
+
 /// @brief A scratch file for parsers that read from a path, one per process,
 /// named with @p suffix (readers look at extensions), removed at exit.
 class ScratchFile {

@@ -8,11 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    const std::string file = "fuzz.nrrd";
-    try {
-        voxhap::volume::parseNrrdHeader(std::string_view(reinterpret_cast<const char*>(data), size), file);
-    } catch (const voxhap::Error& e) {
-        voxhap::fuzz::checkRefusal(e, file);
-    }
-    return 0;
+    return voxhap::fuzz::parseText(data, size, "fuzz.nrrd", [](std::string_view text, const std::string& file) {
+        voxhap::volume::parseNrrdHeader(text, file);
+    });
 }

@@ -9,9 +9,9 @@
 #include "volume/Errors.h"
 
 #include <openvdb/tools/Count.h>      // for minMax
-#include <openvdb/tools/ValueTransformer.h> // for foreach
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/enumerable_thread_specific.h>
 
-#include <atomic>
 #include <cmath>
 
 namespace voxhap::haptic {
@@ -56,38 +56,35 @@ struct BetaRule {
     }
 };
 
-/// Fills the β tree's active values; flags tiles whose T1 is not uniform.
-struct BetaFill {
-    BetaFill(const BetaRule& r, const LabelGrid* l, const FloatGrid* t, std::atomic<bool>* flag)
-        : rule(r), labels(l), t1(t), nonUniform(flag),
-          labelAcc(l ? std::optional(l->getConstAccessor()) : std::nullopt),
+/// The label and T1 grids read through one accessor pair (one per thread).
+struct SourceReader {
+    SourceReader(const LabelGrid* l, const FloatGrid* t)
+        : labelAcc(l ? std::optional(l->getConstAccessor()) : std::nullopt),
           t1Acc(t ? std::optional(t->getConstAccessor()) : std::nullopt)
     {
     }
-    BetaFill(const BetaFill& o) : BetaFill(o.rule, o.labels, o.t1, o.nonUniform) {} // fresh accessors per thread
+    int label(const openvdb::Coord& c) { return labelAcc ? labelAcc->getValue(c) : 1; }
+    float t1(const openvdb::Coord& c) { return t1Acc ? t1Acc->getValue(c) : 0.0f; }
 
-    void operator()(const FloatGrid::TreeType::ValueOnIter& it) const
-    {
-        const openvdb::Coord c = it.getCoord();
-        const int label = labelAcc ? labelAcc->getValue(c) : 1;
-        const float t1v = t1Acc ? t1Acc->getValue(c) : 0.0f;
-        if (!it.isVoxelValue() && rule.usesT1(label) && t1Acc) {
-            const int depth = t1Acc->getValueDepth(c);
-            if (depth > int(it.getDepth())) { // T1 varies inside this tile
-                *nonUniform = true;
-                return;
-            }
-        }
-        it.setValue(rule(label, t1v));
-    }
-
-    BetaRule rule;
-    const LabelGrid* labels;
-    const FloatGrid* t1;
-    std::atomic<bool>* nonUniform;
-    mutable std::optional<LabelGrid::ConstAccessor> labelAcc;
-    mutable std::optional<FloatGrid::ConstAccessor> t1Acc;
+    std::optional<LabelGrid::ConstAccessor> labelAcc;
+    std::optional<FloatGrid::ConstAccessor> t1Acc;
 };
+
+/// β over every leaf, in parallel: each leaf is written by one task only.
+/// (A threaded tools::foreach over the tree's ValueOn iterator, tiles and
+/// voxels together, gave wrong voxels now and then on a loaded machine.)
+void fillLeaves(FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid* labels, const FloatGrid* t1)
+{
+    tbb::enumerable_thread_specific<SourceReader> readers([&] { return SourceReader(labels, t1); });
+    openvdb::tree::LeafManager<FloatGrid::TreeType> leaves(tree);
+    leaves.foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        SourceReader& r = readers.local();
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            it.setValue(rule(r.label(c), r.t1(c)));
+        }
+    });
+}
 
 FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
 {
@@ -95,13 +92,26 @@ FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
     const auto t1 = t1Grid(v);
     auto tree = labels ? std::make_shared<FloatGrid::TreeType>(labels->tree(), 0.0f, openvdb::TopologyCopy())
                        : std::make_shared<FloatGrid::TreeType>(t1->tree(), 0.0f, openvdb::TopologyCopy());
-    std::atomic<bool> nonUniform{false};
-    const BetaFill fill(rule, labels.get(), t1.get(), &nonUniform);
-    openvdb::tools::foreach(tree->beginValueOn(), fill, /*threaded=*/true, /*shareOp=*/false);
-    if (nonUniform) { // rare: a label tile over varying T1; resolve it voxel by voxel
-        tree->voxelizeActiveTiles();
-        openvdb::tools::foreach(tree->beginValueOn(), fill, true, false);
+    // Tiles (uniform label regions, few): serially. A tile whose T1 varies
+    // inside it (the T1 tree has a child node there; both trees share the
+    // node layout) is made voxels and filled with the leaves.
+    bool nonUniform = false;
+    {
+        SourceReader r(labels.get(), t1.get());
+        auto it = tree->beginValueOn();
+        it.setMaxDepth(FloatGrid::TreeType::ValueOnIter::LEAF_DEPTH - 1);
+        for (; it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            const int label = r.label(c);
+            if (rule.usesT1(label) && r.t1Acc && r.t1Acc->getValueDepth(c) > int(it.getDepth())) {
+                nonUniform = true;
+                continue;
+            }
+            it.setValue(rule(label, r.t1(c)));
+        }
     }
+    if (nonUniform) tree->voxelizeActiveTiles(); // rare; tiles already filled become equal voxels
+    fillLeaves(*tree, rule, labels.get(), t1.get());
     tree->prune(); // exact: tolerance 0
     auto grid = FloatGrid::create(tree);
     grid->setTransform(v.transform().copy());

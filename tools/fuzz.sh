@@ -4,7 +4,10 @@
 #
 #   tools/fuzz.sh                       every target, 10 minutes each
 #   tools/fuzz.sh --minutes 60 NrrdHeader
-#   tools/fuzz.sh --seconds 8 ...        what the test suite runs
+#   tools/fuzz.sh --runs 4000 --fresh T  what the test suite runs: a fixed
+#                                       number of inputs from seed 1 and an
+#                                       empty corpus, so that every run of the
+#                                       suite tries the same inputs
 #
 # Each target starts from fuzz/seeds/<target> and fuzz/regressions/<target>
 # (inputs that once broke it) and keeps what it learns in
@@ -17,13 +20,17 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build_dir=${VOXHAP_BUILD_DIR:-$here/build}
 seconds=600
+runs=-1
+fresh=0
 targets=()
 while (($#)); do
   case "$1" in
     --minutes) seconds=$(($2 * 60)); shift 2 ;;
     --seconds) seconds=$2; shift 2 ;;
+    --runs) runs=$2; shift 2 ;;
+    --fresh) fresh=1; shift ;;
     --build-dir) build_dir=$2; shift 2 ;;
-    -h|--help) sed -n '3,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     -*) echo "voxhap fuzz: unknown option $1 (see --help)" >&2; exit 2 ;;
     *) targets+=("$1"); shift ;;
   esac
@@ -41,14 +48,20 @@ done
 for t in "${targets[@]}"; do
   corpus=$build_dir/fuzz/corpus/$t
   artifacts=$build_dir/fuzz/artifacts/$t
+  extra=()
+  if ((fresh)); then
+    corpus=$(mktemp -d)
+    trap 'rm -rf "$corpus"' EXIT
+    extra=(-seed=1)
+  fi
   mkdir -p "$corpus" "$artifacts"
   inputs=("$corpus" "$here/fuzz/seeds/$t")
   if [ -d "$here/fuzz/regressions/$t" ]; then inputs+=("$here/fuzz/regressions/$t"); fi
-  echo "voxhap fuzz: $t for ${seconds} s"
+  if ((runs >= 0)); then echo "voxhap fuzz: $t, $runs inputs"; else echo "voxhap fuzz: $t for ${seconds} s"; fi
   # 4 KiB inputs reach every header field; rss 2 GiB: a parser asking for more is a finding.
   # grep hides libFuzzer's progress lines; the fuzzer's exit status is what counts.
   set +e
-  "$bin/fuzz_$t" -max_total_time="$seconds" -max_len=4096 -rss_limit_mb=2048 -timeout=10 \
+  "$bin/fuzz_$t" -max_total_time="$seconds" -runs="$runs" "${extra[@]}" -max_len=4096 -rss_limit_mb=2048 -timeout=10 \
     -print_final_stats=1 -artifact_prefix="$artifacts/" "${inputs[@]}" 2>&1 |
     grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|==[0-9]+==|SUMMARY|INFO: seed corpus)|ERROR|refusal|^ +#[0-9]+ .* in [a-zA-Z_:]+voxhap'
   status=${PIPESTATUS[0]}

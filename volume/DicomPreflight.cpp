@@ -33,6 +33,15 @@ struct Tag {
     }
 };
 
+/// @p text with bytes outside printable ASCII shown as '?', for messages on one line.
+std::string printable(std::string text)
+{
+    for (char& c : text) {
+        if (c < 0x20 || c > 0x7e) c = '?';
+    }
+    return text;
+}
+
 class Walker {
 public:
     Walker(const std::filesystem::path& file, std::ifstream& in, std::uint64_t size) : mFile(file), mIn(in), mSize(size) {}
@@ -47,6 +56,12 @@ public:
             read(pos, h, 8, Tag{0x0002, 0x0000});
             const Tag t{u16(h, false), u16(h + 2, false)};
             if (t.group != 0x0002) break;
+            // PS3.10 §7.1 uses only these VRs in the meta header; GDCM asserts
+            // on others, SQ among them (found by fuzz/FuzzDicomPreflight).
+            const std::string vr{char(h[4]), char(h[5])};
+            if (vr != "UL" && vr != "OB" && vr != "UI" && vr != "SH" && vr != "AE") {
+                fail(t, "value representation '" + printable(vr) + "' is not allowed in the meta header");
+            }
             std::uint64_t header = 0;
             const std::uint32_t len = length(pos, h, true, false, t, header);
             if (len == kUndefined) fail(t, "undefined length in the meta header");

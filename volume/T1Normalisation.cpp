@@ -7,7 +7,7 @@
 #include "volume/Errors.h"
 #include "volume/Grids.h"
 
-#include <openvdb/tools/ValueTransformer.h>
+#include <openvdb/tree/LeafManager.h>
 
 #include <algorithm>
 #include <array>
@@ -161,7 +161,13 @@ void applyT1wNormalisation(Volume& v, const T1wNormalisation& fit)
     if (!source) throw ValueError("applyT1wNormalisation: no t1 channel");
     // Grids are shared read-only once set: transform a copy.
     FloatGrid::Ptr out = source->deepCopy();
-    openvdb::tools::foreach(out->beginValueOn(), [&](const FloatGrid::ValueOnIter& it) { it.setValue(float(fit.t1Ms(*it))); });
+    // Tiles serially, leaves one task each: every value is mapped exactly once.
+    auto tile = out->tree().beginValueOn();
+    tile.setMaxDepth(FloatGrid::TreeType::ValueOnIter::LEAF_DEPTH - 1);
+    for (; tile; ++tile) tile.setValue(float(fit.t1Ms(*tile)));
+    openvdb::tree::LeafManager<FloatGrid::TreeType>(out->tree()).foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(float(fit.t1Ms(*it)));
+    });
     v.setGrid(Channel::T1, out);
 
     VolumeMetadata& md = v.metadata();
