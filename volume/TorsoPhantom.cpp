@@ -25,8 +25,8 @@ constexpr double kHalfLength = 60.0;    ///< half extent along z (cranio-caudal)
 
 constexpr double kBodyY = -77.0;        ///< vertebral body axis (x = 0)
 constexpr double kBodyRadius = 18.0;
-constexpr double kBodyHeight = 28.0;    ///< vertebral body height; the lesion's vertebra is centred at z = 0
-constexpr double kDiscHeight = 10.0;
+constexpr double kVertebraHeight = 28.0;    ///< vertebral body height; the lesion's vertebra is centred at z = 0
+constexpr double kTorsoDiscHeight = 10.0;
 constexpr double kCanalY = -50.0;       ///< spinal canal axis
 constexpr double kCanalRadius = 9.0;
 constexpr double kCordRadius = 4.0;
@@ -82,13 +82,13 @@ PhantomModel torsoModel(const TorsoParams& p, const TissueTable& table)
         if ((w - kLesionCentre).squaredNorm() < lesionR2) return lesion;
 
         // Vertebral column: bodies and discs repeat along z, the lesion's body centred at z = 0.
-        const double period = kBodyHeight + kDiscHeight;
-        const double phase = std::fmod(std::fmod(z + 0.5 * kBodyHeight, period) + period, period);
-        const bool bodyLevel = phase < kBodyHeight;
+        const double period = kVertebraHeight + kTorsoDiscHeight;
+        const double phase = std::fmod(std::fmod(z + 0.5 * kVertebraHeight, period) + period, period);
+        const bool bodyLevel = phase < kVertebraHeight;
         const double rBody = std::hypot(x, w.y() - kBodyY);
         if (rBody < kBodyRadius) {
             if (!bodyLevel) return disc;
-            const double s = std::min({kBodyRadius - rBody, phase, kBodyHeight - phase});
+            const double s = std::min({kBodyRadius - rBody, phase, kVertebraHeight - phase});
             return s < shell ? cortical : cancellous;
         }
         const double rCanal = std::hypot(x, w.y() - kCanalY);
@@ -99,7 +99,7 @@ PhantomModel torsoModel(const TorsoParams& p, const TissueTable& table)
         if (rCanal < kArchOuterRadius && w.y() >= kCanalY) return bodyLevel ? cortical : flavum;
         if (std::abs(x) <= kSpinousHalfWidth && w.y() > kCanalY && w.y() <= kSpinousTipY) {
             if (!bodyLevel) return inter;
-            const double s = std::min({kSpinousHalfWidth - std::abs(x), kSpinousTipY - w.y(), phase, kBodyHeight - phase});
+            const double s = std::min({kSpinousHalfWidth - std::abs(x), kSpinousTipY - w.y(), phase, kVertebraHeight - phase});
             return s < shell ? cortical : cancellous;
         }
         return muscle;

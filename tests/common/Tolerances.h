@@ -25,6 +25,12 @@ inline constexpr double kGeometryRelative = 1e-12;
 /// an exact power of ten, so the relative error is a few ulps.
 inline constexpr double kUnitConversionRelative = 1e-12;
 
+/// Positions, orientations and spacings travel as DICOM decimal strings of at
+/// most 16 characters ("1.07421875", "484.91"): parsed into doubles they carry
+/// ~1e-13 mm of rounding on coordinates of order 100 mm, and differences of
+/// them (the slice step) likewise. 1e-6 mm is ample and far below any pixel.
+inline constexpr double kDicomDecimalMm = 1e-6;
+
 /// A voxelised boundary lies within half a voxel of the analytic one: voxels
 /// take the tissue at their centre, and a centre is at most half a voxel from
 /// any point of its cell along an axis.

@@ -3,6 +3,7 @@
 /// @brief The insertion state machine and force pipeline against the §7
 /// regression phantoms (R2, R3, R4, R6) and the papers' layer depths.
 
+#include "common/BuiltinTable.h"
 #include "common/Layers.h"
 #include "common/Tolerances.h"
 
@@ -19,7 +20,7 @@
 namespace voxhap::haptic {
 namespace {
 
-const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+using voxhap::test::table;
 
 /// A stiff, strong bench device so that the proxy's stick phase and the clamps stay
 /// out of the way: the proxy reaches a 1 N step in 1/kc = 0.01 mm.

@@ -2,6 +2,7 @@
 /// @file TestMaterialField.cpp
 /// @brief The mapping layer against physics.md §1.3, §5.3 and §5.4.
 
+#include "common/BuiltinTable.h"
 #include "common/Tolerances.h"
 
 #include "haptic/detail/FieldGrids.h"
@@ -20,7 +21,7 @@ using volume::FieldStrength;
 /// β they reproduce is off by up to 856 ms·0.0005e-3/ms + 0.5/2058 ≈ 7e-4 relative.
 constexpr double kFitRounding = 1e-3;
 
-const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+using voxhap::test::table;
 
 TEST(T1DampingLaw, ReproducesTheFittedFatAndMuscleValues)
 {

@@ -4,6 +4,7 @@
 /// phantom put them; scene files are parsed strictly; a scene builds only the
 /// material grids its terms read.
 
+#include "common/BuiltinTable.h"
 #include "haptic/Insertion.h"
 #include "haptic/Scene.h"
 #include "volume/Errors.h"
@@ -19,7 +20,7 @@
 namespace voxhap::haptic {
 namespace {
 
-const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+using voxhap::test::table;
 
 /// Phantom voxels are 0.5 mm and interfaces sit on lattice faces: a layer boundary
 /// on a straight path along a lattice axis moves by at most one voxel.

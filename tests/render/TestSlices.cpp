@@ -7,6 +7,7 @@
 
 #include "RenderFixtures.h"
 
+#include "common/BuiltinTable.h"
 #include "common/TempDirTest.h"
 
 #include "render/BitmapFont.h"
@@ -28,7 +29,7 @@ namespace {
 using test::expectedPixel;
 using test::SpherePhantom;
 
-const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+using voxhap::test::table;
 
 /// A bright sphere's centroid in a slice through its centre: the voxelised
 /// sphere is symmetric about its centre on the axis-aligned 1 mm lattice (the

@@ -4,6 +4,7 @@
 /// dt jitter, passivity of closed loops, the critical-structure rule, and no
 /// allocation per tick.
 
+#include "common/BuiltinTable.h"
 #include "common/Phantom.h"
 #include "stress/AllocationCounter.h"
 
@@ -25,7 +26,7 @@
 namespace voxhap::haptic {
 namespace {
 
-const volume::TissueTable& table() { return volume::TissueTable::builtin(); }
+using voxhap::test::table;
 
 const SceneInstance& instance(const std::string& name)
 {

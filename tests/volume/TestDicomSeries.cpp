@@ -31,10 +31,7 @@ using voxhap::Vec3d;
 using voxhap::test::SyntheticSlice;
 using namespace voxhap::volume;
 
-/// Positions and orientations travel as DICOM decimal strings of at most 16
-/// characters: about 1e-13 mm of rounding on coordinates of order 100 mm;
-/// 1e-6 mm leaves ample headroom and is far below any pixel.
-constexpr double kDicomDecimalMm = 1e-6;
+using voxhap::test::kDicomDecimalMm;
 /// Resampled values of a field linear in world space: bilinear and linear
 /// interpolation reproduce it, up to float rounding of values of order 1e3
 /// (ulp ~1e-4) accumulated over a few multiply-adds.

@@ -3,6 +3,7 @@
 /// @brief Phantom layer boundaries against the physics.md numbers, voxel
 /// consistency of hu/t1/label, sparsity, and the torso's anatomy.
 
+#include "common/BuiltinTable.h"
 #include "common/Tolerances.h"
 
 #include "volume/Errors.h"
@@ -19,7 +20,7 @@ namespace {
 
 using test::halfVoxel;
 
-const TissueTable& table() { return TissueTable::builtin(); }
+using voxhap::test::table;
 
 /// Tissue name of the voxel nearest to a world point (the voxel whose cell holds it).
 std::string labelAt(const Volume& v, const Vec3d& world)

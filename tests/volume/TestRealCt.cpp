@@ -26,10 +26,7 @@ using namespace voxhap::volume;
 
 const fs::path kCtDir = voxhap::test::realCtDir();
 
-/// Positions and spacings are DICOM decimal strings ("1.07421875", "484.91"):
-/// parsed into doubles they carry ~1e-13 mm of rounding; differences of them
-/// (the slice step) likewise. 1e-6 mm is ample and far below a voxel.
-constexpr double kDicomDecimalMm = 1e-6;
+using voxhap::test::kDicomDecimalMm;
 
 class RealCt : public testing::Test {
 protected:
