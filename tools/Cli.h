@@ -56,6 +56,7 @@ using Action = std::function<int()>;
 Action registerPhantom(CLI::App& app);
 Action registerInfo(CLI::App& app);
 Action registerConvert(CLI::App& app);
+Action registerSegment(CLI::App& app);
 Action registerDemo(CLI::App& app);
 Action registerBench(CLI::App& app);
 Action registerSimulate(CLI::App& app);

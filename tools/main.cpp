@@ -19,6 +19,7 @@ int main(int argc, char** argv)
         {"phantom", registerPhantom(app)},
         {"info", registerInfo(app)},
         {"convert", registerConvert(app)},
+        {"segment", registerSegment(app)},
         {"simulate", registerSimulate(app)},
         {"serve", registerServe(app)},
         {"render", registerRender(app)},

@@ -153,7 +153,27 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     }
     ByteSource src(file, h.dataOffset, h.gzip);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
-    v.setGrid(channel, readRaster(src, h.layout, channel, options, name));
+    if (channel == Channel::Label) {
+        // Labels (e.g. `voxhap segment --export`) read through the float path, which
+        // holds every int32 id up to 2^24 exactly, with no air threshold; 0 stays inactive.
+        RasterOptions keepAll = options;
+        keepAll.airHu = -std::numeric_limits<float>::max();
+        const auto values = openvdb::gridPtrCast<FloatGrid>(readRaster(src, h.layout, Channel::Hu, keepAll, name));
+        auto labels = LabelGrid::create(kAirLabel);
+        auto acc = labels->getAccessor();
+        for (auto it = values->cbeginValueOn(); it; ++it) {
+            const float x = *it;
+            if (x != std::round(x) || std::abs(x) > float(1 << 24)) {
+                throw IoError(name + ": data: label " + std::to_string(x) + " is not an integer id");
+            }
+            if (x == 0.0f) continue;
+            if (it.isVoxelValue()) acc.setValue(it.getCoord(), std::int32_t(x));
+            else labels->tree().fill(it.getBoundingBox(), std::int32_t(x), true);
+        }
+        v.setGrid(channel, labels);
+    } else {
+        v.setGrid(channel, readRaster(src, h.layout, channel, options, name));
+    }
     auto& md = v.metadata();
     md.source = file.filename().string();
     if (auto it = h.keyValues.find("voxhap_modality"); it != h.keyValues.end()) md.modality = it->second;

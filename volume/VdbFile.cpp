@@ -40,6 +40,7 @@ void saveVdb(const Volume& v, const std::filesystem::path& file)
     for (Channel c : kChannels) {
         if (v.has(c)) grids.push_back(v.grid(c));
     }
+    for (const auto& [name, g] : v.derivedGrids()) grids.push_back(g);
     if (grids.empty()) throw IoError(file.string() + ": the volume holds no grid to save");
 
     openvdb::MetaMap meta;
@@ -80,6 +81,7 @@ Volume loadVdb(const std::filesystem::path& file)
     }
 
     std::array<openvdb::GridBase::Ptr, 3> byChannel{};
+    std::vector<openvdb::GridBase::Ptr> derived; // float grids besides the channels, e.g. distance fields
     std::string others;
     for (const auto& g : *grids) {
         bool matched = false;
@@ -89,7 +91,9 @@ Volume loadVdb(const std::filesystem::path& file)
             byChannel[std::size_t(c)] = g;
             matched = true;
         }
-        if (!matched) others += (others.empty() ? "" : ", ") + g->getName();
+        if (matched) continue;
+        others += (others.empty() ? "" : ", ") + g->getName();
+        if (g->isType<FloatGrid>()) derived.push_back(g);
     }
     openvdb::GridBase::Ptr first;
     for (const auto& g : byChannel) {
@@ -130,6 +134,14 @@ Volume loadVdb(const std::filesystem::path& file)
                 throw IoError(file.string() + ": " + e.what());
             }
         }
+    }
+    for (const auto& g : derived) {
+        if (g->transform() != first->transform()) {
+            throw IoError(file.string() + ": grid '" + g->getName() + "' has a different transform from '" +
+                          first->getName() + "'");
+        }
+        if (v.derived(g->getName())) throw IoError(file.string() + ": grid '" + g->getName() + "' appears twice");
+        v.setDerived(g->getName(), g);
     }
     auto& md = v.metadata();
     md.modality = getString(*meta, "modality");

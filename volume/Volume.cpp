@@ -142,6 +142,30 @@ void Volume::setGrid(Channel c, GridPtr grid)
     mGrids[index(c)] = std::move(grid);
 }
 
+void Volume::setDerived(const std::string& name, GridPtr grid)
+{
+    for (Channel c : kChannels) {
+        if (name == channelName(c)) throw ValueError("volume: '" + name + "' is a channel, not a derived grid name");
+    }
+    if (name.empty()) throw ValueError("volume: a derived grid needs a name");
+    if (!grid) {
+        removeDerived(name);
+        return;
+    }
+    if (!openvdb::gridPtrCast<FloatGrid>(grid)) {
+        throw ValueError("volume: derived grid '" + name + "' must be float, got " + grid->valueType());
+    }
+    grid->setName(name);
+    grid->setTransform(mTransform);
+    mDerived[name] = std::move(grid);
+}
+
+Volume::GridConstPtr Volume::derived(const std::string& name) const
+{
+    const auto it = mDerived.find(name);
+    return it == mDerived.end() ? nullptr : it->second;
+}
+
 FloatGrid::ConstPtr huGrid(const Volume& v) { return openvdb::gridConstPtrCast<FloatGrid>(v.grid(Channel::Hu)); }
 FloatGrid::ConstPtr t1Grid(const Volume& v) { return openvdb::gridConstPtrCast<FloatGrid>(v.grid(Channel::T1)); }
 LabelGrid::ConstPtr labelGrid(const Volume& v) { return openvdb::gridConstPtrCast<LabelGrid>(v.grid(Channel::Label)); }

@@ -130,6 +130,20 @@ public:
     void setGrid(Channel c, GridPtr grid);
     void removeGrid(Channel c) { mGrids[index(c)].reset(); }
 
+    /// @name Derived grids: FloatGrids computed from the channels and saved with
+    /// them, e.g. the signed distance field "sdf.kidney" of a critical structure
+    /// (segmentation/DistanceField.h). They share the volume's transform.
+    /// @{
+    /// @brief Store a derived FloatGrid under @p name (not hu, t1 or label; replaces
+    /// one of the same name). @throw ValueError on a reserved name or a non-float grid
+    void setDerived(const std::string& name, GridPtr grid);
+    /// @brief The derived grid @p name, or nullptr.
+    GridConstPtr derived(const std::string& name) const;
+    /// @brief All derived grids, by name.
+    const std::map<std::string, GridPtr>& derivedGrids() const { return mDerived; }
+    void removeDerived(const std::string& name) { mDerived.erase(name); }
+    /// @}
+
     VolumeMetadata& metadata() { return mMeta; }
     const VolumeMetadata& metadata() const { return mMeta; }
 
@@ -139,6 +153,7 @@ private:
     openvdb::math::Transform::Ptr mTransform;
     IndexBox mBox;
     std::array<GridPtr, 3> mGrids{};
+    std::map<std::string, GridPtr> mDerived;
     VolumeMetadata mMeta;
 };
 

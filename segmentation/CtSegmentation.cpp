@@ -1,0 +1,378 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CtSegmentation.cpp
+/// @brief The CT rules of CtSegmentation.h. Thresholds cite physics.md §5.2 or
+/// the tissue table; the size and shape rules are [chosen] and were tuned on
+/// the contrast-enhanced abdominal CT of the test data, then checked on the
+/// torso phantom.
+
+#include "segmentation/CtSegmentation.h"
+
+#include "segmentation/Components.h"
+#include "segmentation/DistanceTransform.h"
+#include "segmentation/Morphology.h"
+#include "segmentation/detail/VoxelLoops.h"
+#include "volume/Errors.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace voxhap::segmentation {
+
+namespace {
+
+// Step 1, body. −500 HU is halfway between air (−1000) and fat (about −100,
+// physics.md §5.2): partial-volume voxels on the skin split evenly.
+constexpr float kBodyHu = -500.0f;
+// An in-plane opening of 5 mm cuts the patient off the table, its pad and the
+// side rails, which touch the body through contacts thinner than 10 mm [chosen].
+constexpr double kBodyOpeningMm = 5.0;
+// Slice islands smaller than this are rail or cable fragments the opening
+// re-attached, not body [chosen]: the smallest body cross-section (an arm at the
+// edge of the field of view) is tens of cm².
+constexpr double kMinIslandMm2 = 400.0;
+// Smoothing before thresholds: 1 mm takes the CT's quantum noise (σ of 10 to 30 HU
+// in soft tissue) down enough for the tissue windows, and moves a boundary by well
+// under a voxel [chosen].
+constexpr double kSmoothingMm = 1.0;
+
+// Step 2, lung: gas is below −400 HU (lung −550 to −950, physics.md §5.2).
+constexpr float kGasHu = -400.0f;
+constexpr double kLungMinMl = 50.0;          // bowel gas pockets are smaller here; lung bases larger [chosen]
+constexpr float kPureAirHu = -950.0f;        // parenchyma rarely reaches it (§5.2: down to −950)
+constexpr double kLungMaxPureAirFraction = 0.2; // bowel gas: 25–40 % of its voxels below −950 HU [chosen]
+
+// Step 3, enhanced structures. 120 HU, after smoothing, sits between muscle
+// (40–60 HU, §5.2) and enhanced kidney cortex (130–250 HU in the test CT);
+// bone itself is ≥ 150 HU (§5.2 "segment bone by a threshold of about 150 HU").
+constexpr float kEnhancedHu = 120.0f;
+constexpr float kBoneHu = 150.0f;
+// Eroding 2.5 mm separates the vertebrae from the aorta and the kidneys, which
+// touch them through fat planes a few millimetres thick [chosen].
+constexpr double kCoreErosionMm = 2.5;
+constexpr float kDenseBoneHu = 600.0f;        // cortex; vessels and organs stay below (§5.2 aorta ≤ 450)
+constexpr double kBoneDenseFraction = 0.05;   // vertebrae 15 %, ribs 3–18 % in the test CT; 0 for organs [chosen]
+// Aorta: a tube along the body [chosen]; diameter 14–39 mm.
+constexpr double kAortaMinLengthMm = 60.0;
+constexpr double kAortaMinAreaMm2 = 150.0, kAortaMaxAreaMm2 = 1200.0;
+// The aorta lies on the front of the spine; the sternum and costal cartilage,
+// also long and midline, are 100 mm and more anterior [chosen].
+constexpr double kAortaMaxAnteriorMm = 60.0;
+// Kidney: 40–400 ml, median 180–300 HU in the nephrographic/arterial phase,
+// its centre 30–130 mm lateral of the spine [chosen].
+constexpr double kKidneyMinMl = 40.0, kKidneyMaxMl = 400.0;
+// The lower bound keeps the spleen (median 160 HU in the test CT, the kidneys 210) out.
+constexpr double kKidneyMinHu = 180.0, kKidneyMaxHu = 300.0;
+constexpr double kKidneyMinLateralMm = 30.0, kKidneyMaxLateralMm = 130.0;
+// ... and retroperitoneal: within 70 mm of the spine front to back, which keeps
+// the heart (as bright, about 100 mm anterior) out [chosen].
+constexpr double kKidneyMaxAnteriorMm = 70.0;
+// Holes in bone smaller than this are marrow fat or noise, not anatomy [chosen].
+constexpr double kBoneHoleMaxMm2 = 50.0;
+
+// Step 6, spinal canal: a 7 mm closing bridges the gaps of up to about 10 mm between
+// pedicles and laminae (a closing by more fills the canal itself, whose radius
+// is about 9 mm); the canal's cross-section is 1–4 cm² in adults [chosen];
+// levels without a bony ring (discs, vertebral bodies below the pedicles) are
+// bridged up to 30 mm along the spine.
+constexpr double kCanalClosingMm = 7.0;
+constexpr double kCanalMinAreaMm2 = 50.0, kCanalMaxAreaMm2 = 500.0;
+constexpr double kCanalBridgeMm = 30.0;
+constexpr double kCanalMinLengthMm = 30.0;
+
+using detail::forEachVoxel;
+using detail::maskWhere;
+
+double sliceAreaMm2(const Lattice& lat)
+{
+    const auto [a0, a1] = lat.planeAxes();
+    return lat.spacing[a0] * lat.spacing[a1];
+}
+
+} // namespace
+
+/// Keep, per slice, the in-plane components of @p m whose area is within [minMm2, maxMm2].
+Mask filterSliceIslands(const Lattice& lat, const Mask& m, double minMm2, double maxMm2)
+{
+    const Components cc = connectedComponents(lat, m, Span::Slice);
+    const double area = sliceAreaMm2(lat);
+    std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
+    for (std::size_t c = 0; c < cc.list.size(); ++c) {
+        const double a = double(cc.list[c].voxels) * area;
+        keep[c + 1] = (a >= minMm2 && a <= maxMm2) ? 1 : 0;
+    }
+    return maskWhere(m.size(), [&](std::size_t i) { return keep[std::size_t(cc.id[i])] != 0; });
+}
+
+namespace {
+
+/// Per-region figures for the classification of step 3.
+struct RegionStats {
+    std::int64_t voxels = 0, dense = 0;
+    double sumX = 0, sumY = 0;         // world x (patient left +) and y (posterior +) of the voxels [mm]
+    int sliceMin = 1 << 30, sliceMax = -1;
+    std::array<std::int64_t, 128> histogram{}; // 25 HU bins from −400 HU
+    double ml(const Lattice& lat) const { return double(voxels) * lat.voxelMl(); }
+    double centreX() const { return voxels ? sumX / double(voxels) : 0.0; }
+    double centreY() const { return voxels ? sumY / double(voxels) : 0.0; }
+    double lengthMm(const Lattice& lat) const { return (sliceMax - sliceMin + 1) * lat.spacing[lat.sliceAxis]; }
+    double meanAreaMm2(const Lattice& lat) const { return ml(lat) * 1e3 / lengthMm(lat); }
+    double medianHu() const
+    {
+        std::int64_t half = (voxels + 1) / 2, seen = 0;
+        for (std::size_t b = 0; b < histogram.size(); ++b) {
+            seen += histogram[b];
+            if (seen >= half) return -400.0 + 25.0 * (double(b) + 0.5);
+        }
+        return -400.0 + 25.0 * double(histogram.size());
+    }
+};
+
+std::vector<RegionStats> regionStats(const volume::Volume& v, const Lattice& lat, const std::vector<std::int32_t>& region,
+                                     int regions, const std::vector<float>& hu)
+{
+    std::vector<RegionStats> s(std::size_t(regions) + 1);
+    for (std::size_t n = 0; n < region.size(); ++n) {
+        const auto r = std::size_t(region[n]);
+        if (!r) continue;
+        RegionStats& st = s[r];
+        const Vec3i p = lat.position(n);
+        ++st.voxels;
+        st.dense += hu[n] >= kDenseBoneHu;
+        const Vec3d w = v.indexToWorld((lat.origin + p).cast<double>());
+        st.sumX += w.x();
+        st.sumY += w.y();
+        st.sliceMin = std::min(st.sliceMin, p[lat.sliceAxis]);
+        st.sliceMax = std::max(st.sliceMax, p[lat.sliceAxis]);
+        const int bin = std::clamp(int(std::floor((hu[n] + 400.0f) / 25.0f)), 0, int(st.histogram.size()) - 1);
+        ++st.histogram[std::size_t(bin)];
+    }
+    return s;
+}
+
+/// Fill runs of non-@p m voxels along the slice axis shorter than @p gapMm that
+/// lie between two voxels of @p m, where @p allowed.
+void bridgeAlongSliceAxis(const Lattice& lat, Mask& m, const Mask& allowed, double gapMm)
+{
+    const auto strides = lat.strides();
+    const auto [a0, a1] = lat.planeAxes();
+    const int n = lat.dims[lat.sliceAxis];
+    const std::size_t step = strides[std::size_t(lat.sliceAxis)];
+    const int maxGap = int(std::floor(gapMm / lat.spacing[lat.sliceAxis]));
+    tbb::parallel_for(0, lat.dims[a1], [&](int w) {
+        for (int u = 0; u < lat.dims[a0]; ++u) {
+            const std::size_t base = std::size_t(u) * strides[std::size_t(a0)] + std::size_t(w) * strides[std::size_t(a1)];
+            int last = -1;
+            for (int q = 0; q < n; ++q) {
+                if (!m[base + std::size_t(q) * step]) continue;
+                if (last >= 0 && q - last - 1 > 0 && q - last - 1 <= maxGap) {
+                    bool ok = true;
+                    for (int t = last + 1; t < q && ok; ++t) ok = allowed[base + std::size_t(t) * step] != 0;
+                    for (int t = last + 1; t < q && ok; ++t) m[base + std::size_t(t) * step] = 1;
+                }
+                last = q;
+            }
+        }
+    });
+}
+
+} // namespace
+
+Mask ctBodyMask(const Lattice& lat, const std::vector<float>& smoothedHu)
+{
+    return bodyMask(lat, maskWhere(lat.size(), [&](std::size_t i) { return smoothedHu[i] >= kBodyHu; }));
+}
+
+Mask bodyMask(const Lattice& lat, const Mask& dense)
+{
+    const Mask core = largestComponent(lat, erode(lat, dense, kBodyOpeningMm, Span::Slice));
+    const auto [a0, a1] = lat.planeAxes();
+    // Grow back one voxel further than the erosion so that the surface is restored exactly.
+    const double back = kBodyOpeningMm + std::max(lat.spacing[a0], lat.spacing[a1]);
+    Mask body = maskAnd(dilate(lat, core, back, Span::Slice), dense);
+    body = filterSliceIslands(lat, body, kMinIslandMm2, 1e300);
+    fillHolesPerSlice(lat, body);
+    return body;
+}
+
+void markSkin(const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId,
+              std::vector<std::int32_t>& labels)
+{
+    Mask outside(body.size());
+    forEachVoxel(body.size(), [&](std::size_t i) { outside[i] = body[i] ? 0 : 1; });
+    const std::vector<float> d2 = squaredDistance(lat, outside, Span::Slice);
+    // A voxel centre at depth d below the surface lies d + h/2 from the nearest
+    // outside centre on average (the surface passes between the two centres).
+    const auto [a0, a1] = lat.planeAxes();
+    const double reach = thicknessMm + 0.5 * std::min(lat.spacing[a0], lat.spacing[a1]);
+    const auto r2 = float(reach * reach);
+    forEachVoxel(body.size(), [&](std::size_t i) {
+        if (body[i] && d2[i] < r2) labels[i] = skinId;
+    });
+}
+
+std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
+                                    const volume::TissueTable& table)
+{
+    const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
+    const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), lung = id("lung");
+    const std::int32_t kidney = id("kidney"), aorta = id("aorta"), cortical = id("cortical_bone");
+    const std::int32_t cancellous = id("cancellous_bone"), soft = id("soft_tissue"), canal = id("spinal_cord");
+    const float corticalHu = float(table.at("cortical_bone").huMin); // 700 HU
+    const float fatMaxHu = float(table.at("fat").huMax);            // −30 HU
+    const double skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
+
+    const std::vector<float> smooth = gaussianSmooth(lat, hu, kSmoothingMm);
+    const Mask body = ctBodyMask(lat, smooth);
+
+    // Step 2: lung among the gas components.
+    const Mask gas = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smooth[i] < kGasHu; });
+    Mask lungMask(lat.size(), 0);
+    {
+        const Components cc = connectedComponents(lat, gas, Span::Volume);
+        std::vector<std::int64_t> pureAir(cc.list.size() + 1, 0);
+        for (std::size_t n = 0; n < gas.size(); ++n) {
+            if (cc.id[n] && hu[n] < kPureAirHu) ++pureAir[std::size_t(cc.id[n])];
+        }
+        std::vector<std::uint8_t> isLung(cc.list.size() + 1, 0);
+        for (std::size_t c = 0; c < cc.list.size(); ++c) {
+            const double ml = double(cc.list[c].voxels) * lat.voxelMl();
+            const double air = double(pureAir[c + 1]) / double(cc.list[c].voxels);
+            isLung[c + 1] = ml >= kLungMinMl && air <= kLungMaxPureAirFraction;
+        }
+        lungMask = maskWhere(lat.size(), [&](std::size_t i) { return isLung[std::size_t(cc.id[i])] != 0; });
+        fillHolesPerSlice(lat, lungMask); // vessels and airways inside the lung are lung
+        lungMask = maskAnd(lungMask, body);
+    }
+
+    // Step 3: enhanced structures, split by erosion, grown back, classified.
+    const Mask enhanced = maskWhere(lat.size(), [&](std::size_t i) {
+        return body[i] && !lungMask[i] && (smooth[i] >= kEnhancedHu || hu[i] >= kBoneHu);
+    });
+    // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
+    // planes between organs, and the erosion would no longer split them.
+    const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
+    Components cores = connectedComponents(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
+    std::vector<std::int32_t> region = std::move(cores.id);
+    growRegions(lat, region, enhanced);
+    // Structures thinner than twice the erosion (ribs, laminae, small vessels) have no
+    // core: their bright voxels become regions of their own, classified like the rest.
+    const Components thin = connectedComponents(
+        lat, maskWhere(lat.size(), [&](std::size_t i) { return bright[i] && !region[i]; }), Span::Volume);
+    const auto offset = std::int32_t(cores.list.size());
+    forEachVoxel(lat.size(), [&](std::size_t i) {
+        if (thin.id[i]) region[i] = offset + thin.id[i];
+    });
+    growRegions(lat, region, enhanced);
+    const int regions = int(cores.list.size() + thin.list.size());
+    const std::vector<RegionStats> stats = regionStats(v, lat, region, regions, hu);
+
+    enum class Kind : std::uint8_t { None, Bone, Aorta, Kidney, Other };
+    std::vector<Kind> kind(std::size_t(regions) + 1, Kind::None);
+    int largestBone = 0;
+    for (int r = 1; r <= regions; ++r) {
+        const RegionStats& s = stats[std::size_t(r)];
+        if (!s.voxels) continue;
+        kind[std::size_t(r)] = double(s.dense) >= kBoneDenseFraction * double(s.voxels) ? Kind::Bone : Kind::Other;
+        if (kind[std::size_t(r)] == Kind::Bone && (!largestBone || s.voxels > stats[std::size_t(largestBone)].voxels)) {
+            largestBone = r;
+        }
+    }
+    const double spineX = largestBone ? stats[std::size_t(largestBone)].centreX() : 0.0;
+    const double spineY = largestBone ? stats[std::size_t(largestBone)].centreY() : 0.0;
+    int bestAorta = 0;
+    for (int r = 1; r <= regions; ++r) {
+        if (kind[std::size_t(r)] != Kind::Other) continue;
+        const RegionStats& s = stats[std::size_t(r)];
+        const double lateral = std::abs(s.centreX() - spineX), ml = s.ml(lat), median = s.medianHu();
+        if (s.lengthMm(lat) >= kAortaMinLengthMm && s.meanAreaMm2(lat) >= kAortaMinAreaMm2 &&
+            s.meanAreaMm2(lat) <= kAortaMaxAreaMm2 && lateral < kKidneyMinLateralMm &&
+            std::abs(s.centreY() - spineY) <= kAortaMaxAnteriorMm) {
+            // Of several tubes (the vena cava in a venous phase), the aorta is the longest.
+            if (!bestAorta || s.voxels > stats[std::size_t(bestAorta)].voxels) bestAorta = r;
+        } else if (ml >= kKidneyMinMl && ml <= kKidneyMaxMl && median >= kKidneyMinHu && median <= kKidneyMaxHu &&
+                   lateral >= kKidneyMinLateralMm && lateral <= kKidneyMaxLateralMm &&
+                   std::abs(s.centreY() - spineY) <= kKidneyMaxAnteriorMm) {
+            kind[std::size_t(r)] = Kind::Kidney;
+        }
+    }
+    if (bestAorta) kind[std::size_t(bestAorta)] = Kind::Aorta;
+    if (std::getenv("VOXHAP_SEG_DEBUG")) {
+        for (int r = 1; r <= regions; ++r) {
+            const RegionStats& s = stats[std::size_t(r)];
+            if (s.ml(lat) < 5) continue;
+            std::fprintf(stderr, "region %d kind %d ml %.1f dense %.3f median %.0f x %.0f y %.0f len %.0f area %.0f\n", r,
+                         int(kind[std::size_t(r)]), s.ml(lat), double(s.dense) / double(s.voxels), s.medianHu(), s.centreX(),
+                         s.centreY(), s.lengthMm(lat), s.meanAreaMm2(lat));
+        }
+    }
+
+    // Steps 3–4: one label per body voxel.
+    std::vector<std::int32_t> labels(lat.size(), volume::kAirLabel);
+    forEachVoxel(lat.size(), [&](std::size_t i) {
+        if (!body[i]) return;
+        const auto byHu = [&] {
+            if (smooth[i] < kGasHu) return volume::kAirLabel; // bowel gas: no resistance, like air
+            return smooth[i] < fatMaxHu ? fat : muscle;
+        };
+        if (lungMask[i]) {
+            labels[i] = lung;
+            return;
+        }
+        switch (kind[std::size_t(region[i])]) {
+        case Kind::Bone: labels[i] = hu[i] >= kBoneHu ? (hu[i] >= corticalHu ? cortical : cancellous) : byHu(); break;
+        case Kind::Aorta: labels[i] = aorta; break;
+        case Kind::Kidney: labels[i] = kidney; break;
+        case Kind::Other: labels[i] = soft; break;
+        case Kind::None: labels[i] = byHu(); break;
+        }
+    });
+
+    // Small holes in bone (marrow fat, noise) are bone; the kidney's sinus and
+    // medulla (darker than the cortex in the arterial phase) are kidney.
+    const auto fillSmallHoles = [&](std::int32_t a, std::int32_t b, std::int32_t as, double maxMm2) {
+        Mask m = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == a || labels[i] == b; });
+        Mask filled = m;
+        fillHolesPerSlice(lat, filled);
+        const Mask holes = filterSliceIslands(lat, maskAndNot(filled, m), 0.0, maxMm2);
+        forEachVoxel(lat.size(), [&](std::size_t i) {
+            if (holes[i]) labels[i] = as;
+        });
+    };
+    fillSmallHoles(cortical, cancellous, cancellous, kBoneHoleMaxMm2);
+    fillSmallHoles(kidney, kidney, kidney, 1e300);
+
+    // Step 6: the spinal canal.
+    {
+        const Mask bone = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == cortical || labels[i] == cancellous; });
+        const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
+        Mask filled = ring;
+        fillHolesPerSlice(lat, filled);
+        Mask hole = filterSliceIslands(lat, maskAndNot(filled, ring), kCanalMinAreaMm2, kCanalMaxAreaMm2);
+        const Mask soft3 = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && !bone[i] && !lungMask[i]; });
+        bridgeAlongSliceAxis(lat, hole, soft3, kCanalBridgeMm);
+        // The canal is the soft tissue of those holes, the closing's ring excluded: the
+        // ring's inner edge follows the bone except across the gaps it bridged.
+        hole = maskAnd(hole, soft3);
+        const Components cc = connectedComponents(lat, hole, Span::Volume);
+        std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
+        for (std::size_t c = 0; c < cc.list.size(); ++c) {
+            const Component& k = cc.list[c];
+            const double length = (k.max[lat.sliceAxis] - k.min[lat.sliceAxis] + 1) * lat.spacing[lat.sliceAxis];
+            keep[c + 1] = length >= kCanalMinLengthMm;
+        }
+        forEachVoxel(lat.size(), [&](std::size_t i) {
+            if (keep[std::size_t(cc.id[i])]) labels[i] = canal;
+        });
+    }
+
+    markSkin(lat, body, skinMm, skin, labels);
+    return labels;
+}
+
+} // namespace voxhap::segmentation

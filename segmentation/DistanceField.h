@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file DistanceField.h
+/// @brief Signed distance fields of critical structures, for clearance queries in mm.
+///
+/// Why not OpenVDB's level-set tools: they assume cubic voxels (one voxel
+/// size), and patient volumes have 3 mm slices under 1 mm pixels. The field
+/// here is the exact Euclidean distance transform in millimetres
+/// (DistanceTransform.h) between voxel centres, shifted by half a voxel
+/// because the surface lies between the last voxel centre inside and the
+/// first outside: the result is within half a voxel of the distance to the
+/// true surface along a grid axis.
+#pragma once
+
+#include "segmentation/Lattice.h"
+#include "volume/Grids.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace voxhap::segmentation {
+
+/// @brief Derived-grid name of a tissue's distance field: "sdf.<tissue>".
+std::string distanceFieldName(const std::string& tissue);
+
+/// @brief Signed distance [mm] to the surface of the voxels where @p labels == @p id:
+/// negative inside, positive outside; voxels farther out than @p bandMm are inactive
+/// and read as the background +@p bandMm; inside values are clamped at −@p bandMm.
+volume::FloatGrid::Ptr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id,
+                                           double bandMm);
+
+} // namespace voxhap::segmentation

@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestRealCtSegmentation.cpp
+/// @brief Segmentation of the real abdominal CT (../shared/data, 512 × 512 × 134,
+/// 1.07 × 1.07 × 3 mm, contrast-enhanced, lower chest to mid abdomen, supine on a
+/// table). No reference segmentation exists for it, so the checks are anatomical
+/// facts with ranges that say where they come from.
+
+#include "common/BuiltinTable.h"
+#include "common/SharedData.h"
+#include "segmentation/DistanceField.h"
+#include "segmentation/Segmentation.h"
+#include "volume/Grids.h"
+#include "volume/VolumeFile.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+
+namespace voxhap::segmentation {
+namespace {
+
+using test::table;
+
+struct Segmented {
+    std::unique_ptr<volume::Volume> v;
+    SegmentReport report;
+    std::map<std::string, LabelSummary> byName;
+};
+
+const Segmented& realCt()
+{
+    static const Segmented s = [] {
+        Segmented out;
+        out.v = std::make_unique<volume::Volume>(volume::loadVolume(test::realCtDir()));
+        out.report = segment(*out.v, table());
+        for (const auto& l : out.report.labels) out.byName[l.name] = l;
+        return out;
+    }();
+    return s;
+}
+
+int labelAt(const volume::Volume& v, const Vec3d& w)
+{
+    const Vec3d ijk = v.worldToIndex(w);
+    return volume::labelGrid(v)->getConstAccessor().getValue(
+        openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
+}
+
+float sdfAt(const volume::Volume& v, const std::string& tissue, const Vec3d& w)
+{
+    const auto g = openvdb::gridConstPtrCast<volume::FloatGrid>(v.derived(distanceFieldName(tissue)));
+    const Vec3d ijk = v.worldToIndex(w);
+    return g->getConstAccessor().getValue(openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
+}
+
+class RealCtSegmentation : public testing::Test {
+protected:
+    void SetUp() override { VOXHAP_REQUIRE_DIR(test::realCtDir()); }
+};
+
+TEST_F(RealCtSegmentation, BodyHoldsThePatientAndExcludesTheTable)
+{
+    const auto& s = realCt();
+    // On the midline at z = 250 mm the posterior skin is at y ≈ 222 mm and the
+    // table top, under an air gap, at y ≈ 290 mm (found by inspecting the data).
+    EXPECT_NE(labelAt(*s.v, Vec3d(0, 215, 250)), 0);
+    EXPECT_EQ(labelAt(*s.v, Vec3d(0, 290, 250)), 0);
+    double maxY = -1e9, totalMl = 0;
+    for (const auto& l : s.report.labels) {
+        maxY = std::max(maxY, l.bounds[1].y());
+        totalMl += l.ml;
+    }
+    EXPECT_LT(maxY, 270.0) << "a label reaches the table";
+    // A 402 mm segment of an adult trunk, lower chest to pelvis: 20–50 L (an
+    // ellipse of 30 × 22 cm over 40 cm is 21 L; the arms, when in view, add more).
+    EXPECT_GT(totalMl, 20000.0);
+    EXPECT_LT(totalMl, 50000.0);
+}
+
+TEST_F(RealCtSegmentation, LungLiesInTheLungBasesOnly)
+{
+    const auto& s = realCt();
+    ASSERT_TRUE(s.byName.count("lung"));
+    const LabelSummary& lung = s.byName.at("lung");
+    // The scan ends superiorly at z = 486 mm; the diaphragm domes lie some 15 cm
+    // below the top of the scan here: no lung below z = 300 mm.
+    EXPECT_GT(lung.bounds[0].z(), 300.0);
+    // Both lung bases: more than 1 L, less than whole lungs (4–6 L).
+    EXPECT_GT(lung.ml, 1000.0);
+    EXPECT_LT(lung.ml, 4000.0);
+}
+
+TEST_F(RealCtSegmentation, VertebralBodyPointIsBone)
+{
+    const auto& s = realCt();
+    const int l = labelAt(*s.v, Vec3d(4.3, 120.5, 295.91)); // as in TestRealCt.cpp
+    EXPECT_TRUE(l == table().at("cancellous_bone").id || l == table().at("cortical_bone").id) << l;
+}
+
+TEST_F(RealCtSegmentation, LabelVolumesArePlausible)
+{
+    const auto& s = realCt();
+    const auto ml = [&](const char* n) { return s.byName.count(n) ? s.byName.at(n).ml : 0.0; };
+    // Two adult kidneys: 120–200 ml each (imaging norms), plus the partial volume at
+    // their edges: 150–700 ml.
+    EXPECT_GT(ml("kidney"), 150.0);
+    EXPECT_LT(ml("kidney"), 700.0);
+    // Abdominal aorta: 2–2.5 cm across over the 20–27 cm in view: 60–130 ml; 30–200
+    // leaves room for where the lumen ends in the field of view.
+    EXPECT_GT(ml("aorta"), 30.0);
+    EXPECT_LT(ml("aorta"), 200.0);
+    // Spine, ribs and the top of the pelvis in 40 cm: 0.8–3 L.
+    EXPECT_GT(ml("cortical_bone") + ml("cancellous_bone"), 800.0);
+    EXPECT_LT(ml("cortical_bone") + ml("cancellous_bone"), 3000.0);
+    // Fat and muscle each several litres: 3–25 L.
+    for (const char* n : {"fat", "muscle"}) {
+        EXPECT_GT(ml(n), 3000.0) << n;
+        EXPECT_LT(ml(n), 25000.0) << n;
+    }
+}
+
+TEST_F(RealCtSegmentation, SpinalCanalBehindTheVertebralBodies)
+{
+    const auto& s = realCt();
+    ASSERT_TRUE(s.byName.count("spinal_cord"));
+    const LabelSummary& canal = s.byName.at("spinal_cord");
+    // Behind the vertebral bodies (centre y ≈ 120 mm at x ≈ 4 mm), about 15 mm across.
+    EXPECT_GT(canal.bounds[0].x(), -25.0);
+    EXPECT_LT(canal.bounds[1].x(), 30.0);
+    EXPECT_GT(canal.bounds[0].y(), 110.0);
+    EXPECT_LT(canal.bounds[1].y(), 175.0);
+    // 1–4 cm² over at least 3 cm of spine.
+    EXPECT_GT(canal.ml, 3.0);
+    EXPECT_LT(canal.ml, 160.0);
+}
+
+TEST_F(RealCtSegmentation, DistanceFieldsGiveClearanceInMillimetres)
+{
+    const auto& s = realCt();
+    const Vec3d vertebra(4.3, 120.5, 295.91);
+    // The kidneys lie 30 mm or more lateral of the vertebral body's centre.
+    EXPECT_GT(sdfAt(*s.v, "kidney", vertebra), 10.0);
+    // Inside the aorta the field is negative: its centre of the box of aorta voxels at z = 300.
+    ASSERT_TRUE(s.byName.count("aorta"));
+    EXPECT_EQ(s.report.distanceFields.size(), 4u); // lung, kidney, aorta, spinal_cord
+}
+
+} // namespace
+} // namespace voxhap::segmentation
