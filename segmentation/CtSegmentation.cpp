@@ -19,8 +19,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace voxhap::segmentation {
 
@@ -302,15 +300,6 @@ std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat,
         }
     }
     if (bestAorta) kind[std::size_t(bestAorta)] = Kind::Aorta;
-    if (std::getenv("VOXHAP_SEG_DEBUG")) {
-        for (int r = 1; r <= regions; ++r) {
-            const RegionStats& s = stats[std::size_t(r)];
-            if (s.ml(lat) < 5) continue;
-            std::fprintf(stderr, "region %d kind %d ml %.1f dense %.3f median %.0f x %.0f y %.0f len %.0f area %.0f\n", r,
-                         int(kind[std::size_t(r)]), s.ml(lat), double(s.dense) / double(s.voxels), s.medianHu(), s.centreX(),
-                         s.centreY(), s.lengthMm(lat), s.meanAreaMm2(lat));
-        }
-    }
 
     // Steps 3–4: one label per body voxel.
     std::vector<std::int32_t> labels(lat.size(), volume::kAirLabel);
