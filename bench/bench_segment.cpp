@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file bench_segment.cpp
+/// @brief Segmentation time and memory on the real CT (issue 7 item 7), with
+/// 1 and 2 threads measured in the same run (docs/benchmarks.md: speed with its
+/// error, comparisons as ratios from one run).
+///
+///     bench_segment [--repeats N] [--json]
+///
+/// Without ../shared/data the torso phantom (1 mm voxels) stands in, and the
+/// report says so.
+
+#include "segmentation/Segmentation.h"
+#include "volume/Grids.h"
+#include "volume/Phantoms.h"
+#include "volume/VolumeFile.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace voxhap;
+
+struct Stat {
+    double mean = 0, sd = 0;
+};
+
+Stat stat(const std::vector<double>& x)
+{
+    Stat s;
+    for (double v : x) s.mean += v / double(x.size());
+    for (double v : x) s.sd += (v - s.mean) * (v - s.mean) / double(std::max<std::size_t>(1, x.size() - 1));
+    s.sd = std::sqrt(s.sd);
+    return s;
+}
+
+double peakRssMb()
+{
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_maxrss) / 1024.0;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    int repeats = 3;
+    bool json = false;
+    for (int i = 1; i < argc; ++i) {
+        if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
+        else if (!std::strcmp(argv[i], "--json")) json = true;
+        else {
+            std::cerr << "usage: bench_segment [--repeats N] [--json]\n";
+            return 2;
+        }
+    }
+    const auto& table = volume::TissueTable::builtin();
+    const std::filesystem::path ct = std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
+    const bool real = std::filesystem::is_directory(ct);
+    volume::TorsoParams tp;
+    tp.grid.spacing = Vec3d(1, 1, 1);
+    const volume::Volume input = real ? volume::loadVolume(ct) : volume::makePhantom(volume::torsoModel(tp, table), tp.grid, table);
+    const double rssBefore = peakRssMb();
+    const double denseFloatMb = double(input.indexBox().voxelCount()) * 4.0 / (1 << 20);
+
+    nlohmann::json out;
+    out["input"] = real ? "real CT (ct-abdomen-tcia)" : "torso phantom, 1 mm (real CT not found)";
+    out["voxels"] = input.indexBox().voxelCount();
+    std::vector<double> means;
+    for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+        std::vector<double> t;
+        for (int r = 0; r < repeats; ++r) {
+            volume::Volume v = input; // grids are shared read-only; segment() adds its own
+            const auto start = std::chrono::steady_clock::now();
+            segmentation::segment(v, table);
+            t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        }
+        const Stat s = stat(t);
+        means.push_back(s.mean);
+        out["threads_" + std::to_string(threads)] = {{"mean_s", s.mean}, {"sd_s", s.sd}, {"repeats", repeats}};
+    }
+    out["speedup_2_vs_1"] = means[0] / means[1];
+    out["peak_rss_mb"] = peakRssMb();
+    out["peak_rss_over_load_mb"] = peakRssMb() - rssBefore;
+    out["dense_float_mb"] = denseFloatMb;
+    if (json) {
+        std::cout << out.dump(2) << '\n';
+        return 0;
+    }
+    std::cout << "segmentation of the " << out["input"].get<std::string>() << ", " << out["voxels"] << " voxels\n";
+    for (int threads : {1, 2}) {
+        const auto& j = out["threads_" + std::to_string(threads)];
+        std::cout << "  " << threads << " thread" << (threads > 1 ? "s" : " ") << ": " << j["mean_s"].get<double>() << " s ± "
+                  << j["sd_s"].get<double>() << " s (n = " << repeats << ")\n";
+    }
+    std::cout << "  2 vs 1 thread: " << out["speedup_2_vs_1"].get<double>() << "x\n";
+    std::cout << "  peak memory: " << out["peak_rss_mb"].get<double>() << " MiB (" << out["peak_rss_over_load_mb"].get<double>()
+              << " MiB above the loaded volume; a dense float copy of it is " << denseFloatMb << " MiB)\n";
+    return 0;
+}
