@@ -34,6 +34,20 @@ namespace fs = std::filesystem;
 volatile std::sig_atomic_t gInterrupted = 0;
 extern "C" void onInterrupt(int) { gInterrupted = 1; }
 
+/// Ctrl-C handling for the whole command, set-up included: an interrupt that
+/// arrives while the scene loads still ends in a clean stop with the session
+/// and metrics written (an empty session then), never in a killed process.
+class InterruptGuard {
+public:
+    InterruptGuard() : mPrevious(std::signal(SIGINT, onInterrupt)) { }
+    ~InterruptGuard() { std::signal(SIGINT, mPrevious); }
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+private:
+    void (*mPrevious)(int);
+};
+
 struct ServeOptions {
     CommonOptions common;
     std::string scene, device = "hand", out = "voxhap-serve";
@@ -86,6 +100,8 @@ std::string layerName(const haptic::NeedleForceModel& m, int i)
 
 int run(const ServeOptions& o, const CLI::App& cmd)
 {
+    gInterrupted = 0;
+    const InterruptGuard guard;
     const volume::TissueTable& table = tissueTable(o.common);
     haptic::Scene scene = haptic::loadScene(o.scene);
     if (cmd.count("--rate")) scene.rateHz = o.rate;
@@ -97,8 +113,6 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     so.rateHz = scene.rateHz;
     haptic::ServoLoop loop(*model, *device, so);
 
-    gInterrupted = 0;
-    const auto previous = std::signal(SIGINT, onInterrupt);
     haptic::Session session;
     const bool live = stderrIsTerminal() && !o.common.json;
     const auto t0 = std::chrono::steady_clock::now();
@@ -109,8 +123,8 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         haptic::Event e;
         while (loop.popEvent(e)) session.events.push_back(e);
     };
-    loop.start();
-    while (loop.running() && !gInterrupted && (duration <= 0.0 || elapsed() < duration)) {
+    if (!gInterrupted) loop.start();
+    while (!gInterrupted && loop.running() && !gInterrupted && (duration <= 0.0 || elapsed() < duration)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         drain();
         if (live) {
@@ -122,7 +136,6 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         }
     }
     loop.stop();
-    std::signal(SIGINT, previous);
     drain();
     if (live) std::cerr << '\n';
     const double wall = elapsed();

@@ -152,7 +152,9 @@ void readMultiFrame(DicomHeader& h)
 {
     gdcm::Reader reader;
     reader.SetFileName(h.file.string().c_str());
-    if (!reader.ReadUpToTag(gdcm::Tag(0x7fe0, 0x0010))) throw IoError(h.file.string() + ": not a readable DICOM file");
+    // The whole file: elements out of order after the pixel data are part of
+    // what ImageHelper reads, and of what DicomElementRules checked.
+    if (!reader.Read()) throw IoError(h.file.string() + ": not a readable DICOM file");
     const gdcm::File& file = reader.GetFile();
     const std::vector<double> dir = gdcm::ImageHelper::GetDirectionCosinesValue(file);
     const std::vector<double> origin = gdcm::ImageHelper::GetOriginValue(file);

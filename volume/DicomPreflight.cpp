@@ -5,7 +5,10 @@
 
 #include "volume/DicomPreflight.h"
 
+#include "volume/DicomElementRules.h"
 #include "volume/Errors.h"
+
+#include <gdcmReader.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -95,6 +98,7 @@ public:
             read(pos, h, 8, Tag{});
             const Tag t{u16(h, big), u16(h + 2, big)};
             if (t.is(0xFFFE, 0xE00D) && untilDelimiter) return pos + 8; // end of an undefined-length item
+            if (depth == 0 && (t.is(0x5200, 0x9229) || t.is(0x5200, 0x9230) || t.is(0x0018, 0x6011))) mFunctionalGroups = true;
             // Item tags anywhere else: GDCM would re-read the rest with other
             // lengths than this walk checked (found by fuzz/FuzzDicomPreflight).
             if (t.group == 0xFFFE) fail(t, "item tag outside a sequence");
@@ -113,6 +117,10 @@ public:
         }
         return pos;
     }
+
+    /// True when the data set holds functional groups (or ultrasound regions):
+    /// GDCM reads their values on paths that assert (DicomElementRules.h).
+    bool functionalGroups() const { return mFunctionalGroups; }
 
 private:
     /// Items of an undefined-length sequence or encapsulated pixel data, up to (FFFE,E0DD).
@@ -188,6 +196,7 @@ private:
     const std::filesystem::path& mFile;
     std::ifstream& mIn;
     std::uint64_t mSize;
+    bool mFunctionalGroups = false;
 };
 
 } // namespace
@@ -208,6 +217,17 @@ DicomKind preflightDicom(const std::filesystem::path& file)
     const bool implicitVr = ts == "1.2.840.10008.1.2";
     const bool big = ts == "1.2.840.10008.1.2.2";
     walk.dataset(start, size, false, !implicitVr, big, 0);
+    if (walk.functionalGroups()) {
+        // Structurally sound, so gdcm::Reader parses it safely; the values
+        // ImageHelper asserts on are checked before anything else reads them.
+        in.close();
+        gdcm::Reader reader;
+        reader.SetFileName(file.string().c_str());
+        // The whole file, not up to the pixel data: GDCM keeps elements that
+        // follow it out of order, and ImageHelper would see them (fuzz finding).
+        if (!reader.Read()) throw IoError(file.string() + ": not a readable DICOM file");
+        checkElementRules(reader.GetFile().GetDataSet(), file);
+    }
     return DicomKind::Dicom;
 }
 

@@ -14,6 +14,7 @@
 #include "volume/T1Normalisation.h"
 
 #include <Eigen/Geometry>
+#include <gdcmSequenceOfItems.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -127,6 +128,73 @@ TEST_F(DicomSeries, MultiFrameFileLoadsEveryFrameAtItsPosition)
     auto acc = huGrid(v)->getConstAccessor();
     for (int k = 0; k < 5; ++k) {
         for (int i = 1; i < 16; i += 4) EXPECT_EQ(acc.getValue(openvdb::Coord(i, 7, k)), float(storedValue(i, 7, k) - 1024)) << i << "," << k;
+    }
+}
+
+/// @brief Apply @p edit to the first item of every functional group of an
+/// enhanced file (shared, then each frame's), writing the result back.
+template <typename Edit>
+void editFunctionalGroups(const fs::path& file, Edit&& edit)
+{
+    voxhap::test::rewrite(file, [&](gdcm::File& f) {
+        gdcm::DataSet& ds = f.GetDataSet();
+        int group = 0;
+        for (const gdcm::Tag& tag : {gdcm::Tag(0x5200, 0x9229), gdcm::Tag(0x5200, 0x9230)}) {
+            if (!ds.FindDataElement(tag)) continue;
+            gdcm::DataElement de = ds.GetDataElement(tag);
+            gdcm::SmartPointer<gdcm::SequenceOfItems> sq = de.GetValueAsSQ();
+            for (gdcm::SequenceOfItems::SizeType i = 1; i <= sq->GetNumberOfItems(); ++i) {
+                edit(sq->GetItem(i).GetNestedDataSet(), group++);
+            }
+            de.SetValue(*sq);
+            ds.Replace(de);
+        }
+        ds.Remove(gdcm::Tag(0x0020, 0x0037));
+    });
+}
+
+TEST_F(DicomSeries, EnhancedFileWithoutOrientationIsRefusedBeforeGdcmAssertsOnIt)
+{
+    // A fuzzing finding: GDCM's ImageHelper aborts the process on an enhanced
+    // CT whose functional groups lack the plane orientation.
+    std::vector<SyntheticSlice> frames;
+    for (int k = 0; k < 3; ++k) frames.push_back(slice(k));
+    const fs::path file = mDir / "no-orientation.dcm";
+    voxhap::test::writeSyntheticMultiFrame(frames, 2.5, file);
+    editFunctionalGroups(file, [](gdcm::DataSet& item, int) { item.Remove(gdcm::Tag(0x0020, 0x9116)); });
+    try {
+        loadDicom({file});
+        FAIL() << "an enhanced file without orientation loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (0020,0037) ImageOrientationPatient", 0), 0u) << msg;
+    }
+}
+
+TEST_F(DicomSeries, EnhancedFileWithAFrameOfAnotherOrientationIsRefused)
+{
+    std::vector<SyntheticSlice> frames;
+    for (int k = 0; k < 3; ++k) frames.push_back(slice(k));
+    const fs::path file = mDir / "tilted-frame.dcm";
+    voxhap::test::writeSyntheticMultiFrame(frames, 2.5, file);
+    // Group 0 is the shared one; give the last frame's plane position item its
+    // own, different orientation (GDCM asserts that it equals the shared one).
+    editFunctionalGroups(file, [](gdcm::DataSet& item, int group) {
+        if (group != 3 || !item.FindDataElement(gdcm::Tag(0x0020, 0x9113))) return;
+        gdcm::DataElement de = item.GetDataElement(gdcm::Tag(0x0020, 0x9113));
+        gdcm::SmartPointer<gdcm::SequenceOfItems> sq = de.GetValueAsSQ();
+        gdcm::Attribute<0x0020, 0x0037> iop = {{0, 1, 0, 1, 0, 0}};
+        sq->GetItem(1).GetNestedDataSet().Replace(iop.GetAsDataElement());
+        de.SetValue(*sq);
+        item.Replace(de);
+    });
+    try {
+        loadDicom({file});
+        FAIL() << "an enhanced file with a differently oriented frame loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (0020,0037)", 0), 0u) << msg;
+        EXPECT_NE(msg.find("frame 3"), std::string::npos) << msg;
     }
 }
 
