@@ -58,10 +58,10 @@ function(voxhap_precompile target kind)
   endif()
 endfunction()
 
-# voxhap_add_test(<name> SOURCES ... DEPS ... [PCH test|cli_test]): one
+# voxhap_add_test(<name> SOURCES ... DEPS ... [PCH test|cli_test] [SHARED_SUITES s...]): one
 # GoogleTest executable per module, each case registered with CTest.
 function(voxhap_add_test name)
-  cmake_parse_arguments(ARG "" "PCH" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "PCH" "SOURCES;DEPS;LABELS;SHARED_SUITES" ${ARGN})
   if(NOT ARG_PCH)
     set(ARG_PCH test)
   endif()
@@ -74,5 +74,19 @@ function(voxhap_add_test name)
   voxhap_warnings(${name})
   voxhap_glue_optimization(${name})
   voxhap_precompile(${name} ${ARG_PCH})
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  # A suite whose tests share one expensive fixture (a segmented real CT)
+  # runs as one ctest entry, in one process: per-test processes would each
+  # rebuild the fixture.
+  set(filter "")
+  foreach(suite IN LISTS ARG_SHARED_SUITES)
+    add_test(NAME ${suite} COMMAND ${name} --gtest_filter=${suite}.*)
+    set_tests_properties(${suite} PROPERTIES LABELS "${ARG_LABELS}")
+    string(APPEND filter ":${suite}.*")
+  endforeach()
+  if(filter)
+    string(SUBSTRING "${filter}" 1 -1 filter)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_FILTER "-${filter}" PROPERTIES LABELS "${ARG_LABELS}")
+  else()
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  endif()
 endfunction()

@@ -107,6 +107,31 @@ std::optional<std::vector<double>> groupOrientation(const gdcm::DataSet* item, c
 
 } // namespace
 
+std::string_view expectedVr(std::uint16_t group, std::uint16_t element)
+{
+    // The elements ImageHelper and PixmapReader read through gdcm::Attribute,
+    // whose SetFromDataElement asserts that the file's VR is the dictionary's
+    // (found by fuzz/FuzzDicomPreflight with a DS turned into another VR).
+    struct Rule {
+        std::uint32_t tag;
+        std::string_view vr;
+    };
+    static constexpr Rule kRules[] = {
+        {0x00080016, "UI"}, {0x00080060, "CS"}, {0x00180050, "DS"}, {0x00180088, "DS"}, {0x00181164, "DS"},
+        {0x00182010, "DS"}, {0x0018602c, "FD"}, {0x0018602e, "FD"}, {0x00200032, "DS"}, {0x00200037, "DS"},
+        {0x00280002, "US"}, {0x00280004, "CS"}, {0x00280006, "US"}, {0x00280008, "IS"}, {0x00280009, "AT"},
+        {0x00280010, "US"}, {0x00280011, "US"}, {0x00280030, "DS"}, {0x00280034, "IS"}, {0x00280100, "US"},
+        {0x00280101, "US"}, {0x00280102, "US"}, {0x00280103, "US"}, {0x00281050, "DS"}, {0x00281051, "DS"},
+        {0x00281052, "DS"}, {0x00281053, "DS"}, {0x00281054, "LO"}, {0x00281101, "US|SS"}, {0x00281102, "US|SS"},
+        {0x00281103, "US|SS"}, {0x30040002, "CS"}, {0x3004000c, "DS"}, {0x3004000e, "DS"},
+    };
+    const std::uint32_t tag = std::uint32_t(group) << 16 | element;
+    for (const Rule& r : kRules) {
+        if (r.tag == tag) return r.vr;
+    }
+    return {};
+}
+
 bool needsElementRules(const gdcm::DataSet& ds)
 {
     return ds.FindDataElement(kShared) || ds.FindDataElement(kPerFrame) || ds.FindDataElement(kUltrasoundRegions);

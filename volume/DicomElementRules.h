@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file DicomElementRules.h
-/// @brief Value-level checks of the functional groups of enhanced (multi-frame)
+/// @brief Value representations of the image elements, and value-level checks
+/// of the functional groups of enhanced (multi-frame)
 /// DICOM objects, run before GDCM's ImageHelper reads their geometry.
 ///
 /// Debian's GDCM 3.0 keeps its assertions: ImageHelper aborts the process on
@@ -11,13 +12,21 @@
 /// so that such files are refused with one line instead.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <string_view>
 
 namespace gdcm {
 class DataSet;
 }
 
 namespace voxhap::volume {
+
+/// @brief The value representations GDCM accepts for the image elements it
+/// reads with gdcm::Attribute (geometry, pixel module, rescale): anything else
+/// fails an assertion there. Empty for elements without a rule.
+/// @return e.g. "DS", or "US|SS" when either is allowed
+std::string_view expectedVr(std::uint16_t group, std::uint16_t element);
 
 /// @brief True when @p ds carries functional groups, (5200,9229) or (5200,9230),
 /// or is an ultrasound multi-frame object: GDCM reads their geometry on paths

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <string_view>
 
 namespace voxhap::volume {
 
@@ -159,6 +160,12 @@ private:
                                        "SV", "TM", "UC", "UI", "UL", "UN", "UR", "US", "UT", "UV"};
         if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return std::strcmp(k, vr) == 0; })) {
             fail(t, "invalid value representation");
+        }
+        // A known VR that is not the one GDCM reads this element as (DicomElementRules.h).
+        if (const std::string_view expected = expectedVr(t.group, t.element);
+            !expected.empty() && expected.find(std::string_view(vr, 2)) == std::string_view::npos) {
+            fail(t, "value representation '" + printable(std::string(vr, 2)) + "' where " + std::string(expected) +
+                        " is required");
         }
         static const char* kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV", "UC", "UN", "UR", "UT", "UV"};
         for (const char* l : kLong) {

@@ -198,6 +198,26 @@ TEST_F(DicomSeries, EnhancedFileWithAFrameOfAnotherOrientationIsRefused)
     }
 }
 
+TEST_F(DicomSeries, ImageElementWithAnotherValueRepresentationIsRefused)
+{
+    // A fuzzing finding: gdcm::Attribute asserts when ImagePositionPatient is
+    // stored with another VR than DS.
+    const fs::path file = mDir / "position-as-lo.dcm";
+    voxhap::test::writeSyntheticSlice(slice(0), file);
+    voxhap::test::rewrite(file, [](gdcm::File& f) {
+        gdcm::DataElement de = f.GetDataSet().GetDataElement(gdcm::Tag(0x0020, 0x0032));
+        de.SetVR(gdcm::VR::LO);
+        f.GetDataSet().Replace(de);
+    });
+    try {
+        loadDicom({file});
+        FAIL() << "a position stored as LO loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (0020,0032) value representation 'LO' where DS is required", 0), 0u) << msg;
+    }
+}
+
 TEST_F(DicomSeries, ObliqueOrientationBecomesTheTransform)
 {
     const Eigen::Matrix3d rot =
