@@ -1,14 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file FuzzDicomPreflight.cpp
-/// @brief libFuzzer target: the DICOM structural walk, and the promise it
-/// makes: a file it passes does not abort GDCM (Debian's GDCM asserts on
-/// truncated elements, which is why the walk exists; DicomPreflight.h).
+/// @brief libFuzzer target: the DICOM loader end to end on one file — the
+/// structural walk and element rules (DicomPreflight.h, DicomElementRules.h),
+/// the header scan, the pixel-module checks, GDCM's decode and the sparse
+/// conversion. Debian's GDCM asserts on malformed input, so whatever reaches
+/// it must have been checked: a crash here is a rule missing before GDCM.
 
 #include "FuzzInput.h"
 
-#include "volume/DicomPreflight.h"
+#include "volume/DicomSeries.h"
 
-#include <gdcmImageReader.h>
 #include <gdcmTrace.h>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
@@ -22,14 +23,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }();
     (void)quiet;
     const auto& file = scratch.write(data, size);
+    voxhap::volume::DicomOptions options;
+    // Fuzzed headers declare any size: the loader must refuse before
+    // allocating, well under libFuzzer's 2 GiB limit.
+    options.memoryCapBytes = std::uint64_t(256) << 20;
     try {
-        if (voxhap::volume::preflightDicom(file) == voxhap::volume::DicomKind::Dicom) {
-            gdcm::ImageReader reader; // what loadDicom does with the pixels of a file that passed
-            reader.SetFileName(file.string().c_str());
-            reader.Read();
-        }
+        (void)voxhap::volume::loadDicom({file}, options);
     } catch (const voxhap::Error& e) {
-        voxhap::fuzz::checkRefusal(e, file.string());
+        // Problems of the series as a whole (slice spacing, tilt) name its folder.
+        voxhap::fuzz::checkRefusal(e, file.string(), file.parent_path().string());
     }
     return 0;
 }

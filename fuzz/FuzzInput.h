@@ -17,11 +17,13 @@
 
 namespace voxhap::fuzz {
 
-/// @brief Abort (a finding) unless @p e reads "<file>: ..." on one line.
-inline void checkRefusal(const Error& e, const std::string& file)
+/// @brief Abort (a finding) unless @p e reads "<file>: ..." on one line, or
+/// "<also>: ..." when @p also is given (a series names its folder).
+inline void checkRefusal(const Error& e, const std::string& file, const std::string& also = {})
 {
     const std::string_view m = e.what();
-    if (m.rfind(file + ": ", 0) != 0 || m.find('\n') != std::string_view::npos) {
+    const bool named = m.rfind(file + ": ", 0) == 0 || (!also.empty() && m.rfind(also + ": ", 0) == 0);
+    if (!named || m.find('\n') != std::string_view::npos) {
         std::fprintf(stderr, "refusal message breaks the convention: %s\n", e.what());
         std::abort();
     }

@@ -106,8 +106,19 @@ public:
             std::uint64_t header = 0;
             const std::uint32_t len = length(pos, h, explicitVr, big, t, header);
             pos += header;
+            const std::string vr = explicitVr ? std::string{char(h[4]), char(h[5])} : std::string();
+            // Pixel data is never a sequence (GDCM asserts on an SQ there).
+            if (t.is(0x7FE0, 0x0010) && vr == "SQ") fail(t, "pixel data stored as a sequence");
             if (len == kUndefined) {
-                pos = sequence(pos, explicitVr, big, depth + 1, t);
+                // GDCM asserts unless an undefined length belongs to a sequence,
+                // to encapsulated (OB/OW) pixel data or to UN, whose items are
+                // implicit VR (CP-246) (fuzz finding).
+                bool nestedExplicit = explicitVr;
+                if (vr == "UN" && !t.is(0x7FE0, 0x0010)) nestedExplicit = false;
+                else if (explicitVr && (t.is(0x7FE0, 0x0010) ? vr != "OB" && vr != "OW" : vr != "SQ")) {
+                    fail(t, "undefined length with value representation '" + printable(vr) + "'");
+                }
+                pos = sequence(pos, nestedExplicit, big, depth + 1, t);
             } else {
                 need(pos + len, t);
                 if (!untilDelimiter) {
