@@ -25,6 +25,7 @@ namespace {
 
 constexpr std::uint32_t kUndefined = 0xFFFFFFFFu;
 constexpr int kMaxDepth = 32; // real files nest a few levels; bounds the recursion
+constexpr std::uint32_t kMaxUid = 65; // longest UID: 64 characters and a padding byte (PS3.5 §9.1)
 
 struct Tag {
     std::uint16_t group = 0, element = 0;
@@ -76,6 +77,10 @@ public:
                 while (!transferSyntax.empty() && (transferSyntax.back() == '\0' || transferSyntax.back() == ' '))
                     transferSyntax.pop_back();
             }
+            if (t.is(0x0002, 0x0002) && len <= kMaxUid) {
+                mMetaSopClass.resize(len);
+                read(pos + header, mMetaSopClass.data(), len, t);
+            }
             if (t.is(0x0002, 0x0000) && len == 4) {
                 unsigned char v[4];
                 read(pos + header, v, 4, t);
@@ -121,6 +126,11 @@ public:
                 pos = sequence(pos, nestedExplicit, big, depth + 1, t);
             } else {
                 need(pos + len, t);
+                if (depth == 0 && t.is(0x0008, 0x0016) && len <= kMaxUid) {
+                    mSopClass.resize(len);
+                    read(pos, mSopClass.data(), len, t);
+                }
+                if (depth == 0 && t.is(0x0008, 0x0010)) recognitionCode(pos, len, t);
                 if (!untilDelimiter) {
                     if (pos + len > end) fail(t, "element runs past its sequence item");
                 }
@@ -130,11 +140,32 @@ public:
         return pos;
     }
 
+    /// The SOP class GDCM goes by: the meta header's (0002,0002), else the
+    /// data set's (0008,0016); with the tag it came from.
+    std::pair<std::string, Tag> sopClass() const
+    {
+        if (!mMetaSopClass.empty()) return {mMetaSopClass, Tag{0x0002, 0x0002}};
+        return {mSopClass, Tag{0x0008, 0x0016}};
+    }
+    [[noreturn]] void refuse(const Tag& t, const std::string& what) { fail(t, what); }
+
     /// True when the data set holds functional groups (or ultrasound regions):
     /// GDCM reads their values on paths that assert (DicomElementRules.h).
     bool functionalGroups() const { return mFunctionalGroups; }
 
 private:
+    /// (0008,0010) RecognitionCode (retired, ACR-NEMA): GDCM asserts that a
+    /// file holding one is ACR-NEMA (fuzz finding).
+    void recognitionCode(std::uint64_t pos, std::uint32_t len, const Tag& t)
+    {
+        std::string code(std::min<std::uint32_t>(len, 16), '\0');
+        read(pos, code.data(), code.size(), t);
+        for (const char* ok : {"ACR-NEMA", "ACRNEMA", "MIPS 2.0"}) {
+            if (code.rfind(ok, 0) == 0) return;
+        }
+        fail(t, "RecognitionCode '" + printable(code) + "' is not ACR-NEMA's");
+    }
+
     /// Items of an undefined-length sequence or encapsulated pixel data, up to (FFFE,E0DD).
     std::uint64_t sequence(std::uint64_t pos, bool explicitVr, bool big, int depth, const Tag& owner)
     {
@@ -215,7 +246,28 @@ private:
     std::ifstream& mIn;
     std::uint64_t mSize;
     bool mFunctionalGroups = false;
+    std::string mMetaSopClass, mSopClass;
 };
+
+
+/// The image storage classes voxhap reads: CT and MR, classic, enhanced and
+/// legacy-converted enhanced. GDCM takes other classes down paths that assert
+/// on what they do not expect (an ACR-NEMA recognition code, palettes,
+/// ultrasound regions; fuzz findings), and none of them is a CT or MR volume.
+bool readableSopClass(std::string uid)
+{
+    // GDCM drops one trailing padding byte and compares the rest exactly.
+    if (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
+    static const char* kClasses[] = {
+        "1.2.840.10008.5.1.4.1.1.2",   // CT Image Storage
+        "1.2.840.10008.5.1.4.1.1.2.1", // Enhanced CT Image Storage
+        "1.2.840.10008.5.1.4.1.1.2.2", // Legacy Converted Enhanced CT Image Storage
+        "1.2.840.10008.5.1.4.1.1.4",   // MR Image Storage
+        "1.2.840.10008.5.1.4.1.1.4.1", // Enhanced MR Image Storage
+        "1.2.840.10008.5.1.4.1.1.4.4", // Legacy Converted Enhanced MR Image Storage
+    };
+    return std::any_of(std::begin(kClasses), std::end(kClasses), [&](const char* k) { return uid == k; });
+}
 
 } // namespace
 
@@ -231,10 +283,22 @@ DicomKind preflightDicom(const std::filesystem::path& file)
     Walker walk(file, in, size);
     std::string ts;
     const std::uint64_t start = walk.meta(132, ts);
-    if (ts == "1.2.840.10008.1.2.1.99") return DicomKind::Dicom; // deflated data set: GDCM inflates and checks
+    const auto refuseClass = [&walk](const std::pair<std::string, Tag>& sop) {
+        if (!readableSopClass(sop.first)) {
+            walk.refuse(sop.second, std::string(sop.second.element == 0x0002 ? "MediaStorageSOPClassUID" : "SOPClassUID") +
+                                        " '" + printable(sop.first) + "' is not a CT or MR image storage class");
+        }
+    };
+    // A deflated data set cannot be walked before GDCM inflates it; its meta
+    // header must name the class.
+    if (ts == "1.2.840.10008.1.2.1.99") {
+        refuseClass({walk.sopClass().second.element == 0x0002 ? walk.sopClass().first : std::string(), Tag{0x0002, 0x0002}});
+        return DicomKind::Dicom;
+    }
     const bool implicitVr = ts == "1.2.840.10008.1.2";
     const bool big = ts == "1.2.840.10008.1.2.2";
     walk.dataset(start, size, false, !implicitVr, big, 0);
+    refuseClass(walk.sopClass());
     if (walk.functionalGroups()) {
         // Structurally sound, so gdcm::Reader parses it safely; the values
         // ImageHelper asserts on are checked before anything else reads them.

@@ -218,6 +218,28 @@ TEST_F(DicomSeries, ImageElementWithAnotherValueRepresentationIsRefused)
     }
 }
 
+TEST_F(DicomSeries, ImagesThatAreNotCtOrMrAreRefusedByClass)
+{
+    // GDCM reads other storage classes down paths that assert on what they do
+    // not expect (fuzz findings); none of them is a CT or MR volume.
+    const fs::path file = mDir / "ultrasound.dcm";
+    voxhap::test::writeSyntheticSlice(slice(0), file);
+    voxhap::test::rewrite(file, [](gdcm::File& f) {
+        gdcm::Attribute<0x0008, 0x0016> sop;
+        sop.SetValue("1.2.840.10008.5.1.4.1.1.6.1"); // Ultrasound Image Storage
+        f.GetDataSet().Replace(sop.GetAsDataElement());
+        f.GetHeader().Clear(); // the writer rebuilds the meta header from the data set
+    });
+    try {
+        loadDicom({file});
+        FAIL() << "an ultrasound image loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (0002,0002) MediaStorageSOPClassUID '1.2.840.10008.5.1.4.1.1.6.1", 0), 0u)
+            << msg;
+    }
+}
+
 TEST_F(DicomSeries, ObliqueOrientationBecomesTheTransform)
 {
     const Eigen::Matrix3d rot =
