@@ -239,9 +239,12 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
     // ones). Walk and scan run in parallel over chunks of files, each chunk with
     // its own scanner: the header pass is a third of a load when serial.
     std::vector<std::uint8_t> dicom(all.size(), 0);
+    std::vector<DicomPixelLocation> where(all.size());
     tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t n) {
-        dicom[n] = preflightDicom(all[n]) == DicomKind::Dicom;
+        dicom[n] = preflightDicom(all[n], &where[n]) == DicomKind::Dicom;
     });
+    std::map<fs::path, const DicomPixelLocation*> located;
+    for (std::size_t n = 0; n < all.size(); ++n) located[all[n]] = &where[n];
     std::vector<fs::path> files;
     for (std::size_t n = 0; n < all.size(); ++n) {
         if (dicom[n]) files.push_back(all[n]);
@@ -256,7 +259,12 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
     });
     std::vector<DicomHeader> out;
     for (auto& part : found) {
-        for (auto& h : part) out.push_back(std::move(h));
+        for (auto& h : part) {
+            const DicomPixelLocation& w = *located.at(h.file);
+            h.transferSyntax = w.transferSyntax;
+            if (w.found) h.pixelOffset = w.offset, h.pixelLength = w.length;
+            out.push_back(std::move(h));
+        }
     }
     if (out.empty()) {
         std::string what;
@@ -302,7 +310,9 @@ void completeDicomHeader(DicomHeader& h)
         }
         const int stored = small(kBitsStored, "BitsStored", 1, allocated, allocated);
         small(kHighBit, "HighBit", stored - 1, allocated - 1, stored - 1);
-        small(kPixelRepresentation, "PixelRepresentation", 0, 1, 0);
+        h.pixelRepresentation = small(kPixelRepresentation, "PixelRepresentation", 0, 1, 0);
+        h.bitsAllocated = allocated;
+        h.bitsStored = stored;
         h.imageType = trim(get(kImageType));
         h.gantryTilt = optionalNumber(get(kTilt), f, kTilt, "GantryDetectorTilt").value_or(0.0);
         h.sliceThickness = optionalNumber(get(kThickness), f, kThickness, "SliceThickness").value_or(0.0);

@@ -29,6 +29,11 @@ struct DicomHeader {
     double gantryTilt = 0;              ///< (0018,1120) [deg]
     std::optional<double> padding;      ///< (0028,0120) in stored units
     std::optional<double> fieldStrength; ///< (0018,0087) MagneticFieldStrength [T], MR only
+    int bitsAllocated = 16, bitsStored = 16, pixelRepresentation = 0; ///< (0028,0100), (0028,0101), (0028,0103)
+    std::string transferSyntax;          ///< (0002,0010)
+    /// Where the preflight walk found a top-level PixelData of defined length
+    /// (uncompressed): byte offset and length of its value; 0, 0 when not.
+    std::uint64_t pixelOffset = 0, pixelLength = 0;
     /// The scanned values, keyed by (group << 16 | element), parsed by completeDicomHeader.
     std::map<std::uint32_t, std::string> tags;
 

@@ -151,6 +151,37 @@ void decodeDicomFrames(const std::filesystem::path& file, DicomFrames& f)
     }
 }
 
+bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
+{
+    const bool littleEndian = h.transferSyntax == "1.2.840.10008.1.2" || h.transferSyntax == "1.2.840.10008.1.2.1";
+    if (!littleEndian || h.pixelLength == 0 || (h.bitsAllocated != 8 && h.bitsAllocated != 16 && h.bitsAllocated != 32)) {
+        return false;
+    }
+    const bool sign = h.pixelRepresentation == 1;
+    switch (h.bitsAllocated) {
+    case 8: f.type = sign ? SampleType::Int8 : SampleType::UInt8; break;
+    case 16: f.type = sign ? SampleType::Int16 : SampleType::UInt16; break;
+    default: f.type = sign ? SampleType::Int32 : SampleType::UInt32; break;
+    }
+    f.rows = h.rows;
+    f.columns = h.columns;
+    f.frames = h.frames;
+    f.bitsStored = h.bitsStored;
+    const std::uint64_t expected = std::uint64_t(h.rows) * std::uint64_t(h.columns) * std::uint64_t(h.frames) * sampleBytes(f.type);
+    const std::string name = h.file.string();
+    if (h.pixelLength < expected) {
+        throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(h.pixelLength) + " bytes, expected " +
+                      std::to_string(expected));
+    }
+    f.raw.resize(expected);
+    std::ifstream in(h.file, std::ios::binary);
+    in.seekg(std::streamoff(h.pixelOffset));
+    if (!in.read(f.raw.data(), std::streamsize(expected))) {
+        throw IoError(name + ": (7FE0,0010) PixelData: cannot read " + std::to_string(expected) + " bytes");
+    }
+    return true;
+}
+
 void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
                   float air, float* out)
 {

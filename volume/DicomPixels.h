@@ -5,6 +5,7 @@
 /// padding).
 #pragma once
 
+#include "volume/DicomHeaders.h"
 #include "volume/RasterLayout.h"
 
 #include <cstdint>
@@ -37,6 +38,16 @@ void quietGdcm();
 /// @throw IoError naming the file and the field: unreadable file, unsupported
 ///        transfer syntax, colour images, truncated pixel data
 DicomFrames decodeDicomFrames(const std::filesystem::path& file);
+
+/// @brief Read the samples of an uncompressed little-endian file straight
+/// from where the preflight walk found its pixel data, without GDCM: for
+/// these syntaxes GDCM's decode is a copy of the same bytes (the test
+/// DicomNative compares both on every file of the real CT), and skipping its
+/// full data-set parse makes it the cheapest step of a load.
+/// @return false when @p h is not such a file (compressed, big endian,
+///         encapsulated, 64-bit samples): decode it with GDCM instead
+/// @throw IoError naming the file when the value is shorter than the image
+bool readNativeFrames(const DicomHeader& h, DicomFrames& out);
 
 /// @brief As above, into @p out, reusing its buffers: a thread that decodes
 /// many slices keeps one instance and avoids fresh page-faulting allocations.

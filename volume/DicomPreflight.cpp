@@ -16,8 +16,11 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <tuple>
+#include <utility>
 
 namespace voxhap::volume {
 
@@ -126,6 +129,7 @@ public:
                 pos = sequence(pos, nestedExplicit, big, depth + 1, t);
             } else {
                 need(pos + len, t);
+                if (depth == 0 && t.is(0x7FE0, 0x0010)) mPixels = {pos, len};
                 if (depth == 0 && t.is(0x0008, 0x0016) && len <= kMaxUid) {
                     mSopClass.resize(len);
                     read(pos, mSopClass.data(), len, t);
@@ -247,6 +251,9 @@ private:
     std::uint64_t mSize;
     bool mFunctionalGroups = false;
     std::string mMetaSopClass, mSopClass;
+
+public:
+    std::optional<std::pair<std::uint64_t, std::uint64_t>> mPixels; ///< top-level PixelData of defined length: offset, length
 };
 
 
@@ -271,7 +278,7 @@ bool readableSopClass(std::string uid)
 
 } // namespace
 
-DicomKind preflightDicom(const std::filesystem::path& file)
+DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* where)
 {
     std::error_code ec;
     const std::uint64_t size = std::filesystem::file_size(file, ec);
@@ -299,6 +306,11 @@ DicomKind preflightDicom(const std::filesystem::path& file)
     const bool big = ts == "1.2.840.10008.1.2.2";
     walk.dataset(start, size, false, !implicitVr, big, 0);
     refuseClass(walk.sopClass());
+    if (where) {
+        where->transferSyntax = ts;
+        where->found = walk.mPixels.has_value();
+        if (walk.mPixels) std::tie(where->offset, where->length) = *walk.mPixels;
+    }
     if (walk.functionalGroups()) {
         // Structurally sound, so gdcm::Reader parses it safely; the values
         // ImageHelper asserts on are checked before anything else reads them.

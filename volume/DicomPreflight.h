@@ -9,7 +9,9 @@
 /// that such files are refused with one line naming the file and the tag.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
 
 namespace voxhap::volume {
 
@@ -19,10 +21,19 @@ enum class DicomKind {
     Dicom,    ///< a Part 10 file whose elements all fit inside it
 };
 
+/// @brief Where a file's (7FE0,0010) PixelData lies, as the walk found it.
+struct DicomPixelLocation {
+    std::string transferSyntax;  ///< (0002,0010), padding removed
+    std::uint64_t offset = 0;    ///< first byte of the value
+    std::uint64_t length = 0;    ///< value length [bytes]
+    bool found = false;          ///< a top-level PixelData of defined length (native, not encapsulated)
+};
+
 /// @brief Walk @p file's meta header and data set.
+/// @param where if given, receives the location of the pixel data
 /// @return NotDicom for files without the DICM magic (nothing else is read)
 /// @throw IoError naming the file and the first element that runs past its end
 ///        (or is malformed: odd VR, nesting deeper than 32 levels)
-DicomKind preflightDicom(const std::filesystem::path& file);
+DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* where = nullptr);
 
 } // namespace voxhap::volume

@@ -84,7 +84,7 @@ public:
             frames = cached.get();
         } else {
             thread_local DicomFrames scratch; // one per decoding thread, buffers reused slice after slice
-            decodeDicomFrames(h.file, scratch);
+            if (!readNativeFrames(h, scratch)) decodeDicomFrames(h.file, scratch);
             frames = &scratch;
         }
         if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {

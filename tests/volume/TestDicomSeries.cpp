@@ -4,6 +4,7 @@
 /// file name), per-slice rescale, geometry, irregular stacks (missing slice,
 /// uneven step, tilt) refused or resampled, series choice, bad files.
 
+#include "common/DicomNative.h"
 #include "common/DicomWriter.h"
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
@@ -238,6 +239,12 @@ TEST_F(DicomSeries, ImagesThatAreNotCtOrMrAreRefusedByClass)
         EXPECT_EQ(msg.rfind(file.string() + ": (0002,0002) MediaStorageSOPClassUID '1.2.840.10008.5.1.4.1.1.6.1", 0), 0u)
             << msg;
     }
+}
+
+TEST_F(DicomSeries, UncompressedSamplesReadDirectlyEqualGdcmsDecode)
+{
+    for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    voxhap::test::expectNativeEqualsGdcm({mDir});
 }
 
 TEST_F(DicomSeries, ObliqueOrientationBecomesTheTransform)

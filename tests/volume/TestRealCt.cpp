@@ -8,6 +8,7 @@
 #include "common/SharedData.h"
 #include "common/Tolerances.h"
 
+#include "common/DicomNative.h"
 #include "volume/DicomSeries.h"
 #include "volume/Grids.h"
 
@@ -183,3 +184,9 @@ TEST_F(RealCt, HuRangeIsPlausibleAndAirIsSparse)
 }
 
 } // namespace
+
+TEST(DicomNative, EveryRealCtFileReadsAsGdcmDecodesIt)
+{
+    VOXHAP_REQUIRE_DIR(kCtDir);
+    voxhap::test::expectNativeEqualsGdcm({kCtDir});
+}
