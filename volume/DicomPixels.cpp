@@ -185,8 +185,14 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
 void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
                   float air, float* out)
 {
-    const std::size_t plane = std::size_t(f.rows) * std::size_t(f.columns);
-    const char* raw = f.raw.data() + plane * std::size_t(frame) * sampleBytes(f.type);
+    samplesToFloat(f, frame, 0, std::size_t(f.rows) * std::size_t(f.columns), slope, intercept, padding, air, out);
+}
+
+void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t plane, double slope, double intercept,
+                    std::optional<double> padding, float air, float* out)
+{
+    const std::size_t framePlane = std::size_t(f.rows) * std::size_t(f.columns);
+    const char* raw = f.raw.data() + (framePlane * std::size_t(frame) + first) * sampleBytes(f.type);
     switch (f.type) {
     case SampleType::UInt8: toFloat<std::uint8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
     case SampleType::Int8: toFloat<std::int8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;

@@ -71,28 +71,34 @@ class FrameSource {
 public:
     explicit FrameSource(const std::vector<DicomHeader>& headers) : mHeaders(headers), mCache(headers.size()) {}
 
-    /// Copy one frame, rescaled, into @p out (rows × columns floats); padding becomes @p air.
-    void read(const Slice& s, float* out, float air)
+    /// The stored samples of @p s's file: decoded into @p scratch (its buffers
+    /// reused slice after slice), or a multi-frame file's cached decode.
+    const DicomFrames& frames(const Slice& s, DicomFrames& scratch)
     {
-        std::shared_ptr<const DicomFrames> cached;
-        const DicomFrames* frames = nullptr;
+        const DicomFrames* frames = &scratch;
         const DicomHeader& h = mHeaders[s.file];
         if (h.frames > 1) {
             std::lock_guard<std::mutex> lock(mMutex);
             if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file));
-            cached = mCache[s.file];
-            frames = cached.get();
-        } else {
-            thread_local DicomFrames scratch; // one per decoding thread, buffers reused slice after slice
-            if (!readNativeFrames(h, scratch)) decodeDicomFrames(h.file, scratch);
-            frames = &scratch;
+            frames = mCache[s.file].get(); // lives as long as this source
+        } else if (!readNativeFrames(h, scratch)) {
+            decodeDicomFrames(h.file, scratch);
         }
         if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {
             throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
                           "pixel data dimensions differ from the header");
         }
-        frameToFloat(*frames, s.frame, s.slope, s.intercept, h.padding, air, out);
+        return *frames;
     }
+
+    /// Copy one frame, rescaled, into @p out (rows × columns floats); padding becomes @p air.
+    void read(const Slice& s, float* out, float air)
+    {
+        thread_local DicomFrames scratch; // one per decoding thread
+        frameToFloat(frames(s, scratch), s.frame, s.slope, s.intercept, mHeaders[s.file].padding, air, out);
+    }
+
+    const DicomHeader& header(const Slice& s) const { return mHeaders[s.file]; }
 
 private:
     const std::vector<DicomHeader>& mHeaders;
@@ -240,25 +246,37 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
     const float airBelow = isMr ? options.airT1 : options.airHu;
     SparseSlabs sparse(background, airBelow);
     FrameSource source(headers);
-    std::vector<float> slab(plane * SparseSlabs::kSlabSlices);
-    const auto readSlice = [&](std::size_t sorted, float* out) {
-        source.read(slices[stack.slices[sorted].source], out, background);
-    };
 
     if (!resample) {
+        // The slab's stored samples are decoded, then converted to floats row by
+        // row straight into the grid's leaves: the slab never exists as floats.
+        std::vector<DicomFrames> decoded(SparseSlabs::kSlabSlices);
+        std::vector<const DicomFrames*> frames(SparseSlabs::kSlabSlices, nullptr);
         for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
             const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);
             auto t = std::chrono::steady_clock::now();
-            tbb::parallel_for(0, n, [&](int k) { readSlice(std::size_t(k0 + k), slab.data() + plane * std::size_t(k)); });
+            tbb::parallel_for(0, n, [&](int k) {
+                frames[std::size_t(k)] = &source.frames(slices[stack.slices[std::size_t(k0 + k)].source], decoded[std::size_t(k)]);
+            });
             decodeSeconds += since(t);
             t = std::chrono::steady_clock::now();
-            sparse.addSlab(slab.data(), nx, ny, k0, n);
+            sparse.addSlabRows(
+                [&](int z, int y, float* scratch) {
+                    const Slice& s = slices[stack.slices[std::size_t(k0 + z)].source];
+                    samplesToFloat(*frames[std::size_t(z)], s.frame, std::size_t(y) * std::size_t(nx), std::size_t(nx), s.slope,
+                                   s.intercept, source.header(s).padding, background, scratch);
+                    return static_cast<const float*>(scratch);
+                },
+                nx, ny, k0, n);
             sparseSeconds += since(t);
             if (options.progress) options.progress(double(k0 + n) / nz);
         }
     } else {
+        std::vector<float> slab(plane * SparseSlabs::kSlabSlices);
         std::vector<float> input(plane * slices.size());
-        tbb::parallel_for(std::size_t(0), slices.size(), [&](std::size_t k) { readSlice(k, input.data() + plane * k); });
+        tbb::parallel_for(std::size_t(0), slices.size(), [&](std::size_t k) {
+            source.read(slices[stack.slices[k].source], input.data() + plane * k, background);
+        });
         SliceResampler resampler(stack, input.data(), nx, ny, row, col, geo.spacing.head<2>(), background);
         for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
             const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);

@@ -37,13 +37,19 @@ SparseSlabs::~SparseSlabs() = default;
 
 void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
 {
+    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+    addSlabRows([&](int z, int y, float*) { return data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx); }, nx,
+                ny, k0, nz);
+}
+
+void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz)
+{
     using LeafT = FloatGrid::TreeType::LeafNodeType;
     constexpr int kDim = int(LeafT::DIM);
     static_assert(kSlabSlices == kDim, "a slab is one layer of leaves");
     if (k0 % kDim != 0 || nz < 1 || nz > kDim) throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
     const float air = mImpl->airBelow, bg = mImpl->background;
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
-    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
     // One leaf per 8 × 8 column block of the slab, built straight from the
     // dense values (exact, no tolerance); all-air blocks make no leaf. This
     // avoids copyFromDense's probing of the growing tree and its whole-tree
@@ -61,9 +67,10 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
             LeafT** row = leaves.data() + std::size_t(yb) * std::size_t(bx);
             // Each leaf's buffer, fetched once (every buffer access checks delayed loading).
             std::vector<float*> values(std::size_t(bx), nullptr);
+            std::vector<float> scratch(static_cast<std::size_t>(nx));
             for (int z = 0; z < nz; ++z) {
                 for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
-                    const float* in = data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx);
+                    const float* in = rows(z, y, scratch.data());
                     for (int x = 0; x < nx; ++x) {
                         const float v = in[x];
                         if (v < air) { // air: the inactive background

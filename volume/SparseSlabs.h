@@ -11,6 +11,7 @@
 #include "volume/Volume.h"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 namespace voxhap::volume {
@@ -35,6 +36,15 @@ public:
     /// @param k0   a multiple of kSlabSlices; nz at most kSlabSlices; each slab added once
     /// @throw ValueError on a non-finite value (naming its index) or a misaligned slab
     void addSlab(float* data, int nx, int ny, int k0, int nz);
+
+    /// @brief Image row @p y of slab slice @p z as nx floats: either a pointer
+    /// into data the caller holds, or @p scratch (nx floats) filled.
+    using RowSource = std::function<const float*(int z, int y, float* scratch)>;
+
+    /// @brief As addSlab, with each row produced on demand (by any thread):
+    /// a loader converts stored samples straight into the leaves, and the
+    /// slab of floats never exists.
+    void addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz);
 
     /// @brief The grid built so far (the builder is empty afterwards).
     Volume::GridPtr finish();
