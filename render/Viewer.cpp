@@ -54,9 +54,10 @@ Viewer::Viewer(const volume::Volume& v, const ViewerOptions& options, const volu
     mPoint = mOpt.point ? *mOpt.point : !mOpt.plan.paths.empty() ? mOpt.plan.paths.front().target : centre;
     mStepMm = mVolume->finestSpacing();
     // One pixel size for all panes, so that a millimetre looks the same in each:
-    // the finest voxel, or coarser until every view fits its pane.
+    // the largest view fills its pane (magnified beyond the voxels if need be,
+    // as a console zooms a small field of view).
     const Vec3d ext = mBox.max - mBox.min;
-    mPixelMm = mStepMm;
+    mPixelMm = 0.0;
     for (const PaneRect& p : mLayout.panes) {
         Vec3d right, down;
         viewAxes(p.view, right, down);

@@ -93,6 +93,7 @@ public:
 
     const ViewerLayout& layout() const { return mLayout; }
     /// @brief The pixel frame of a pane (slices follow the crosshair; 3D is fixed).
+    /// All panes share one pixel size: the smallest at which every view fits its pane.
     const ViewFrame& frame(ViewKind v) const { return mFrames[std::size_t(v)]; }
     /// @brief Where a pane's image starts in the window [px].
     Vec2d imageOrigin(ViewKind v) const;

@@ -69,9 +69,9 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
             if (!(in >> pane)) throw ValueError(where + "scroll: missing the pane");
             s.event.kind = ViewerEvent::Kind::Scroll;
             s.event.pane = scriptPane(pane, where);
-            const double n = scriptNumber(in, "steps", where);
-            if (n != std::round(n) || std::abs(n) > 1e6) throw ValueError(where + "scroll: steps must be an integer");
-            s.event.steps = int(n);
+            const double count = scriptNumber(in, "steps", where);
+            if (count != std::round(count) || std::abs(count) > 1e6) throw ValueError(where + "scroll: steps must be an integer");
+            s.event.steps = int(count);
         } else if (verb == "wait-pose" || verb == "sleep") {
             s.kind = verb == "sleep" ? ScriptStep::Kind::Sleep : ScriptStep::Kind::WaitPose;
             s.seconds = scriptNumber(in, "seconds", where);
