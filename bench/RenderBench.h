@@ -3,7 +3,7 @@
 /// @brief The rendering figure of benchmarks.md: seconds per four-view
 /// snapshot of the viewer (axial, sagittal, coronal in software, 3D by VTK),
 /// first frame (3D pipeline built, shaders compiled) and steady frame (every
-/// pane redrawn), the 3D pane in the viewer's default colour mode (CPU ray
+/// pane redrawn) and the frame after a streamed needle pose, the 3D pane in the viewer's default colour mode (CPU ray
 /// caster, VolumeView3d's Auto), on the real CT and on a 256³ phantom.
 #pragma once
 
@@ -36,8 +36,8 @@ struct RenderCase {
     Seconds setup;                ///< the viewer: volume copied for VTK, frames laid out
     Seconds first;                ///< the first four-view frame of a fresh viewer
     Seconds steady;               ///< a later four-view frame, all panes redrawn
-    Seconds slices;               ///< the three slice panes alone (3D pane cached), same viewer
-    double steadyOverSlices = 0;  ///< ratio within the run: what the 3D pane costs
+    Seconds slices;               ///< after a new needle pose: slices and overlays redrawn, the 3D picture cached
+    double steadyOverSlices = 0;  ///< steady over needle frame, per round in this run: what the volume rendering costs
     long differingPixels = 0;     ///< steady frame against first frame: 0 if rendering is deterministic
 };
 

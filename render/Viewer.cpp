@@ -131,17 +131,10 @@ bool Viewer::handle(const ViewerEvent& e)
             mMessage = "outside the image";
             return true;
         }
-        const std::size_t before = mEditor.plan().paths.size();
-        const bool hadPath = mEditor.hasEditedPath();
-        const PlannedPath last = hadPath ? mEditor.plan().paths.back() : PlannedPath{};
         if (const auto moved = mEditor.click(f.toWorld(e.px))) {
             mPoint = *moved;
             updateFrames();
         }
-        const bool changed = mEditor.plan().paths.size() != before ||
-                             (hadPath && (mEditor.plan().paths.back().entry != last.entry ||
-                                          mEditor.plan().paths.back().target != last.target));
-        if (changed) mPathsChanged = true, m3dStale = true;
         return true;
     }
     case ViewerEvent::Kind::Scroll: {
@@ -190,9 +183,7 @@ void Viewer::savePlan()
 void Viewer::setNeedle(const std::optional<NeedlePose>& needle)
 {
     mNeedle = needle;
-    if (m3d) m3d->setNeedle(needle);
-    m3dStale = true;
-    mDirty = true;
+    mDirty = true; // the 3D picture is kept: the needle is drawn over it
 }
 
 void Viewer::setNote(std::string note)
@@ -271,18 +262,30 @@ Image Viewer::render3dPane()
         const bool ct = mVolume->channel() == ScalarChannel::Hu;
         const WindowPreset preset = mOpt.mode == BlendMode::Mip ? WindowPreset::Bone : WindowPreset::SoftTissue;
         style.window = mOpt.window ? *mOpt.window : ct ? windowLevel(preset) : mWindow;
+        // Paths and needle are drawn over the cached picture instead (drawOver3d).
         Overlays o;
-        o.paths = mEditor.plan().paths;
-        o.needle = mNeedle;
         o.title = "3d " + std::string(blendModeName(mOpt.mode));
         m3d = std::make_unique<VolumeView3d>(*mVolume, f, style, mTable, o);
-        mPathsChanged = false;
-    }
-    if (mPathsChanged) {
-        m3d->setPaths(mEditor.plan().paths);
-        mPathsChanged = false;
     }
     return m3d->render();
+}
+
+void Viewer::drawOver3d(Image& img) const
+{
+    // The 3D pane is a parallel projection onto its frame, so the frame's
+    // toPixel is exactly where VTK puts a point: lines drawn here land where
+    // VTK would draw them, on top as its overlay layer does, and moving the
+    // needle costs no volume rendering.
+    const ViewFrame& f = frame(ViewKind::ThreeD);
+    const OverlayStyle style;
+    for (const PlannedPath& p : mEditor.plan().paths) {
+        drawLine(img, f.toPixel(p.entry), f.toPixel(p.target), Stroke{style.path, 2.0, 0.0, 1.0});
+        fillDisc(img, f.toPixel(p.entry), 4.0, style.entry);
+        fillDisc(img, f.toPixel(p.target), 4.0, style.target);
+        if (p.needle) drawLine(img, f.toPixel(p.needle->hub()), f.toPixel(p.needle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
+    }
+    if (const auto& entry = mEditor.pendingEntry()) fillDisc(img, f.toPixel(*entry), 4.0, style.entry);
+    if (mNeedle) drawLine(img, f.toPixel(mNeedle->hub()), f.toPixel(mNeedle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
 }
 
 Image Viewer::render()
@@ -296,8 +299,10 @@ Image Viewer::render()
         m3dImage = render3dPane();
         m3dStale = false;
     }
+    Image pane3d = m3dImage;
+    if (mOpt.threeD) drawOver3d(pane3d);
     const Vec2d o3 = imageOrigin(ViewKind::ThreeD);
-    win.paste(m3dImage, int(o3.x()), int(o3.y()));
+    win.paste(pane3d, int(o3.x()), int(o3.y()));
     // Status bar: the tool and measurements, then the note (the pose stream).
     const int y0 = mLayout.height - kViewerStatusPx + 3;
     const int maxChars = std::max(1, (mLayout.width - 8) / 6);

@@ -8,7 +8,9 @@
 /// it knows nothing of X events or sockets, so that a script of synthetic
 /// events drives it exactly as a mouse does (ViewerScript.h), and a test can
 /// check the picture. Slices are drawn in software (SliceView); the 3D pane is
-/// a VolumeView3d, re-rendered only when what it shows changes.
+/// a VolumeView3d rendered once (seconds on a CT in software GL) with the
+/// paths and the live needle drawn over it in software, so that a moving
+/// needle redraws in milliseconds.
 ///
 /// Controls (keys are X keysym names):
 /// - n, p, d, a: tools navigate, plan (entry then target), distance, angle
@@ -108,6 +110,7 @@ private:
     void savePlan();
     Image renderSlicePane(ViewKind v);
     Image render3dPane();
+    void drawOver3d(Image& img) const;
 
     ViewerOptions mOpt;
     const volume::TissueTable& mTable;
@@ -119,8 +122,8 @@ private:
     std::array<ViewFrame, 4> mFrames;
     std::array<Image, 3> mSliceBase;       ///< slices without overlays, until the crosshair or window moves
     std::array<bool, 3> mSliceStale{true, true, true};
-    Image m3dImage;
-    bool m3dStale = true, mPathsChanged = false, mDirty = true;
+    Image m3dImage;                        ///< the volume alone; paths and needle go over a copy
+    bool m3dStale = true, mDirty = true;
     std::unique_ptr<VolumeView3d> m3d;
     WindowLevel mWindow;
     int mWindowPreset = 0;

@@ -126,7 +126,6 @@ struct VolumeView3d::Impl {
     vtkSmartPointer<vtkRenderer> renderer;
     vtkSmartPointer<vtkRenderer> lines; ///< where paths and needles go: the scene, or a layer above it
     vtkSmartPointer<vtkActor> needle;
-    std::vector<vtkSmartPointer<vtkActor>> pathActors; ///< paths, their entries and targets, planned needles
     RayCaster caster = RayCaster::Gpu;
 };
 
@@ -266,7 +265,21 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         }
     }
 
-    setPaths(overlays.paths);
+    // Paths and needles as 3D lines; entry and target as points.
+    std::vector<std::pair<Vec3d, Vec3d>> paths, needles;
+    std::vector<Vec3d> entries, targets;
+    for (const PlannedPath& p : overlays.paths) {
+        paths.emplace_back(p.entry, p.target);
+        entries.push_back(p.entry);
+        targets.push_back(p.target);
+        if (p.needle) needles.emplace_back(p.needle->hub(), p.needle->tip);
+    }
+    if (!paths.empty()) {
+        m.lines->AddActor(lineActor(paths, m.style.path, 2.0));
+        m.lines->AddActor(pointActor(entries, m.style.entry, 10.0));
+        m.lines->AddActor(pointActor(targets, m.style.target, 10.0));
+    }
+    if (!needles.empty()) m.lines->AddActor(lineActor(needles, m.style.needle, 3.0));
     setNeedle(overlays.needle);
 
     // A parallel projection onto the frame: pixel (x, y) shows the ray through frame.toWorld(x, y).
@@ -308,29 +321,6 @@ void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
     if (!needle) return;
     m.needle = lineActor({{needle->hub(), needle->tip}}, m.style.needle, 3.0);
     m.lines->AddActor(m.needle);
-}
-
-void VolumeView3d::setPaths(const std::vector<PlannedPath>& planned)
-{
-    // Paths and needles as 3D lines; entry and target as points.
-    Impl& m = *mImpl;
-    for (const auto& a : m.pathActors) m.lines->RemoveActor(a);
-    m.pathActors.clear();
-    std::vector<std::pair<Vec3d, Vec3d>> paths, needles;
-    std::vector<Vec3d> entries, targets;
-    for (const PlannedPath& p : planned) {
-        paths.emplace_back(p.entry, p.target);
-        entries.push_back(p.entry);
-        targets.push_back(p.target);
-        if (p.needle) needles.emplace_back(p.needle->hub(), p.needle->tip);
-    }
-    if (!paths.empty()) {
-        m.pathActors.push_back(lineActor(paths, m.style.path, 2.0));
-        m.pathActors.push_back(pointActor(entries, m.style.entry, 10.0));
-        m.pathActors.push_back(pointActor(targets, m.style.target, 10.0));
-    }
-    if (!needles.empty()) m.pathActors.push_back(lineActor(needles, m.style.needle, 3.0));
-    for (const auto& a : m.pathActors) m.lines->AddActor(a);
 }
 
 Image VolumeView3d::render()

@@ -55,8 +55,6 @@ public:
     RayCaster caster() const;
     /// @brief Move (or remove) the live needle drawn in the view.
     void setNeedle(const std::optional<NeedlePose>& needle);
-    /// @brief Replace the planned paths drawn in the view (the viewer edits them).
-    void setPaths(const std::vector<PlannedPath>& paths);
 
 private:
     struct Impl;
