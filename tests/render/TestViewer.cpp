@@ -306,6 +306,24 @@ TEST_F(ViewerTest, NavigateMovesTheOtherSlicesAndScrollStepsOneVoxel)
     EXPECT_NEAR(v.point().z(), p.z() + 2.0, 1e-9) << "Down: one slice back in the pane last used";
 }
 
+TEST_F(ViewerTest, WindowClicksReachThePaneUnderThePointer)
+{
+    Viewer v(*mVolume, mOpt, test::table());
+    // A mouse click in window pixels on the sagittal pane: the crosshair moves
+    // to the world point under it (within half a pixel: the click is whole pixels).
+    const Vec3d p(mPhantom.centre.x(), -30, 20);
+    const Vec2d w = windowPixel(v, ViewKind::Sagittal, p);
+    EXPECT_TRUE(v.clickWindow(int(std::lround(w.x())), int(std::lround(w.y()))));
+    EXPECT_TRUE(nearVec(v.point(), p, 0.5 * v.frame(ViewKind::Sagittal).pixelMm));
+    // The gap between panes and the 3D pane move nothing.
+    const Vec3d before = v.point();
+    EXPECT_TRUE(v.clickWindow(v.layout().pane(ViewKind::Axial).width + 1, 10));
+    const Vec2d c3 = v.imageOrigin(ViewKind::ThreeD);
+    EXPECT_TRUE(v.clickWindow(int(c3.x()) + 5, int(c3.y()) + 5));
+    EXPECT_EQ(v.point(), before);
+    EXPECT_NE(v.lastMessage().find("3d pane"), std::string::npos);
+}
+
 TEST_F(ViewerTest, DistanceToolShowsItsLengthInTheStatus)
 {
     Viewer v(*mVolume, mOpt, test::table());
