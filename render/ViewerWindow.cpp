@@ -83,6 +83,8 @@ ViewerWindow::~ViewerWindow()
 
 bool ViewerWindow::mapped() const { return mImpl->mapped; }
 
+unsigned long ViewerWindow::windowId() const { return mImpl->window; }
+
 void ViewerWindow::show(const Image& img)
 {
     Impl& m = *mImpl;

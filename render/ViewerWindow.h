@@ -41,6 +41,8 @@ public:
     std::vector<WindowInput> poll(int timeoutMs);
     /// @brief True once the window has been mapped (shown) by the X server.
     bool mapped() const;
+    /// @brief The X window id (for tests and tools that send it events).
+    unsigned long windowId() const;
 
 private:
     struct Impl;
