@@ -176,8 +176,16 @@ void Viewer::savePlan()
         mMessage = "nothing to save: click an entry and a target with the plan tool (p)";
         return;
     }
-    render::savePlan(mEditor.plan(), mOpt.planOut);
-    mMessage = "saved " + mOpt.planOut.string();
+    // A failed save must not end an interactive session: say so in the status
+    // bar and keep the error for a scripted run to report.
+    try {
+        render::savePlan(mEditor.plan(), mOpt.planOut);
+        mMessage = "saved " + mOpt.planOut.string();
+        mSaveError.clear();
+    } catch (const std::exception& e) {
+        mSaveError = e.what();
+        mMessage = "not saved: " + mSaveError;
+    }
 }
 
 void Viewer::setNeedle(const std::optional<NeedlePose>& needle)

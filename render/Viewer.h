@@ -74,7 +74,6 @@ public:
     Viewer& operator=(const Viewer&) = delete;
 
     /// @brief Apply one event. @return false once the event asks to quit
-    /// @throw IoError if saving the plan fails
     bool handle(const ViewerEvent& e);
     /// @brief A click at window pixel (@p x, @p y): the pane under it, if any.
     bool clickWindow(int x, int y);
@@ -104,6 +103,8 @@ public:
     std::string status() const;
     /// @brief The status line of the last action ("saved plan.json", "nothing to save").
     const std::string& lastMessage() const { return mMessage; }
+    /// @brief Why the last save failed (it names the file); empty if it did not.
+    const std::string& saveError() const { return mSaveError; }
 
 private:
     void updateFrames();
@@ -130,7 +131,7 @@ private:
     ViewKind mActive = ViewKind::Axial;
     PlanEditor mEditor;
     std::optional<NeedlePose> mNeedle;
-    std::string mNote, mMessage;
+    std::string mNote, mMessage, mSaveError;
 };
 
 } // namespace voxhap::render

@@ -255,6 +255,8 @@ int run(const ViewOptions& o)
             }
         }
         feed.pump(viewer);
+        // A window shows a failed save in its status bar; a headless run fails on it.
+        if (!viewer.saveError().empty()) throw IoError(viewer.saveError());
         render::writePng(viewer.render(), o.snapshot);
         ++frames;
     }

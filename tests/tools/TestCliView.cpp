@@ -233,6 +233,8 @@ TEST_F(CliView, RefusesWithOneLine)
     write("wait.txt", "wait-pose 0.2\n");
     voxhap::test::expectFailure(run("view s.vdb --no-3d --script wait.txt --snapshot x.png"), "wait.txt:1: wait-pose");
     voxhap::test::expectFailure(run("view missing.vdb --no-3d --snapshot x.png"), "missing.vdb");
+    write("save.txt", "key p\nclick axial 10 10\nclick axial 20 20\nkey s\n");
+    voxhap::test::expectFailure(run("view s.vdb --no-3d --script save.txt --save nodir/p.json --snapshot x.png"), "nodir/p.json");
 }
 
 } // namespace
