@@ -2,6 +2,7 @@
 /// @file Plan.cpp
 #include "render/Plan.h"
 
+#include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 #include "volume/JsonFields.h"
 
@@ -134,6 +135,28 @@ Plan loadPlan(const std::filesystem::path& file)
     std::ostringstream text;
     text << in.rdbuf();
     return parsePlan(text.str(), file.string());
+}
+
+std::string planJson(const Plan& plan)
+{
+    const auto point = [](const Vec3d& p) { return Json::array({p.x(), p.y(), p.z()}); };
+    Json paths = Json::array();
+    for (const PlannedPath& p : plan.paths) {
+        Json j = {{"entry", point(p.entry)}, {"target", point(p.target)}};
+        if (!p.name.empty()) j["name"] = p.name;
+        if (p.needle) {
+            j["needle"] = {{"tip", point(p.needle->tip)}, {"direction", point(p.needle->direction)},
+                           {"length_mm", p.needle->lengthMm}};
+        }
+        paths.push_back(std::move(j));
+    }
+    return Json{{"schema", "voxhap-plan/1"}, {"paths", paths}}.dump(2) + "\n";
+}
+
+void savePlan(const Plan& plan, const std::filesystem::path& file)
+{
+    const std::string text = planJson(plan);
+    volume::writeStreamAtomically(file, [&](std::ostream& out) { out << text; });
 }
 
 } // namespace voxhap::render

@@ -51,4 +51,10 @@ Plan loadPlan(const std::filesystem::path& file);
 /// @brief Parse plan JSON text; @p origin names it in error messages.
 Plan parsePlan(std::string_view json, const std::string& origin);
 
+/// @brief The plan as voxhap-plan/1 JSON text (what parsePlan reads back).
+std::string planJson(const Plan& plan);
+
+/// @brief Write the plan as voxhap-plan/1, atomically. @throw IoError naming the file
+void savePlan(const Plan& plan, const std::filesystem::path& file);
+
 } // namespace voxhap::render

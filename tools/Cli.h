@@ -63,5 +63,6 @@ Action registerSimulate(CLI::App& app);
 Action registerServe(CLI::App& app);
 Action registerRender(CLI::App& app);
 Action registerPlot(CLI::App& app);
+Action registerView(CLI::App& app);
 
 } // namespace voxhap::tools

@@ -4,6 +4,7 @@
 
 #include "tools/Cli.h"
 
+#include "bench/RenderBench.h"
 #include "bench/SamplerBench.h"
 #include "bench/ServoBench.h"
 #include "volume/AtomicFile.h"
@@ -21,6 +22,7 @@ namespace {
 struct BenchOptions {
     bench::SamplerBenchOptions sampler;
     bench::ServoBenchOptions servo;
+    bench::RenderBenchOptions render;
     bool quick = false;
     bool noVtk = false;
     std::string json, png;
@@ -78,6 +80,17 @@ int runServo(BenchOptions o)
     return 0;
 }
 
+int runRender(BenchOptions o)
+{
+    if (o.quick) o.render.firstFrames = 1, o.render.steadyFrames = 2;
+    const auto progress = progressLine();
+    const auto report = bench::runRenderBench(o.render, progress);
+    progress("");
+    bench::printRenderReport(std::cout, report);
+    writeJson(o.json, bench::renderReportJson(report));
+    return 0;
+}
+
 } // namespace
 
 Action registerBench(CLI::App& app)
@@ -106,7 +119,18 @@ Action registerBench(CLI::App& app)
     servo->add_option("--seconds", o->servo.seconds, "Length of the 1 kHz run (default 30)")->check(CLI::Range(0.5, 3600.0));
     servo->add_flag("--quick", o->quick, "5 s at 1 kHz and 1 s per ladder rate");
     servo->add_option("--json", o->json, "Also write the figures as JSON");
-    return [o, servo] { return servo->parsed() ? runServo(*o) : runSampler(*o); };
+    CLI::App* render = cmd->add_subcommand(
+        "render", "Four-view frame of the viewer, first and steady, on a CT (--ct) and a 256^3 torso phantom");
+    render->add_option("--ct", o->render.ct, "A CT: DICOM folder or volume file (default: the phantom only)")
+        ->check(CLI::ExistingPath);
+    render->add_option("--first", o->render.firstFrames, "Fresh viewers timed on their first frame (default 2)")
+        ->check(CLI::Range(1, 100));
+    render->add_option("--steady", o->render.steadyFrames, "Steady frames per volume (default 5)")->check(CLI::Range(1, 1000));
+    render->add_flag("--quick", o->quick, "One first frame and two steady frames");
+    render->add_option("--json", o->json, "Also write the figures as JSON");
+    return [o, servo, render] {
+        return servo->parsed() ? runServo(*o) : render->parsed() ? runRender(*o) : runSampler(*o);
+    };
 }
 
 } // namespace voxhap::tools

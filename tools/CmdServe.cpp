@@ -6,6 +6,7 @@
 #include "tools/Cli.h"
 
 #include "haptic/IgtlDevice.h"
+#include "haptic/PoseStream.h"
 #include "haptic/Scene.h"
 #include "haptic/ServoLoop.h"
 #include "haptic/Session.h"
@@ -50,7 +51,7 @@ private:
 
 struct ServeOptions {
     CommonOptions common;
-    std::string scene, device = "hand", out = "voxhap-serve";
+    std::string scene, device = "hand", out = "voxhap-serve", viewer;
     double speed = 0, duration = 0, rate = 0;
     bool reckless = false;
 };
@@ -112,6 +113,20 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     haptic::ServoOptions so;
     so.rateHz = scene.rateHz;
     haptic::ServoLoop loop(*model, *device, so);
+    // The live needle for `voxhap view --listen`: sent from this (status) thread,
+    // never the servo thread, at about 50 Hz (a display rate).
+    std::unique_ptr<haptic::PoseSender> viewer;
+    if (!o.viewer.empty()) {
+        std::string host;
+        int port = 0;
+        try {
+            haptic::parseHostPort(o.viewer, "--viewer", host, port);
+        } catch (const ValueError& e) {
+            throw UsageError(e.what());
+        }
+        viewer = std::make_unique<haptic::PoseSender>(host, port);
+    }
+    std::size_t sentRecords = 0;
 
     haptic::Session session;
     const bool live = stderrIsTerminal() && !o.common.json;
@@ -124,9 +139,13 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         while (loop.popEvent(e)) session.events.push_back(e);
     };
     if (!gInterrupted) loop.start();
-    while (!gInterrupted && loop.running() && !gInterrupted && (duration <= 0.0 || elapsed() < duration)) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    while (!gInterrupted && loop.running() && (duration <= 0.0 || elapsed() < duration)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(viewer ? 20 : 100));
         drain();
+        if (viewer && session.records.size() > sentRecords) {
+            sentRecords = session.records.size();
+            viewer->send({session.records.back().tip, session.records.back().direction});
+        }
         if (live) {
             std::cerr << "\r" << std::fixed << std::setprecision(1) << elapsed() << " s  " << std::setprecision(0)
                       << double(loop.ticks()) / std::max(elapsed(), 1e-9) << " Hz  tick p99 " << std::setprecision(1)
@@ -199,6 +218,9 @@ Action registerServe(CLI::App& app)
     cmd->add_flag("--reckless", o->reckless, "The simulated hand does not stop when it feels the loss of resistance");
     cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-serve)");
+    cmd->add_option("--viewer", o->viewer,
+                    "Stream the needle pose at about 50 Hz to `voxhap view --listen PORT` at [HOST:]PORT (OpenIGTLink "
+                    "TRANSFORM)");
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };
 }

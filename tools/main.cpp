@@ -24,6 +24,7 @@ int main(int argc, char** argv)
         {"serve", registerServe(app)},
         {"render", registerRender(app)},
         {"plot", registerPlot(app)},
+        {"view", registerView(app)},
         {"bench", registerBench(app)},
     };
 

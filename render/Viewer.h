@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Viewer.h
+/// @brief The interactive planning viewer (`voxhap view`): four panes (axial,
+/// sagittal, coronal, 3D) of one volume, clicks that set the entry and target
+/// or measure distances and angles (PlanEditor), and a live needle.
+///
+/// The viewer is a state plus a renderer of the whole window into one Image;
+/// it knows nothing of X events or sockets, so that a script of synthetic
+/// events drives it exactly as a mouse does (ViewerScript.h), and a test can
+/// check the picture. Slices are drawn in software (SliceView); the 3D pane is
+/// a VolumeView3d rendered once (seconds on a CT in software GL) with the
+/// paths and the live needle drawn over it in software, so that a moving
+/// needle redraws in milliseconds.
+///
+/// Controls (keys are X keysym names):
+/// - n, p, d, a: tools navigate, plan (entry then target), distance, angle
+/// - left click: use the tool at that point of a slice
+/// - Up / Page_Up, Down / Page_Down, wheel: next or previous slice of the pane
+///   last clicked (one finest-voxel step along the pane's normal)
+/// - w: next window (soft tissue, bone, lung); c: clear measurements
+/// - s: save the plan (voxhap-plan/1); q or Escape: quit
+#pragma once
+
+#include "render/Image.h"
+#include "render/PlanEditor.h"
+#include "render/ViewFrame.h"
+#include "render/ViewTypes.h"
+#include "render/ViewerLayout.h"
+#include "render/VolumeView3d.h"
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace voxhap::volume {
+class TissueTable;
+class Volume;
+} // namespace voxhap::volume
+
+namespace voxhap::render {
+
+class RenderVolume;
+
+struct ViewerOptions {
+    int width = 1024, height = 1048;   ///< window [px], status bar included
+    BlendMode mode = BlendMode::Colour; ///< of the 3D pane
+    RayCaster caster = RayCaster::Auto;
+    std::optional<WindowLevel> window;  ///< slices; default soft tissue on CT, the value range on T1
+    bool labels = true;                 ///< tissue colours on the slices
+    bool threeD = true;                 ///< false: the 3D pane says why not (threeDNote) instead
+    std::string threeDNote;             ///< shown in the 3D pane when threeD is false
+    std::optional<Vec3d> point;         ///< first crosshair [mm, LPS]; default the first target, else the centre
+    Plan plan;                          ///< paths loaded with the volume
+    std::filesystem::path planOut = "plan.json"; ///< where key s saves
+};
+
+/// @brief One input event, from the window or a script.
+struct ViewerEvent {
+    enum class Kind { Click, Key, Scroll };
+    Kind kind = Kind::Key;
+    ViewKind pane = ViewKind::Axial; ///< Click, Scroll
+    Vec2d px{0, 0};                  ///< Click: in the pane image's pixels
+    std::string key;                 ///< Key: keysym name
+    int steps = 0;                   ///< Scroll: slices, positive along the pane's normal
+};
+
+class Viewer {
+public:
+    /// @throw ValueError on a volume without image values or a window too small
+    Viewer(const volume::Volume& v, const ViewerOptions& options, const volume::TissueTable& table);
+    ~Viewer();
+    Viewer(const Viewer&) = delete;
+    Viewer& operator=(const Viewer&) = delete;
+
+    /// @brief Apply one event. @return false once the event asks to quit
+    bool handle(const ViewerEvent& e);
+    /// @brief A click at window pixel (@p x, @p y): the pane under it, if any.
+    bool clickWindow(int x, int y);
+    /// @brief Scroll in the pane under window pixel (@p x, @p y).
+    void scrollWindow(int x, int y, int steps);
+
+    /// @brief The live needle (nullopt: none).
+    void setNeedle(const std::optional<NeedlePose>& needle);
+    /// @brief A note for the status bar (e.g. the pose stream's state).
+    void setNote(std::string note);
+    /// @brief Redraw every pane at the next render(), the 3D one included (for benchmarks).
+    void invalidate();
+    /// @brief True if something changed since the last render().
+    bool dirty() const { return mDirty; }
+
+    /// @brief The whole window: the four panes and the status bar.
+    Image render();
+
+    const ViewerLayout& layout() const { return mLayout; }
+    /// @brief The pixel frame of a pane (slices follow the crosshair; 3D is fixed).
+    /// All panes share one pixel size: the smallest at which every view fits its pane.
+    const ViewFrame& frame(ViewKind v) const { return mFrames[std::size_t(v)]; }
+    /// @brief Where a pane's image starts in the window [px].
+    Vec2d imageOrigin(ViewKind v) const;
+    const Vec3d& point() const { return mPoint; }
+    const PlanEditor& editor() const { return mEditor; }
+    std::string status() const;
+    /// @brief The status line of the last action ("saved plan.json", "nothing to save").
+    const std::string& lastMessage() const { return mMessage; }
+    /// @brief Why the last save failed (it names the file); empty if it did not.
+    const std::string& saveError() const { return mSaveError; }
+
+private:
+    void updateFrames();
+    void savePlan();
+    Image renderSlicePane(ViewKind v);
+    Image render3dPane();
+    void drawOver3d(Image& img) const;
+
+    ViewerOptions mOpt;
+    const volume::TissueTable& mTable;
+    std::unique_ptr<RenderVolume> mVolume;
+    ViewerLayout mLayout;
+    WorldBounds mBox;
+    double mPixelMm = 1.0, mStepMm = 1.0;
+    Vec3d mPoint{0, 0, 0};
+    std::array<ViewFrame, 4> mFrames;
+    std::array<Image, 3> mSliceBase;       ///< slices without overlays, until the crosshair or window moves
+    std::array<bool, 3> mSliceStale{true, true, true};
+    Image m3dImage;                        ///< the volume alone; paths and needle go over a copy
+    bool m3dStale = true, mDirty = true;
+    std::unique_ptr<VolumeView3d> m3d;
+    WindowLevel mWindow;
+    int mWindowPreset = 0;
+    ViewKind mActive = ViewKind::Axial;
+    PlanEditor mEditor;
+    std::optional<NeedlePose> mNeedle;
+    std::string mNote, mMessage, mSaveError;
+};
+
+} // namespace voxhap::render

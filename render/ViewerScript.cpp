@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ViewerScript.cpp
+#include "render/ViewerScript.h"
+
+#include "volume/Errors.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace voxhap::render {
+
+namespace {
+
+constexpr double kScriptMaxWaitS = 600.0; // a script that waits longer is a mistake, not a test
+
+ViewKind scriptPane(const std::string& name, const std::string& where)
+{
+    for (ViewKind k : {ViewKind::Axial, ViewKind::Sagittal, ViewKind::Coronal, ViewKind::ThreeD}) {
+        if (name == viewName(k)) return k;
+    }
+    throw ValueError(where + "unknown pane '" + name + "' (expected axial, sagittal, coronal or 3d)");
+}
+
+double scriptNumber(std::istringstream& in, const std::string& what, const std::string& where)
+{
+    std::string tok;
+    if (!(in >> tok)) throw ValueError(where + "missing " + what);
+    std::size_t used = 0;
+    double v = 0;
+    try {
+        v = std::stod(tok, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != tok.size() || !std::isfinite(v)) throw ValueError(where + what + " '" + tok + "' is not a number");
+    return v;
+}
+
+} // namespace
+
+std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::string& origin)
+{
+    std::vector<ScriptStep> steps;
+    std::istringstream lines{std::string(text)};
+    std::string line;
+    int n = 0;
+    while (std::getline(lines, line)) {
+        ++n;
+        if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+        std::istringstream in(line);
+        std::string verb;
+        if (!(in >> verb)) continue;
+        const std::string where = origin + ":" + std::to_string(n) + ": ";
+        ScriptStep s;
+        s.line = n;
+        if (verb == "key") {
+            s.event.kind = ViewerEvent::Kind::Key;
+            if (!(in >> s.event.key)) throw ValueError(where + "key: missing the key name");
+        } else if (verb == "click") {
+            std::string pane;
+            if (!(in >> pane)) throw ValueError(where + "click: missing the pane");
+            s.event.kind = ViewerEvent::Kind::Click;
+            s.event.pane = scriptPane(pane, where);
+            const double x = scriptNumber(in, "x", where), y = scriptNumber(in, "y", where);
+            s.event.px = Vec2d(x, y);
+        } else if (verb == "scroll") {
+            std::string pane;
+            if (!(in >> pane)) throw ValueError(where + "scroll: missing the pane");
+            s.event.kind = ViewerEvent::Kind::Scroll;
+            s.event.pane = scriptPane(pane, where);
+            const double count = scriptNumber(in, "steps", where);
+            if (count != std::round(count) || std::abs(count) > 1e6) throw ValueError(where + "scroll: steps must be an integer");
+            s.event.steps = int(count);
+        } else if (verb == "wait-pose" || verb == "sleep") {
+            s.kind = verb == "sleep" ? ScriptStep::Kind::Sleep : ScriptStep::Kind::WaitPose;
+            s.seconds = scriptNumber(in, "seconds", where);
+            if (!(s.seconds >= 0.0 && s.seconds <= kScriptMaxWaitS)) {
+                throw ValueError(where + verb + ": seconds must be in 0..600");
+            }
+        } else {
+            throw ValueError(where + "unknown step '" + verb + "' (expected key, click, scroll, wait-pose or sleep)");
+        }
+        std::string extra;
+        if (in >> extra) throw ValueError(where + "unexpected '" + extra + "' after the " + verb + " step");
+        steps.push_back(std::move(s));
+    }
+    return steps;
+}
+
+std::vector<ScriptStep> loadViewerScript(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
+    if (!in) throw IoError(file.string() + ": cannot read the script");
+    std::ostringstream s;
+    s << in.rdbuf();
+    return parseViewerScript(s.str(), file.string());
+}
+
+} // namespace voxhap::render

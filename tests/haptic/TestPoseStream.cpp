@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestPoseStream.cpp
+/// @brief The live-needle stream over a real loopback socket: a PoseSender's
+/// pose reads back exactly (to the float32 the TRANSFORM carries), the sender
+/// reconnects by itself to a receiver started later, the receiver survives a
+/// garbage header, and addresses are checked with one clear message.
+
+#include "haptic/PoseStream.h"
+
+#include "volume/Errors.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace voxhap::haptic {
+namespace {
+
+template <typename Pred>
+bool waitUntil(Pred&& p, double seconds = 5.0)
+{
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+        if (p()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return p();
+}
+
+/// The value a double becomes on the wire: TRANSFORM holds float32.
+double wire(double v) { return double(float(v)); }
+
+TEST(PoseStream, SentPoseReadsBackAsItsFloat32Values)
+{
+    PoseReceiver rx(0);
+    ASSERT_GT(rx.port(), 0);
+    PoseSender tx("127.0.0.1", rx.port());
+    // A direction that is not a float exactly (0.6, 0.8) and a tip that is not either (0.1).
+    const StreamedPose sent{Vec3d(12.5, -40.1, 173.25), Vec3d(0.6, 0.0, -0.8)};
+    ASSERT_TRUE(waitUntil([&] { return tx.send(sent) && rx.poses() > 0; }));
+    const auto got = rx.latest();
+    ASSERT_TRUE(got.has_value());
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(got->tip[i], wire(sent.tip[i])) << "tip " << i;
+        EXPECT_EQ(got->direction[i], wire(sent.direction[i])) << "direction " << i;
+    }
+    // Every pose sent arrives (TCP on loopback loses none), and a later one replaces the earlier.
+    ASSERT_TRUE(waitUntil([&] { return rx.poses() == tx.sent(); }));
+    const StreamedPose next{Vec3d(1, 2, 3), Vec3d(0, 1, 0)};
+    ASSERT_TRUE(tx.send(next));
+    ASSERT_TRUE(waitUntil([&] { return rx.poses() == tx.sent(); }));
+    EXPECT_EQ(rx.latest()->tip, Vec3d(1, 2, 3));
+    EXPECT_EQ(rx.latest()->direction, Vec3d(0, 1, 0));
+}
+
+TEST(PoseStream, SenderConnectsToAViewerThatStartsLater)
+{
+    // Find a free port, then release it for the receiver to take later.
+    int port = 0;
+    {
+        PoseReceiver probe(0);
+        port = probe.port();
+    }
+    PoseSender tx("127.0.0.1", port, 0.01);
+    EXPECT_FALSE(tx.send({Vec3d(1, 1, 1), Vec3d(0, 0, 1)})) << "nobody listening: dropped, not blocked";
+    EXPECT_FALSE(tx.connected());
+    PoseReceiver rx(port);
+    ASSERT_TRUE(waitUntil([&] { return tx.send({Vec3d(1, 1, 1), Vec3d(0, 0, 1)}) && rx.poses() > 0; }));
+    EXPECT_EQ(rx.latest()->tip, Vec3d(1, 1, 1));
+}
+
+TEST(PoseStream, ReceiverDropsAGarbageHeaderAndAcceptsTheNextSender)
+{
+    PoseReceiver rx(0);
+    {
+        const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(std::uint16_t(rx.port()));
+        ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+        ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+        unsigned char junk[58];
+        for (int i = 0; i < 58; ++i) junk[i] = 0xff; // version 0xffff, body size 2^64 − 1
+        ASSERT_EQ(::send(fd, junk, sizeof junk, MSG_NOSIGNAL), ssize_t(sizeof junk));
+        EXPECT_TRUE(waitUntil([&] { return rx.rejected() == 1; }));
+        ::close(fd);
+    }
+    EXPECT_FALSE(rx.latest().has_value());
+    PoseSender tx("127.0.0.1", rx.port(), 0.01);
+    ASSERT_TRUE(waitUntil([&] { return tx.send({Vec3d(4, 5, 6), Vec3d(1, 0, 0)}) && rx.poses() > 0; }));
+    EXPECT_EQ(rx.latest()->tip, Vec3d(4, 5, 6));
+}
+
+TEST(PoseStream, HostAndPortAreChecked)
+{
+    std::string host;
+    int port = 0;
+    parseHostPort("18945", "--viewer", host, port);
+    EXPECT_EQ(host, "127.0.0.1");
+    EXPECT_EQ(port, 18945);
+    parseHostPort("10.0.0.7:2000", "--viewer", host, port);
+    EXPECT_EQ(host, "10.0.0.7");
+    EXPECT_EQ(port, 2000);
+    for (const char* bad : {"", "0", "70000", "abc", "1.2.3.4:", ":80", "localhost:80", "12x"}) {
+        try {
+            parseHostPort(bad, "--viewer", host, port);
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        } catch (const ValueError& e) {
+            EXPECT_EQ(std::string(e.what()).rfind("--viewer: ", 0), 0u) << e.what();
+        }
+    }
+}
+
+} // namespace
+} // namespace voxhap::haptic

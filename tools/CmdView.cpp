@@ -1,0 +1,323 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CmdView.cpp
+/// @brief `voxhap view <volume>`: the interactive planning viewer (four panes,
+/// entry and target by clicks, distance and angle tools, a live needle from
+/// `voxhap serve --viewer`), or the same driven by a script into a snapshot.
+
+#include "tools/Cli.h"
+#include "tools/LoadOptions.h"
+
+#include "haptic/PoseStream.h"
+#include "render/Display.h"
+#include "render/ImageFile.h"
+#include "render/Plan.h"
+#include "render/Viewer.h"
+#include "render/ViewerScript.h"
+#include "render/ViewerWindow.h"
+#include "volume/Errors.h"
+#include "volume/Volume.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+namespace voxhap::tools {
+
+namespace {
+
+volatile std::sig_atomic_t gViewInterrupted = 0;
+extern "C" void onViewInterrupt(int) { gViewInterrupted = 1; }
+
+struct ViewOptions {
+    CommonOptions common;
+    ReaderOptions reader;
+    std::string input, plan, save = "plan.json", script, snapshot, size = "1024x1048", mode = "colour", window, point;
+    int listen = -1;
+    double timeoutS = 0, needleLengthMm = 90.0;
+    bool noLabels = false, no3d = false;
+};
+
+std::pair<int, int> parseSize(const std::string& text)
+{
+    const auto x = text.find('x');
+    int w = 0, h = 0;
+    try {
+        std::size_t uw = 0, uh = 0;
+        if (x != std::string::npos) {
+            w = std::stoi(text.substr(0, x), &uw);
+            h = std::stoi(text.substr(x + 1), &uh);
+        }
+        if (x == std::string::npos || uw != x || uh != text.size() - x - 1) w = h = 0;
+    } catch (const std::exception&) {
+        w = h = 0;
+    }
+    if (w < 100 || h < 100 || w > 8192 || h > 8192) {
+        throw UsageError("--size: '" + text + "' is not WIDTHxHEIGHT with each side in 100..8192");
+    }
+    return {w, h};
+}
+
+double viewSecondsSince(std::chrono::steady_clock::time_point t)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+/// Hands the latest streamed pose to the viewer, and says how the stream is doing.
+class NeedleFeed {
+public:
+    NeedleFeed(haptic::PoseReceiver* receiver, double lengthMm) : mReceiver(receiver), mLengthMm(lengthMm) {}
+    long poses() const { return mReceiver ? mReceiver->poses() : 0; }
+    void pump(render::Viewer& viewer)
+    {
+        if (!mReceiver) return;
+        const long n = mReceiver->poses();
+        if (n != mSeen) {
+            if (const auto p = mReceiver->latest()) {
+                render::NeedlePose pose;
+                pose.tip = p->tip;
+                pose.direction = p->direction;
+                pose.lengthMm = mLengthMm;
+                viewer.setNeedle(pose);
+            }
+            mSeen = n;
+        }
+        std::ostringstream note;
+        note << "needle stream :" << mReceiver->port() << (mReceiver->connected() ? " connected, " : " waiting, ") << n
+             << " poses";
+        viewer.setNote(note.str());
+    }
+
+private:
+    haptic::PoseReceiver* mReceiver;
+    double mLengthMm;
+    long mSeen = 0;
+};
+
+/// Plays the script's steps one at a time, so that the window stays live while it waits.
+class ScriptPlayer {
+public:
+    ScriptPlayer(std::vector<render::ScriptStep> steps, std::string origin) : mSteps(std::move(steps)), mOrigin(std::move(origin)) {}
+    bool done() const { return mNext >= mSteps.size(); }
+    /// Run steps until one must wait; false once a step asks to quit.
+    /// @throw IoError when a wait-pose step times out
+    bool advance(render::Viewer& viewer, NeedleFeed& feed)
+    {
+        while (!done()) {
+            const render::ScriptStep& s = mSteps[mNext];
+            if (s.kind == render::ScriptStep::Kind::Event) {
+                ++mNext;
+                if (!viewer.handle(s.event)) return false;
+                continue;
+            }
+            if (!mWaitStarted) {
+                mWaitStarted = std::chrono::steady_clock::now();
+                mPosesAtStart = feed.poses();
+            }
+            const double waited = viewSecondsSince(*mWaitStarted);
+            const bool finished = s.kind == render::ScriptStep::Kind::Sleep ? waited >= s.seconds : feed.poses() > mPosesAtStart;
+            if (!finished && s.kind == render::ScriptStep::Kind::WaitPose && waited >= s.seconds) {
+                throw IoError(mOrigin + ":" + std::to_string(s.line) + ": wait-pose: no needle pose within " +
+                              std::to_string(s.seconds) + " s" + (feed.poses() == 0 && !mListening ? " (no --listen)" : ""));
+            }
+            if (!finished) return true;
+            mWaitStarted.reset();
+            ++mNext;
+        }
+        return true;
+    }
+    void setListening(bool l) { mListening = l; }
+
+private:
+    std::vector<render::ScriptStep> mSteps;
+    std::string mOrigin;
+    std::size_t mNext = 0;
+    std::optional<std::chrono::steady_clock::time_point> mWaitStarted;
+    long mPosesAtStart = 0;
+    bool mListening = false;
+};
+
+nlohmann::json paneJson(const render::Viewer& v)
+{
+    nlohmann::json panes = nlohmann::json::array();
+    for (const render::PaneRect& p : v.layout().panes) {
+        const render::ViewFrame& f = v.frame(p.view);
+        const render::Vec2d o = v.imageOrigin(p.view);
+        panes.push_back({{"view", render::viewName(p.view)},
+                         {"pane", {p.x, p.y, p.width, p.height}},
+                         {"image_origin", {int(o.x()), int(o.y())}},
+                         {"image_size", {f.width, f.height}},
+                         {"pixel_mm", f.pixelMm}});
+    }
+    return panes;
+}
+
+int run(const ViewOptions& o)
+{
+    // Cheap inputs first: a bad size, plan or script fails before the volume loads.
+    const auto [width, height] = parseSize(o.size);
+    render::ViewerOptions vo;
+    vo.width = width, vo.height = height;
+    try {
+        vo.mode = render::parseBlendMode(o.mode);
+        if (!o.window.empty()) vo.window = render::parseWindow(o.window);
+    } catch (const ValueError& e) {
+        throw UsageError(e.what());
+    }
+    if (!o.point.empty()) vo.point = parseVec3(o.point, "--point");
+    if (o.listen > 65535) throw UsageError("--listen: port " + std::to_string(o.listen) + " outside 0..65535");
+    vo.labels = !o.noLabels;
+    vo.planOut = o.save;
+    if (!o.plan.empty()) vo.plan = render::loadPlan(o.plan);
+    ScriptPlayer script(o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script);
+    const volume::TissueTable& table = tissueTable(o.common);
+    const bool windowed = o.snapshot.empty();
+    if (windowed) {
+        const char* d = std::getenv("DISPLAY");
+        if (!d || !render::displayReachable(d)) {
+            throw IoError("view: no X display ($DISPLAY unset or not answering); for a headless run give --snapshot FILE");
+        }
+    }
+    // Before any thread starts: the guard may set $DISPLAY for this process.
+    std::optional<render::DisplayGuard> display;
+    if (!o.no3d) display.emplace();
+    vo.threeD = display && display->available();
+    vo.threeDNote = o.no3d ? "off (--no-3d)" : display->why();
+
+    std::unique_ptr<haptic::PoseReceiver> receiver;
+    if (o.listen >= 0) {
+        receiver = std::make_unique<haptic::PoseReceiver>(o.listen);
+        script.setListening(true);
+        std::cerr << "voxhap view: listening for needle poses (OpenIGTLink TRANSFORM) on 127.0.0.1:" << receiver->port() << '\n';
+    }
+    NeedleFeed feed(receiver.get(), o.needleLengthMm);
+
+    const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
+    if (vo.point) {
+        const auto b = v.worldBounds();
+        if ((vo.point->array() < b[0].array()).any() || (vo.point->array() > b[1].array()).any()) {
+            throw UsageError("--point lies outside the volume's bounds");
+        }
+    }
+    render::Viewer viewer(v, vo, table);
+
+    gViewInterrupted = 0;
+    const auto previous = std::signal(SIGINT, onViewInterrupt);
+    const auto start = std::chrono::steady_clock::now();
+    long frames = 0;
+    std::string why = "script done";
+    if (windowed) {
+        render::ViewerWindow win(width, height, "voxhap view: " + o.input);
+        bool running = true;
+        why = "quit";
+        while (running && !gViewInterrupted) {
+            for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15)) {
+                switch (in.kind) {
+                case render::WindowInput::Kind::Click: running = viewer.clickWindow(in.x, in.y) && running; break;
+                case render::WindowInput::Kind::Scroll: viewer.scrollWindow(in.x, in.y, in.steps); break;
+                case render::WindowInput::Kind::Key: {
+                    render::ViewerEvent e;
+                    e.kind = render::ViewerEvent::Kind::Key;
+                    e.key = in.key;
+                    running = viewer.handle(e) && running;
+                    break;
+                }
+                case render::WindowInput::Kind::Close: running = false; break;
+                }
+            }
+            feed.pump(viewer);
+            if (win.mapped() && !script.done()) running = script.advance(viewer, feed) && running;
+            if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
+                why = "timeout";
+                break;
+            }
+            if (viewer.dirty()) {
+                win.show(viewer.render());
+                ++frames;
+            }
+        }
+    } else {
+        feed.pump(viewer);
+        bool running = true;
+        while (running && !script.done() && !gViewInterrupted) {
+            running = script.advance(viewer, feed);
+            feed.pump(viewer);
+            if (running && !script.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
+                why = "timeout";
+                break;
+            }
+        }
+        feed.pump(viewer);
+        // A window shows a failed save in its status bar; a headless run fails on it.
+        if (!viewer.saveError().empty()) throw IoError(viewer.saveError());
+        render::writePng(viewer.render(), o.snapshot);
+        ++frames;
+    }
+    std::signal(SIGINT, previous);
+    if (gViewInterrupted) why = "interrupted";
+
+    if (o.common.json) {
+        nlohmann::json j;
+        j["input"] = o.input;
+        j["window"] = {width, height};
+        j["panes"] = paneJson(viewer);
+        j["point_mm"] = {viewer.point().x(), viewer.point().y(), viewer.point().z()};
+        j["frames"] = frames;
+        j["poses"] = feed.poses();
+        j["ended"] = why;
+        j["snapshot"] = o.snapshot.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.snapshot);
+        j["status"] = viewer.status();
+        std::cout << j.dump(2) << '\n';
+    } else {
+        std::cout << "view   " << o.input << ": " << width << " x " << height << " px, " << std::fixed << std::setprecision(3)
+                  << viewer.frame(render::ViewKind::Axial).pixelMm << " mm pixels, " << frames << " frames, ended: " << why
+                  << '\n';
+        if (receiver) std::cout << "needle " << feed.poses() << " poses received\n";
+        if (!o.snapshot.empty()) std::cout << "wrote  " << o.snapshot << '\n';
+        std::cout << "status " << viewer.status() << '\n';
+    }
+    return 0;
+}
+
+} // namespace
+
+Action registerView(CLI::App& app)
+{
+    auto o = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "view", "Interactive viewer: axial, sagittal, coronal and 3D panes; click the entry and target, measure "
+                "distances and angles; show a live needle streamed by `voxhap serve --viewer`");
+    cmd->footer("Keys: n navigate (click moves the slices), p plan (click entry, then target), d distance, a angle\n"
+                "(two segments), arrows or wheel: slices, w window preset, c clear, s save the plan, q quit.\n"
+                "Views are radiological: axial from the feet, coronal from the front (patient's left on the right).");
+    cmd->add_option("volume", o->input, "A volume: .vdb, .nrrd, .nii, .mha or a DICOM folder")->required();
+    cmd->add_option("--plan", o->plan, "Paths to show: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--save", o->save, "Where key s saves the plan (default plan.json)");
+    cmd->add_option("--script", o->script, "Play events from a file (key, click, scroll, wait-pose, sleep; one a line)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--snapshot", o->snapshot, "No window: play the script, write the window as this PNG and exit");
+    cmd->add_option("--listen", o->listen, "Receive the live needle (OpenIGTLink TRANSFORM) on 127.0.0.1:PORT (0: any free port)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--timeout", o->timeoutS, "Quit after this many seconds")->check(CLI::PositiveNumber);
+    cmd->add_option("--needle-length", o->needleLengthMm, "Length of the streamed needle drawn behind its tip [mm] (default 90)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--size", o->size, "Window WIDTHxHEIGHT [px] (default 1024x1048)");
+    cmd->add_option("--mode", o->mode, "3D blend mode: colour, grey, mip or sum (default colour)");
+    cmd->add_option("--window", o->window, "Slice window: bone, soft, lung or WIDTH,LEVEL in HU (default soft)");
+    cmd->add_option("--point", o->point, "First crosshair x,y,z [mm, LPS] (default: the plan's target, else the centre)");
+    cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
+    cmd->add_flag("--no-3d", o->no3d, "No 3D pane (no GL needed)");
+    addReaderOptions(*cmd, o->reader);
+    addCommonOptions(*cmd, o->common);
+    return [o] { return run(*o); };
+}
+
+} // namespace voxhap::tools
