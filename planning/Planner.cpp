@@ -85,7 +85,7 @@ Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTa
     }
 
     // Distance fields: their band is the largest value they hold (DistanceField.h).
-    const Vec3d vox = mVolume->transform().voxelSize();
+    const Vec3d vox = volume::fromVdb(mVolume->transform().voxelSize());
     mImpl->toleranceMm = options.clearanceToleranceMm > 0 ? options.clearanceToleranceMm : 0.5 * vox.minCoeff();
     for (const auto& t : table.tissues()) {
         if (auto g = mVolume->derived(segmentation::distanceFieldName(t.name))) {

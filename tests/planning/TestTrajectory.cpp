@@ -4,6 +4,7 @@
 /// geometry and brute-force distances.
 
 #include "PlanningFixtures.h"
+#include "volume/Errors.h"
 
 #include "haptic/Insertion.h"
 #include "planning/RiskScore.h"
