@@ -7,6 +7,7 @@
 
 #include "planning/Clearance.h"
 #include "planning/ForcePrediction.h"
+#include "planning/LabelTrace.h"
 #include "planning/RiskScore.h"
 
 #include "haptic/MaterialField.h"
@@ -30,6 +31,7 @@ bool TrajectoryReport::hasWarning(const std::string& code) const
 
 struct Planner::Impl {
     std::unique_ptr<haptic::MaterialField> field;
+    std::unique_ptr<LabelTracer> tracer;
     std::unique_ptr<haptic::ShaftIntegrator> dampingPrototype; ///< cloned per thread
     mutable tbb::enumerable_thread_specific<std::unique_ptr<haptic::ShaftIntegrator>> damping;
     std::vector<std::pair<std::string, volume::Volume::GridConstPtr>> sdf;
@@ -75,12 +77,15 @@ Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTa
     mo.device = scene.device;
     mo.tipAreaMm2 = scene.needle.tipAreaMm2();
     mImpl->field = std::make_unique<haptic::MaterialField>(*mVolume, table, mo);
+    mImpl->tracer = std::make_unique<LabelTracer>(*mImpl->field);
     if (scene.terms.damping.on) {
         // The β integral along one line: built once per path, then O(1) per depth.
         haptic::IntegratorOptions io;
         io.strategy = haptic::Strategy::Profile;
         io.trackLabels = false;
-        io.profileMaxLengthMm = 2.0 * scene.needle.lengthMm + 400.0; // shaft behind the entry + the longest path [chosen]
+        // From the hub at the entry to a tip one needle length deep, with room to spare; a
+        // longer path is still integrated exactly, voxel by voxel (TrajectoryProfile.h).
+        io.profileMaxLengthMm = 2.0 * scene.needle.lengthMm + 20.0;
         mImpl->dampingPrototype = haptic::makeIntegrator(*mImpl->field, io);
     }
 
@@ -114,7 +119,7 @@ int Planner::labelAt(const Vec3d& w) const
 
 std::vector<haptic::LabelRun> Planner::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm) const
 {
-    return haptic::traceLabelRuns(*mImpl->field, origin, direction, lengthMm);
+    return mImpl->tracer->trace(origin, direction, lengthMm);
 }
 
 TrajectoryReport Planner::analyze(const Vec3d& entry, const Vec3d& target) const
