@@ -14,6 +14,7 @@
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Errors.h"
+#include "volume/Grids.h"
 #include "volume/Phantoms.h"
 #include "volume/VdbFile.h"
 
@@ -30,6 +31,10 @@ namespace voxhap::tools {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// Slice spacing of the demo's CT [mm]: that of the real series in ../shared/data,
+/// and what the spinal-canal rule of the CT segmentation is tuned on.
+constexpr double kSliceMm = 3.0;
 
 struct DemoOptions {
     CommonOptions common;
@@ -55,15 +60,39 @@ int run(const DemoOptions& o)
     // 1. The spine-biopsy torso (physics.md §1.1) as a CT: its HU grid is what segmentation reads.
     say("torso phantom");
     volume::GridSpec grid;
-    grid.spacing = Vec3d::Constant(o.spacingMm);
+    grid.spacing = Vec3d(o.spacingMm, o.spacingMm, kSliceMm); // a CT series: fine pixels, thicker slices
     const volume::PhantomModel model = volume::torsoModel({}, table);
     auto v = std::make_shared<volume::Volume>(volume::makePhantom(model, grid, table));
     const Vec3d lesion = *volume::phantomLandmark(*v, "lesion");
-    v->removeGrid(volume::Channel::Label);             // found again by segmentation, as on a scan
+
+    // The spinal canal as an imported label map (a 3D Slicer segmentation would play
+    // this part on a scan): CT segmentation finds the canal as the hole of a closed
+    // bony ring, and the phantom's arch does not close on its vertebral body
+    // (tests/segmentation/TestCtSegmentation.cpp), yet the planner must see the cord.
+    // The whole canal (CSF and cord) is imported as cord: the margin a planner keeps.
+    const int cord = table.at("spinal_cord").id, csf = table.at("csf").id;
+    volume::Volume canal(v->transformPtr()->copy(), v->indexBox());
+    {
+        auto labels = volume::LabelGrid::create(0);
+        labels->setTransform(v->transformPtr()->copy());
+        auto out = labels->getAccessor();
+        const auto truth = volume::labelGrid(*v);
+        for (auto it = truth->cbeginValueOn(); it; ++it) {
+            if (*it == cord || *it == csf) out.setValue(it.getCoord(), cord);
+        }
+        canal.setGrid(volume::Channel::Label, labels);
+    }
+    v->removeGrid(volume::Channel::Label); // everything else is found again by segmentation, as on a scan
 
     // 2. Segmentation: labels and the critical structures' distance fields.
     segmentation::SegmentOptions so;
     so.progress = say;
+    segmentation::ImportedLabels imported;
+    imported.labels = &canal;
+    imported.mapping.tissueOf = {{cord, cord}};
+    imported.mapping.origin = "the torso phantom's spinal canal";
+    imported.file = "builtin:torso spinal canal";
+    so.imported = imported;
     const segmentation::SegmentReport seg = segmentation::segment(*v, table, so);
     const std::string vdb = (fs::path(o.outDir) / "torso-segmented.vdb").string();
     volume::saveVdb(*v, vdb);
@@ -116,9 +145,11 @@ int run(const DemoOptions& o)
         return 0;
     }
     std::cout << std::fixed << std::setprecision(1);
-    std::cout << "voxhap demo: spine biopsy on the torso phantom (" << o.spacingMm << " mm voxels)\n\n"
+    std::cout << "voxhap demo: spine biopsy on the torso phantom (" << o.spacingMm << " x " << o.spacingMm << " x " << kSliceMm
+              << " mm voxels)\n\n"
               << "segmented " << seg.labels.size() << " labels in " << seg.seconds << " s; distance fields:";
     for (const auto& d : seg.distanceFields) std::cout << ' ' << d;
+    if (seg.importedVoxels) std::cout << " (spinal canal imported from the phantom: " << seg.importedVoxels << " voxels)";
     std::cout << "\nsearched " << found.counts.directions << " directions to the lesion at (" << lesion.x() << ", " << lesion.y()
               << ", " << lesion.z() << "): " << found.counts.analysed << " analysed, " << found.counts.feasible << " safe, in "
               << std::setprecision(3) << found.seconds << " s\n"
@@ -145,7 +176,7 @@ Action registerDemo(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "demo", "Spine biopsy end to end on the torso phantom: segment, plan, simulate, render; say where the outputs are");
     cmd->add_option("--out,-o", o->outDir, "Output directory (default voxhap-demo)");
-    cmd->add_option("--spacing", o->spacingMm, "Phantom voxel size [mm] (default 1)")->check(CLI::Range(0.5, 3.0));
+    cmd->add_option("--spacing", o->spacingMm, "Phantom pixel size in-plane [mm] (default 1; slices are 3 mm)")->check(CLI::Range(0.5, 3.0));
     addCommonOptions(*cmd, o->common);
     return [o] { return run(*o); };
 }
