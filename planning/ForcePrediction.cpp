@@ -24,16 +24,34 @@ double dampingForce(const haptic::ForceTerms& t, const haptic::DeviceLimits& dev
 
 } // namespace
 
-ForceProfile predictForce(const ForceModelInputs& in, const Vec3d& entry, const Vec3d& direction, double lengthMm)
+DampingLine::DampingLine(std::vector<DampingPiece> pieces) : mPieces(std::move(pieces))
+{
+    mBefore.reserve(mPieces.size());
+    double sum = 0.0;
+    for (const auto& p : mPieces) {
+        mBefore.push_back(sum);
+        sum += p.beta * (p.endMm - p.startMm);
+    }
+}
+
+double DampingLine::to(double x) const
+{
+    // The last piece starting before x.
+    const auto it = std::upper_bound(mPieces.begin(), mPieces.end(), x, [](double v, const DampingPiece& p) { return v < p.startMm; });
+    if (it == mPieces.begin()) return 0.0;
+    const std::size_t k = std::size_t(it - mPieces.begin()) - 1;
+    const DampingPiece& p = mPieces[k];
+    return mBefore[k] + p.beta * (std::min(x, p.endMm) - p.startMm);
+}
+
+ForceProfile predictForce(const ForceModelInputs& in, double lengthMm)
 {
     ForceProfile p;
     if (!in.layers) return p;
     const std::vector<haptic::Layer>& layers = *in.layers;
-    const Vec3d u = direction.normalized();
     const double v = in.speedMmPerS, L = in.needle.lengthMm;
     haptic::InsertionState state(layers);
     haptic::EventBuffer events;
-    haptic::ShaftIntegral integral;
 
     const auto touchesCritical = [&](double d) {
         if (!in.terms.critical) return false;
@@ -65,9 +83,7 @@ ForceProfile predictForce(const ForceModelInputs& in, const Vec3d& entry, const 
         }
         if (in.terms.viscous && current >= 0) nonElastic += tip.viscousNsPerMm * v;
         if (in.terms.damping.on && in.damping) {
-            const Vec3d tipPt = entry + d * u;
-            in.damping->integrate(haptic::Segment{tipPt - L * u, tipPt}, integral);
-            nonElastic += dampingForce(in.terms, in.device, integral.dampingIntegral, v);
+            nonElastic += dampingForce(in.terms, in.device, in.damping->integral(std::max(0.0, d - L), d), v);
         }
         const bool critical = touchesCritical(d);
 

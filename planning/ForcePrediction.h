@@ -14,7 +14,8 @@
 ///          + D(d)                      voxel damping, capped (§1.2 Eq. 5, §1.1 cap, §6.2 split)
 ///
 /// with D = min(min(B, b_dev)·v, cap) + clamp((B − b_dev)·v_ref, 0, cap − ·), B = ∫β ds
-/// over the shaft (the last needle-length of the path). While the shaft touches a
+/// over the shaft: the last needle-length of the path, clipped at the entry, which is
+/// taken to lie on the skin (nothing but air behind it). While the shaft touches a
 /// critical structure the model renders zero (§1.1), and so does the prediction.
 /// The profile stops where the tip meets a rigid layer: bone is contact at the
 /// device's stiffness (§1.3), whose force depends on the user's push, not the path.
@@ -22,12 +23,27 @@
 
 #include "haptic/Layer.h"
 #include "haptic/NeedleForceModel.h"
-#include "haptic/ShaftIntegration.h"
+#include "planning/LabelTrace.h"
 #include "planning/Trajectory.h"
 
 #include <vector>
 
 namespace voxhap::planning {
+
+/// @brief ∫β ds along a traced line from its damping pieces: prefix sums, O(log n) per query.
+class DampingLine {
+public:
+    DampingLine() = default;
+    /// @param pieces in order along the line, not overlapping (LabelTracer's output)
+    explicit DampingLine(std::vector<DampingPiece> pieces);
+    /// @brief ∫β ds over [a, b] [N·s/mm].
+    double integral(double a, double b) const { return to(b) - to(a); }
+
+private:
+    double to(double x) const;
+    std::vector<DampingPiece> mPieces;
+    std::vector<double> mBefore; ///< ∫β up to each piece's start
+};
 
 struct ForceModelInputs {
     const std::vector<haptic::Layer>* layers = nullptr; ///< along the path, depths from the entry
@@ -36,7 +52,7 @@ struct ForceModelInputs {
     haptic::DeviceLimits device;
     double speedMmPerS = 10.0;
     double stepMm = 1.0;
-    haptic::ShaftIntegrator* damping = nullptr;        ///< β integrator (when terms.damping.on), this thread's own
+    const DampingLine* damping = nullptr;              ///< β along the path (when terms.damping.on)
 };
 
 struct ForceProfile {
@@ -45,8 +61,7 @@ struct ForceProfile {
     double contactMm = kNoDepth; ///< first rigid layer met
 };
 
-/// @brief Predict F(d) for d from 0 to @p lengthMm (or the first rigid contact) along
-/// entry + d·û.
-ForceProfile predictForce(const ForceModelInputs& in, const Vec3d& entry, const Vec3d& direction, double lengthMm);
+/// @brief Predict F(d) for d from 0 (the entry) to @p lengthMm, or the first rigid contact.
+ForceProfile predictForce(const ForceModelInputs& in, double lengthMm);
 
 } // namespace voxhap::planning

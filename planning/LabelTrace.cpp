@@ -28,7 +28,8 @@ struct LabelTracer::Impl {
 LabelTracer::LabelTracer(const haptic::MaterialField& field) : mImpl(std::make_unique<Impl>(field)) {}
 LabelTracer::~LabelTracer() = default;
 
-std::vector<haptic::LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm) const
+std::vector<haptic::LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
+                                                 std::vector<DampingPiece>* damping) const
 {
     namespace d = haptic::detail;
     const double n = direction.norm();
@@ -44,13 +45,25 @@ std::vector<haptic::LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3
     std::vector<haptic::LabelRun> runs;
     if (!s.valid || !d::clip(s, mImpl->lo, mImpl->hi, t0, t1)) return runs;
     d::LabelReader& labels = *r.labelPtr();
+    d::FloatReader* beta = damping ? r.betaPtr() : nullptr;
+    if (damping) damping->clear();
     const auto add = [&](const openvdb::Coord& c, double ta, double tb) {
         const int label = labels.get(c);
         const double a = ta * s.lengthMm, b = tb * s.lengthMm;
         if (!runs.empty() && runs.back().label == label) runs.back().endMm = b;
         else if (!runs.empty() || label != 0) runs.push_back({label, a, b});
+        if (!beta) return;
+        const double x = beta->get(c);
+        if (x == 0.0) return;
+        if (!damping->empty() && damping->back().beta == x && damping->back().endMm >= a - 1e-9) damping->back().endMm = b;
+        else damping->push_back({a, b, x});
     };
-    d::walkCellsSkipping(s, t0, t1, 0, [&](const openvdb::Coord& c) { return labels.uniformBlock(c); }, add, add);
+    // A block is skipped whole only where labels and β are both uniform over it.
+    const auto uniform = [&](const openvdb::Coord& c) {
+        const int dim = labels.uniformBlock(c);
+        return dim <= 1 || !beta ? dim : std::min(dim, beta->uniformBlock(c));
+    };
+    d::walkCellsSkipping(s, t0, t1, 0, uniform, add, add);
     while (!runs.empty() && runs.back().label == 0) runs.pop_back();
     return runs;
 }

@@ -11,12 +11,9 @@
 #include "planning/RiskScore.h"
 
 #include "haptic/MaterialField.h"
-#include "haptic/ShaftIntegration.h"
 #include "segmentation/DistanceField.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
-
-#include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
 #include <cmath>
@@ -32,18 +29,8 @@ bool TrajectoryReport::hasWarning(const std::string& code) const
 struct Planner::Impl {
     std::unique_ptr<haptic::MaterialField> field;
     std::unique_ptr<LabelTracer> tracer;
-    std::unique_ptr<haptic::ShaftIntegrator> dampingPrototype; ///< cloned per thread
-    mutable tbb::enumerable_thread_specific<std::unique_ptr<haptic::ShaftIntegrator>> damping;
     std::vector<std::pair<std::string, volume::Volume::GridConstPtr>> sdf;
     double toleranceMm = 0.25;
-
-    haptic::ShaftIntegrator* threadDamping() const
-    {
-        if (!dampingPrototype) return nullptr;
-        auto& mine = damping.local();
-        if (!mine) mine = dampingPrototype->clone();
-        return mine.get();
-    }
 };
 
 namespace {
@@ -78,17 +65,6 @@ Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTa
     mo.tipAreaMm2 = scene.needle.tipAreaMm2();
     mImpl->field = std::make_unique<haptic::MaterialField>(*mVolume, table, mo);
     mImpl->tracer = std::make_unique<LabelTracer>(*mImpl->field);
-    if (scene.terms.damping.on) {
-        // The β integral along one line: built once per path, then O(1) per depth.
-        haptic::IntegratorOptions io;
-        io.strategy = haptic::Strategy::Profile;
-        io.trackLabels = false;
-        // From the hub at the entry to a tip one needle length deep, with room to spare; a
-        // longer path is still integrated exactly, voxel by voxel (TrajectoryProfile.h).
-        io.profileMaxLengthMm = 2.0 * scene.needle.lengthMm + 20.0;
-        mImpl->dampingPrototype = haptic::makeIntegrator(*mImpl->field, io);
-    }
-
     // Distance fields: their band is the largest value they hold (DistanceField.h).
     const Vec3d vox = volume::fromVdb(mVolume->transform().voxelSize());
     mImpl->toleranceMm = options.clearanceToleranceMm > 0 ? options.clearanceToleranceMm : 0.5 * vox.minCoeff();
@@ -117,9 +93,10 @@ int Planner::labelAt(const Vec3d& w) const
         openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
 }
 
-std::vector<haptic::LabelRun> Planner::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm) const
+std::vector<haptic::LabelRun> Planner::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
+                                             std::vector<DampingPiece>* damping) const
 {
-    return mImpl->tracer->trace(origin, direction, lengthMm);
+    return mImpl->tracer->trace(origin, direction, lengthMm, mScene.terms.damping.on ? damping : nullptr);
 }
 
 TrajectoryReport Planner::analyze(const Vec3d& entry, const Vec3d& target) const
@@ -129,12 +106,14 @@ TrajectoryReport Planner::analyze(const Vec3d& entry, const Vec3d& target) const
     if (!(len > 1e-6)) throw ValueError("planning: entry and target coincide");
     TrajectoryReport r;
     r.entry = entry, r.target = target, r.lengthMm = len;
-    auto runs = trace(entry, target - entry, len);
-    return finish(std::move(r), std::move(runs));
+    std::vector<DampingPiece> damping;
+    auto runs = trace(entry, target - entry, len, &damping);
+    return finish(std::move(r), std::move(runs), std::move(damping));
 }
 
 TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
-                                        const std::vector<haptic::LabelRun>& fromTarget) const
+                                        const std::vector<haptic::LabelRun>& fromTarget,
+                                        const std::vector<DampingPiece>& dampingFromTarget) const
 {
     TrajectoryReport r;
     r.entry = entry, r.target = target, r.lengthMm = (target - entry).norm();
@@ -143,12 +122,17 @@ TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
     for (auto it = fromTarget.rbegin(); it != fromTarget.rend(); ++it) {
         runs.push_back({it->label, std::max(0.0, r.lengthMm - it->endMm), r.lengthMm - it->startMm});
     }
-    return finish(std::move(r), std::move(runs));
+    std::vector<DampingPiece> damping;
+    damping.reserve(dampingFromTarget.size());
+    for (auto it = dampingFromTarget.rbegin(); it != dampingFromTarget.rend(); ++it) {
+        if (it->startMm >= r.lengthMm) continue; // beyond the entry: outside the body
+        damping.push_back({std::max(0.0, r.lengthMm - it->endMm), r.lengthMm - it->startMm, it->beta});
+    }
+    return finish(std::move(r), std::move(runs), std::move(damping));
 }
 
-TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs) const
+TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<DampingPiece> damping) const
 {
-    const Vec3d u = (r.target - r.entry) / r.lengthMm;
     const int targetLabel = labelAt(r.target);
     if (const auto* t = mTable.find(targetLabel)) r.targetTissue = t->name;
 
@@ -213,8 +197,9 @@ TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRu
     in.device = mScene.device;
     in.speedMmPerS = mSpeed;
     in.stepMm = mOptions.profileStepMm;
-    in.damping = mImpl->threadDamping();
-    ForceProfile fp = predictForce(in, r.entry, u, r.lengthMm);
+    const DampingLine line(std::move(damping));
+    in.damping = &line;
+    ForceProfile fp = predictForce(in, r.lengthMm);
     r.speedMmPerS = mSpeed;
     r.force = std::move(fp.samples);
     r.peakForceN = fp.peakN;

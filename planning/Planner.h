@@ -8,6 +8,7 @@
 
 #include "haptic/LayerTables.h"
 #include "haptic/Scene.h"
+#include "planning/LabelTrace.h"
 #include "planning/Trajectory.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
@@ -43,11 +44,13 @@ public:
 
     /// @brief The same, from the label runs already traced outward from the target along
     /// -direction up to the entry (Search.h traces them to find the entry).
-    TrajectoryReport analyzeTraced(const Vec3d& entry, const Vec3d& target,
-                                   const std::vector<haptic::LabelRun>& runsFromTarget) const;
+    TrajectoryReport analyzeTraced(const Vec3d& entry, const Vec3d& target, const std::vector<haptic::LabelRun>& runsFromTarget,
+                                   const std::vector<DampingPiece>& dampingFromTarget) const;
 
-    /// @brief The label runs from @p origin along @p direction over @p lengthMm (leading and trailing air dropped).
-    std::vector<haptic::LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm) const;
+    /// @brief The label runs from @p origin along @p direction over @p lengthMm (leading and
+    /// trailing air dropped), and β along it when @p damping is given and the scene damps.
+    std::vector<haptic::LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
+                                        std::vector<DampingPiece>* damping = nullptr) const;
 
     const volume::Volume& volume() const { return *mVolume; }
     const volume::TissueTable& table() const { return mTable; }
@@ -62,7 +65,7 @@ public:
 
 private:
     struct Impl;
-    TrajectoryReport finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs) const;
+    TrajectoryReport finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<DampingPiece> damping) const;
 
     std::shared_ptr<const volume::Volume> mVolume;
     const volume::TissueTable& mTable;

@@ -82,7 +82,8 @@ SearchResult search(const Planner& planner, const Vec3d& target, const SearchCon
             // Outward from the target: the last tissue run ends where the body does.
             // Tracing a little past the maximum tells "ends in reach" from "goes on".
             const double reach = maxLen + 1.0;
-            const auto runs = planner.trace(target, dirs[i], reach);
+            std::vector<DampingPiece> damping;
+            const auto runs = planner.trace(target, dirs[i], reach, &damping);
             if (runs.empty() || runs.back().endMm >= reach - 1e-6) continue; // NoExit
             if (skin >= 0 && runs.back().label != skin) {
                 s.outcome = Outcome::NotSkin;
@@ -93,7 +94,7 @@ SearchResult search(const Planner& planner, const Vec3d& target, const SearchCon
                 s.outcome = Outcome::OutsideBox;
                 continue;
             }
-            s.report = planner.analyzeTraced(entry, target, runs);
+            s.report = planner.analyzeTraced(entry, target, runs, damping);
             s.analysed = true;
             const TrajectoryReport& r = s.report;
             if (r.minClearanceMm <= 0.0) s.outcome = Outcome::Breach;
