@@ -37,19 +37,27 @@ std::vector<Vec3d> directionGrid(const Vec3d& axis, double maxAngleDeg, double s
 
 std::vector<std::size_t> paretoFront(const std::vector<TrajectoryReport>& c, double bandMm)
 {
-    const auto clearance = [&](const TrajectoryReport& r) { return std::min(r.minClearanceMm, bandMm > 0 ? bandMm : r.minClearanceMm); };
+    const auto clearance = [&](std::size_t i) { return bandMm > 0 ? std::min(c[i].minClearanceMm, bandMm) : c[i].minClearanceMm; };
+    const auto dominates = [&](std::size_t j, std::size_t i) {
+        const double ci = clearance(i), cj = clearance(j);
+        const bool noWorse = cj >= ci && c[j].lengthMm <= c[i].lengthMm && c[j].peakForceN <= c[i].peakForceN;
+        return noWorse && (cj > ci || c[j].lengthMm < c[i].lengthMm || c[j].peakForceN < c[i].peakForceN);
+    };
+    // Best clearance first (ties: shorter, then weaker): a candidate's dominators all come
+    // before it, and since domination is transitive one of them is on the front already,
+    // so each candidate is checked against the front only, not against all others.
+    std::vector<std::size_t> order(c.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        if (clearance(a) != clearance(b)) return clearance(a) > clearance(b);
+        if (c[a].lengthMm != c[b].lengthMm) return c[a].lengthMm < c[b].lengthMm;
+        return c[a].peakForceN < c[b].peakForceN;
+    });
     std::vector<std::size_t> front;
-    for (std::size_t i = 0; i < c.size(); ++i) {
-        bool dominated = false;
-        for (std::size_t j = 0; j < c.size() && !dominated; ++j) {
-            if (i == j) continue;
-            const double ci = clearance(c[i]), cj = clearance(c[j]);
-            const bool noWorse = cj >= ci && c[j].lengthMm <= c[i].lengthMm && c[j].peakForceN <= c[i].peakForceN;
-            const bool better = cj > ci || c[j].lengthMm < c[i].lengthMm || c[j].peakForceN < c[i].peakForceN;
-            dominated = noWorse && better;
-        }
-        if (!dominated) front.push_back(i);
+    for (std::size_t i : order) {
+        if (std::none_of(front.begin(), front.end(), [&](std::size_t j) { return dominates(j, i); })) front.push_back(i);
     }
+    std::sort(front.begin(), front.end());
     return front;
 }
 

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 namespace voxhap::planning {
 namespace {
 
@@ -47,6 +49,27 @@ TEST(Pareto, KeepsExactlyTheNonDominated)
     const auto front = paretoFront(v, 30.0);
     // With the band at 30 mm, e's clearance counts as 30: still the best, so kept.
     EXPECT_EQ(front, (std::vector<std::size_t>{0, 1, 2, 4}));
+}
+
+TEST(Pareto, AgreesWithTheDefinitionOnRandomCandidates)
+{
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> c(0, 40), l(60, 150), f(0, 8);
+    std::vector<TrajectoryReport> v(300);
+    for (auto& r : v) r.minClearanceMm = std::round(c(rng)), r.lengthMm = std::round(l(rng)), r.peakForceN = std::round(f(rng));
+    const double band = 30.0;
+    // The definition, pair by pair: kept unless another is no worse in all three and better in one.
+    std::vector<std::size_t> expected;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        bool dominated = false;
+        for (std::size_t j = 0; j < v.size() && !dominated; ++j) {
+            const double ci = std::min(v[i].minClearanceMm, band), cj = std::min(v[j].minClearanceMm, band);
+            dominated = cj >= ci && v[j].lengthMm <= v[i].lengthMm && v[j].peakForceN <= v[i].peakForceN &&
+                        (cj > ci || v[j].lengthMm < v[i].lengthMm || v[j].peakForceN < v[i].peakForceN);
+        }
+        if (!dominated) expected.push_back(i);
+    }
+    EXPECT_EQ(paretoFront(v, band), expected);
 }
 
 TEST(Search, CoarseGridFindsASafePathToTheLesion)
