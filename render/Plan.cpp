@@ -2,6 +2,7 @@
 /// @file Plan.cpp
 #include "render/Plan.h"
 
+#include "planning/Markups.h"
 #include "volume/AtomicFile.h"
 #include "volume/Errors.h"
 #include "volume/JsonFields.h"
@@ -65,48 +66,6 @@ Plan parseVoxhapPlan(Fields& top, const std::string& origin)
     return plan;
 }
 
-/// 3D Slicer markups: only what a Line needs is read; the many display and
-/// measurement fields Slicer writes are passed over.
-Plan parseSlicerMarkups(const Json& j, const std::string& origin)
-{
-    const auto fail = [&](const std::string& field, const std::string& why) {
-        throw ValueError(origin + ": " + field + ": " + why);
-    };
-    if (!j.contains("markups") || !j["markups"].is_array()) fail("markups", "must be an array");
-    Plan plan;
-    for (std::size_t m = 0; m < j["markups"].size(); ++m) {
-        const Json& mk = j["markups"][m];
-        const std::string at = "markups[" + std::to_string(m) + "]";
-        if (!mk.is_object() || mk.value("type", "") != "Line") continue;
-        const std::string system = mk.value("coordinateSystem", "LPS");
-        if (system != "LPS" && system != "RAS") fail(at + ".coordinateSystem", "must be LPS or RAS");
-        if (mk.contains("coordinateUnits") && mk["coordinateUnits"] != "mm") fail(at + ".coordinateUnits", "must be mm");
-        if (!mk.contains("controlPoints") || !mk["controlPoints"].is_array() || mk["controlPoints"].size() != 2) {
-            fail(at + ".controlPoints", "a Line needs exactly two control points");
-        }
-        Vec3d pts[2];
-        for (std::size_t c = 0; c < 2; ++c) {
-            const Json& pos = mk["controlPoints"][c].contains("position") ? mk["controlPoints"][c]["position"] : Json();
-            const std::string field = at + ".controlPoints[" + std::to_string(c) + "].position";
-            if (!pos.is_array() || pos.size() != 3) fail(field, "must be [x, y, z] in mm");
-            for (int k = 0; k < 3; ++k) {
-                if (!pos[std::size_t(k)].is_number()) fail(field, "must be [x, y, z] in mm");
-                pts[c][k] = pos[std::size_t(k)].get<double>();
-            }
-            if (!pts[c].allFinite()) fail(field, "must be finite");
-            if (system == "RAS") pts[c].x() = -pts[c].x(), pts[c].y() = -pts[c].y();
-        }
-        PlannedPath path;
-        path.name = mk.value("name", "line " + std::to_string(plan.paths.size() + 1));
-        path.entry = pts[0];
-        path.target = pts[1];
-        if ((path.target - path.entry).norm() < 1e-6) fail(at + ".controlPoints", "the two points coincide");
-        plan.paths.push_back(std::move(path));
-    }
-    if (plan.paths.empty()) fail("markups", "no Line markup with two control points");
-    return plan;
-}
-
 } // namespace
 
 Plan parsePlan(std::string_view json, const std::string& origin)
@@ -117,12 +76,10 @@ Plan parsePlan(std::string_view json, const std::string& origin)
     } catch (const Json::parse_error& e) {
         throw ValueError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
     }
-    if (j.is_object() && j.contains("markups")) {
-        try {
-            return parseSlicerMarkups(j, origin);
-        } catch (const Json::exception& e) { // a field of the wrong type
-            throw ValueError(origin + ": " + e.what());
-        }
+    if (j.is_object() && j.contains("markups")) { // 3D Slicer markups: the one parser is planning's
+        Plan plan;
+        for (auto& l : planning::parseMarkups(json, origin)) plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+        return plan;
     }
     Fields top(j, origin, "");
     return parseVoxhapPlan(top, origin);

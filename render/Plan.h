@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Plan.h
-/// @brief Planned needle paths to draw (plan.json), until planning (issue 9)
-/// writes its own: entry and target points and, optionally, a needle pose.
+/// @brief Planned needle paths to draw (plan.json): entry and target points and,
+/// optionally, a needle pose.
 ///
 /// plan.json, all points in patient LPS millimetres:
 /// @code
@@ -12,7 +12,7 @@
 /// "name" and "needle" are optional; "direction" points from hub to tip.
 /// 3D Slicer markups (.mrk.json) are accepted too: each Line markup with two
 /// control points becomes a path (first point the entry); RAS coordinates are
-/// converted to LPS.
+/// converted to LPS (planning/Markups.h reads them).
 #pragma once
 
 #include "volume/Math.h"

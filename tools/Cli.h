@@ -11,10 +11,18 @@
 #include "volume/TissueTable.h"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include <functional>
+#include <ostream>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+namespace voxhap::planning {
+class Planner;
+struct TrajectoryReport;
+} // namespace voxhap::planning
 
 namespace voxhap::tools {
 
@@ -64,5 +72,17 @@ Action registerServe(CLI::App& app);
 Action registerRender(CLI::App& app);
 Action registerPlot(CLI::App& app);
 Action registerView(CLI::App& app);
+Action registerPlan(CLI::App& app);
+
+/// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
+struct PlanFiles {
+    std::string report, markups, views, plot; ///< views and plot empty when not written
+    std::string why;                          ///< why there is no plot
+};
+/// @brief report.json, paths.mrk.json, views.png (slices with the paths, when @p views)
+/// and force-depth.png (the first path's predicted profile) in @p outDir.
+PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
+                           const nlohmann::json& report, const std::string& outDir, bool views);
+void printPlanFiles(std::ostream& os, const PlanFiles& f);
 
 } // namespace voxhap::tools

@@ -20,6 +20,7 @@ int main(int argc, char** argv)
         {"info", registerInfo(app)},
         {"convert", registerConvert(app)},
         {"segment", registerSegment(app)},
+        {"plan", registerPlan(app)},
         {"simulate", registerSimulate(app)},
         {"serve", registerServe(app)},
         {"render", registerRender(app)},

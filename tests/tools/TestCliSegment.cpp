@@ -29,12 +29,12 @@ TEST_F(CliSegment, PhantomToLabelsDistanceFieldsAndNrrd)
     EXPECT_EQ(j["method"], "ct");
     std::set<std::string> names;
     for (const auto& l : j["labels"]) names.insert(l["name"].get<std::string>());
-    // The built-in table puts the kidney at 150 HU, on the bone threshold: CT rules
-    // cannot claim it (tests/segmentation use an enhanced table for that).
-    for (const char* n : {"skin", "fat", "muscle", "lung", "aorta", "cortical_bone", "cancellous_bone"}) {
+    // The built-in table puts the kidney at 200 HU (contrast-enhanced parenchyma),
+    // clear of the bone threshold: the CT rules find it.
+    for (const char* n : {"skin", "fat", "muscle", "lung", "kidney", "aorta", "cortical_bone", "cancellous_bone"}) {
         EXPECT_TRUE(names.count(n)) << n;
     }
-    EXPECT_EQ(j["distance_fields"], nlohmann::json({"sdf.lung", "sdf.aorta"}));
+    EXPECT_EQ(j["distance_fields"], nlohmann::json({"sdf.lung", "sdf.kidney", "sdf.aorta"}));
     // The output opens again, with its distance fields, and the NRRD reads back as labels.
     const Result info = run("info seg.vdb --json");
     ASSERT_EQ(info.exitCode, 0) << info.err;

@@ -1,0 +1,176 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file bench_plan.cpp
+/// @brief Candidate search throughput (issue 9 item 2: ≥ 20 000 fully analysed
+/// candidates per second on 2 cores), 1 and 2 threads interleaved in one run
+/// (docs/benchmarks.md), with the clearance error of the same configuration
+/// against brute force.
+///
+///     bench_plan [--repeats N] [--step DEG] [--spacing MM] [--json]
+///
+/// Workload: the torso phantom (its own labels, distance fields from
+/// segmentation), the kyung scene, the vertebral lesion as target, directions
+/// within 60° of posterior.
+
+#include "haptic/Scene.h"
+#include "planning/Search.h"
+#include "segmentation/Segmentation.h"
+#include "volume/Grids.h"
+#include "volume/Phantoms.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using namespace voxhap;
+
+struct Stat {
+    double median = 0, mean = 0, sd = 0;
+};
+
+Stat stat(std::vector<double> x)
+{
+    Stat s;
+    for (double v : x) s.mean += v / double(x.size());
+    for (double v : x) s.sd += (v - s.mean) * (v - s.mean) / double(std::max<std::size_t>(1, x.size() - 1));
+    s.sd = std::sqrt(s.sd);
+    std::sort(x.begin(), x.end());
+    s.median = x.size() % 2 ? x[x.size() / 2] : 0.5 * (x[x.size() / 2 - 1] + x[x.size() / 2]);
+    return s;
+}
+
+std::string cpuModel()
+{
+    std::ifstream in("/proc/cpuinfo");
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    }
+    return "unknown";
+}
+
+/// Distance from segment a–b to the nearest voxel centre of @p id, by brute force [mm].
+double bruteForce(const volume::Volume& v, int id, const Vec3d& a, const Vec3d& b)
+{
+    const auto labels = volume::labelGrid(v);
+    const Vec3d ab = b - a;
+    double best = std::numeric_limits<double>::infinity();
+    for (auto it = labels->cbeginValueOn(); it; ++it) {
+        if (*it != id) continue;
+        const Vec3d p = volume::fromVdb(labels->indexToWorld(it.getCoord()));
+        const double s = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+        best = std::min(best, (a + s * ab - p).norm());
+    }
+    return best;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    int repeats = 5;
+    double step = 1.0, spacing = 1.0;
+    bool json = false;
+    for (int i = 1; i < argc; ++i) {
+        const auto value = [&](const char* name) {
+            if (i + 1 >= argc) {
+                std::cerr << "bench_plan: error: " << name << " needs a value\n";
+                std::exit(2);
+            }
+            return std::atof(argv[++i]);
+        };
+        if (!std::strcmp(argv[i], "--repeats")) repeats = std::max(1, int(value("--repeats")));
+        else if (!std::strcmp(argv[i], "--step")) step = value("--step");
+        else if (!std::strcmp(argv[i], "--spacing")) spacing = value("--spacing");
+        else if (!std::strcmp(argv[i], "--json")) json = true;
+        else {
+            std::cerr << "bench_plan: error: unknown option " << argv[i] << " (--repeats N, --step DEG, --spacing MM, --json)\n";
+            return 2;
+        }
+    }
+    if (!(step > 0) || !(spacing > 0)) {
+        std::cerr << "bench_plan: error: --step and --spacing must be positive\n";
+        return 2;
+    }
+
+    const auto& table = volume::TissueTable::builtin();
+    volume::GridSpec grid;
+    grid.spacing = Vec3d::Constant(spacing);
+    auto v = std::make_shared<volume::Volume>(volume::makePhantom(volume::torsoModel({}, table), grid, table));
+    segmentation::SegmentOptions so;
+    so.automatic = false;
+    segmentation::segment(*v, table, so);
+    const planning::Planner planner(v, table, haptic::loadScene("kyung"));
+    const Vec3d lesion = *volume::phantomLandmark(*v, "lesion");
+    planning::SearchConstraints k;
+    k.reference = Vec3d(0, 1, 0);
+    k.maxAngleDeg = 60.0;
+    planning::SearchOptions o;
+    o.stepDeg = step;
+
+    // Interleaved: 1 thread, 2 threads, 1, 2, ... so drifting load hits both alike.
+    std::vector<double> rate[2], ratio;
+    planning::SearchResult last;
+    (void)planning::search(planner, lesion, k, o); // warm-up: page in the grids
+    for (int r = 0; r < repeats; ++r) {
+        double perThreads[2] = {0, 0};
+        for (int t = 0; t < 2; ++t) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(t + 1));
+            last = planning::search(planner, lesion, k, o);
+            perThreads[t] = double(last.counts.analysed) / last.seconds;
+            rate[t].push_back(perThreads[t]);
+        }
+        ratio.push_back(perThreads[1] / perThreads[0]);
+    }
+    const Stat one = stat(rate[0]), two = stat(rate[1]), speedup = stat(ratio);
+
+    // Error of the same configuration: the best path's clearances against brute force
+    // to voxel centres, less the half voxel between centre and surface (DistanceField.h).
+    double maxErr = 0;
+    nlohmann::json errors = nlohmann::json::object();
+    if (!last.ranked.empty()) {
+        const auto& best = last.ranked.front();
+        for (const auto& c : best.clearances) {
+            if (c.beyondBand) continue;
+            const double ref = bruteForce(*v, table.at(c.tissue).id, best.entry, best.target) - 0.5 * spacing;
+            errors[c.tissue] = c.minMm - ref;
+            maxErr = std::max(maxErr, std::abs(c.minMm - ref));
+        }
+    }
+
+    const std::string cpu = cpuModel();
+    if (json) {
+        nlohmann::json j{{"benchmark", "plan-search"},
+                         {"machine", {{"cpu", cpu}, {"hardware_threads", std::thread::hardware_concurrency()}}},
+                         {"workload", {{"phantom", "torso"}, {"spacing_mm", spacing}, {"scene", "kyung"}, {"step_deg", step},
+                                       {"max_angle_deg", k.maxAngleDeg}, {"directions", last.counts.directions},
+                                       {"analysed", last.counts.analysed}, {"feasible", last.counts.feasible}}},
+                         {"repeats", repeats},
+                         {"candidates_per_s_1_thread", {{"median", one.median}, {"mean", one.mean}, {"sd", one.sd}}},
+                         {"candidates_per_s_2_threads", {{"median", two.median}, {"mean", two.mean}, {"sd", two.sd}}},
+                         {"speedup_2_over_1", {{"median", speedup.median}, {"sd", speedup.sd}}},
+                         {"clearance_error_mm", errors},
+                         {"clearance_max_abs_error_mm", maxErr}};
+        std::cout << j.dump(2) << '\n';
+        return 0;
+    }
+    std::cout << "bench_plan: candidate search on the torso phantom (" << spacing << " mm voxels), kyung scene\n"
+              << "machine: " << cpu << ", " << std::thread::hardware_concurrency() << " hardware threads\n"
+              << "grid: " << step << " deg within " << k.maxAngleDeg << " deg of posterior: " << last.counts.directions
+              << " directions, " << last.counts.analysed << " analysed, " << last.counts.feasible << " feasible; " << repeats
+              << " repeats\n\n";
+    std::printf("%-10s %14s %14s %10s\n", "threads", "median cand/s", "mean cand/s", "sd");
+    std::printf("%-10d %14.0f %14.0f %10.0f\n", 1, one.median, one.mean, one.sd);
+    std::printf("%-10d %14.0f %14.0f %10.0f\n", 2, two.median, two.mean, two.sd);
+    std::printf("speed-up 2/1 threads (same run, interleaved): %.2f +- %.2f\n", speedup.median, speedup.sd);
+    std::printf("clearance error of the best path vs brute force: max %.2f mm\n", maxErr);
+    return 0;
+}

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestCliPlan.cpp
+/// @brief `voxhap plan` as a user runs it: search on the torso phantom, the
+/// markups read back as input, one-line errors and no partial outputs.
+
+#include "common/CliRunner.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+using Result = voxhap::test::CliResult;
+
+class CliPlan : public voxhap::test::CliTest {
+protected:
+    nlohmann::json readJson(const fs::path& p) const
+    {
+        std::ifstream in(mDir / p);
+        return nlohmann::json::parse(in);
+    }
+};
+
+TEST_F(CliPlan, SearchWritesReportAndMarkupsThatReadBackAsInput)
+{
+    // Phantom labels carry the ground truth; plan adds the distance fields it needs.
+    ASSERT_EQ(run("phantom torso --spacing 1.5 -o torso.vdb").exitCode, 0);
+    const Result r = run("plan torso.vdb --target 5,-78,0 --top 3 --step 5 --max-angle 60 --out out --no-views");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("out/report.json"), std::string::npos);
+    const auto report = readJson("out/report.json");
+    EXPECT_EQ(report["schema"], "voxhap-plan-report/1");
+    ASSERT_GE(report["paths"].size(), 1u);
+    EXPECT_LE(report["paths"].size(), 3u);
+    EXPECT_GT(report["search"]["analysed"].get<int>(), 0);
+    const auto& best = report["paths"][0];
+    EXPECT_EQ(best["target_tissue"], "lesion");
+    EXPECT_GE(best["min_clearance_mm"].get<double>(), 5.0); // the default --min-clearance
+    EXPECT_FALSE(best["force"]["force_N"].empty());
+    EXPECT_TRUE(fs::exists(mDir / "out/force-depth.png") || r.err.find("no plot") != std::string::npos);
+
+    // The markups go back in: the same paths, analysed again, give the same lengths.
+    const Result again = run("plan torso.vdb --target 5,-78,0 --entries out/paths.mrk.json --out again --no-views --json");
+    ASSERT_EQ(again.exitCode, 0) << again.err;
+    const auto j = nlohmann::json::parse(again.out);
+    ASSERT_EQ(j["paths"].size(), report["paths"].size());
+    for (std::size_t i = 0; i < j["paths"].size(); ++i) {
+        // Both analyses read the same points from JSON written with round-trip doubles.
+        EXPECT_DOUBLE_EQ(j["paths"][i]["length_mm"].get<double>(), report["paths"][i]["length_mm"].get<double>());
+    }
+}
+
+TEST_F(CliPlan, SinglePathThroughTheKidneyIsFlagged)
+{
+    ASSERT_EQ(run("phantom torso --spacing 1.5 -o torso.vdb").exitCode, 0);
+    // From the left flank straight through the kidney (centre 75, -70, -20) to the lesion.
+    const Result r = run("plan torso.vdb --target 5,-78,0 --entry 145,-62,-40 --out one --no-views --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j["paths"].size(), 1u);
+    bool breach = false;
+    for (const auto& w : j["paths"][0]["warnings"]) breach = breach || w["code"] == "critical_breach";
+    EXPECT_TRUE(breach);
+    EXPECT_GE(j["paths"][0]["risk"]["total"].get<double>(), 100.0);
+}
+
+TEST_F(CliPlan, BadInputIsOneLineAndLeavesNoReport)
+{
+    Result r = run("plan nothing.vdb --target 1,2");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
+    EXPECT_NE(r.err.find("--target"), std::string::npos);
+
+    ASSERT_EQ(run("phantom slab --spacing 1 -o slab.vdb").exitCode, 0);
+    r = run("plan slab.vdb --target 0,-5,0 --entries missing.mrk.json --out bad");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
+    EXPECT_NE(r.err.find("missing.mrk.json"), std::string::npos);
+    EXPECT_FALSE(fs::exists(mDir / "bad/report.json"));
+
+    r = run("plan slab.vdb --target 0,-5,0 --entry-box 1,2,3 --out bad");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("--entry-box"), std::string::npos);
+}
+
+} // namespace

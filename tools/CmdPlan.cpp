@@ -1,0 +1,268 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file CmdPlan.cpp
+/// @brief `voxhap plan <volume> --target x,y,z [--entry x,y,z | --entries paths.mrk.json] [--top N] [--out dir]`:
+/// analyse a given path, or search candidate entries, and write the report,
+/// 3D Slicer markups, slice views with the paths and the predicted force–depth plot.
+/// Also the plan outputs `voxhap demo` writes (writePlanOutputs).
+
+#include "tools/Cli.h"
+#include "tools/LoadOptions.h"
+
+#include "planning/Markups.h"
+#include "planning/Report.h"
+#include "planning/Search.h"
+#include "render/ForcePlot.h"
+#include "render/ImageFile.h"
+#include "render/Snapshot.h"
+#include "segmentation/DistanceField.h"
+#include "segmentation/Segmentation.h"
+#include "volume/Errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace voxhap::tools {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct PlanCliOptions {
+    CommonOptions common;
+    ReaderOptions reader;
+    std::string in, target, entry, entries, out = "voxhap-plan", scene = "kyung", reference = "0,1,0", entryBox;
+    int top = 5;
+    double speed = 0, maxAngle = 45, maxLength = 0, minClearance = 5, step = 2, margin = 20;
+    bool allowBone = false, noViews = false;
+};
+
+std::string fixed(double x, int digits = 1)
+{
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(digits) << x;
+    return s.str();
+}
+
+planning::Box parseBox(const std::string& text)
+{
+    std::vector<double> v;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) {
+        try {
+            std::size_t used = 0;
+            v.push_back(std::stod(item, &used));
+            if (used != item.size()) throw std::invalid_argument(item);
+        } catch (const std::exception&) {
+            throw UsageError("--entry-box '" + text + "': expected six numbers x0,y0,z0,x1,y1,z1 [mm]");
+        }
+    }
+    if (v.size() != 6) throw UsageError("--entry-box '" + text + "': expected six numbers x0,y0,z0,x1,y1,z1 [mm]");
+    planning::Box b{Vec3d(v[0], v[1], v[2]), Vec3d(v[3], v[4], v[5])};
+    if ((b.min.array() > b.max.array()).any()) throw UsageError("--entry-box: each minimum must not exceed its maximum");
+    return b;
+}
+
+/// Labels and distance fields: what the volume lacks is computed (segment()).
+void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool progress)
+{
+    bool anyField = false;
+    for (const auto& t : table.tissues()) anyField = anyField || (t.critical && v.derived(segmentation::distanceFieldName(t.name)));
+    if (v.has(volume::Channel::Label) && anyField) return;
+    segmentation::SegmentOptions so;
+    so.automatic = !v.has(volume::Channel::Label); // keep given labels; only add their distance fields
+    if (progress) so.progress = [](const std::string& step) { std::cerr << "plan: " << step << "...\n"; };
+    segmentation::segment(v, table, so);
+}
+
+void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
+{
+    os << "#" << rank << "  risk " << fixed(r.risk.total, 2) << "  entry (" << fixed(r.entry.x()) << ", " << fixed(r.entry.y())
+       << ", " << fixed(r.entry.z()) << ")  length " << fixed(r.lengthMm) << " mm  clearance "
+       << (std::isfinite(r.minClearanceMm) ? fixed(r.minClearanceMm) + " mm" : std::string("n/a"));
+    if (!r.nearestStructure.empty()) os << " (" << r.nearestStructure << ")";
+    os << "  peak " << fixed(r.peakForceN, 2) << " N\n     ";
+    for (std::size_t i = 0; i < r.segments.size(); ++i) {
+        os << (i ? " > " : "") << r.segments[i].tissue << " " << fixed(r.segments[i].lengthMm());
+    }
+    os << "\n";
+    for (const auto& w : r.warnings) os << "     warning: " << w.message << "\n";
+}
+
+} // namespace
+
+PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
+                           const nlohmann::json& report, const std::string& outDir, bool views)
+{
+    PlanFiles f;
+    fs::create_directories(outDir);
+    const fs::path dir(outDir);
+    f.report = (dir / "report.json").string();
+    planning::writeReport(report, f.report);
+
+    std::vector<planning::MarkupLine> lines;
+    for (std::size_t i = 0; i < paths.size(); ++i) lines.push_back({"path " + std::to_string(i + 1), paths[i].entry, paths[i].target});
+    f.markups = (dir / "paths.mrk.json").string();
+    planning::writeMarkups(lines, f.markups);
+    if (paths.empty()) return f;
+
+    // The predicted force–depth profile of the first path, with its tissue bands.
+    render::ForceTrace trace;
+    const auto& best = paths.front();
+    trace.title = "path 1: predicted at " + fixed(best.speedMmPerS, 0) + " mm/s (" + planner.scene().name + ")";
+    for (const auto& s : best.force) trace.samples.push_back({s.depthMm, s.forceN, s.forceN, 0.0});
+    for (const auto& s : best.segments) trace.layers.push_back({s.tissue, s.startMm, s.endMm});
+    if (std::isfinite(best.contactMm)) trace.addEvent(best.contactMm, "bone contact");
+    const std::string png = (dir / "force-depth.png").string();
+    if (render::plotForceDepth(trace, png, f.why)) f.plot = png;
+
+    if (views) { // slices through the first target, every path drawn (no display needed)
+        render::RenderRequest req;
+        req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
+        req.point = best.target;
+        for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+        render::Snapshot snap(planner.volume(), req, planner.table());
+        std::vector<render::Image> images;
+        for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
+        f.views = (dir / "views.png").string();
+        render::writePng(render::contactSheet(images), f.views);
+    }
+    return f;
+}
+
+void printPlanFiles(std::ostream& os, const PlanFiles& f)
+{
+    os << "  " << f.report << "  (report: segments, clearances, force profile, warnings, risk)\n";
+    os << "  " << f.markups << "  (3D Slicer markups: one Line per path, LPS mm)\n";
+    if (!f.views.empty()) os << "  " << f.views << "  (axial, sagittal, coronal slices through the target, paths drawn)\n";
+    if (!f.plot.empty()) os << "  " << f.plot << "  (predicted force against depth, path 1)\n";
+}
+
+namespace {
+
+int run(const PlanCliOptions& o)
+{
+    // Cheap checks first: bad values fail before the volume loads.
+    const Vec3d target = parseVec3(o.target, "--target");
+    std::optional<Vec3d> entry;
+    if (!o.entry.empty()) entry = parseVec3(o.entry, "--entry");
+    if (entry && !o.entries.empty()) throw UsageError("--entry and --entries exclude each other");
+    std::vector<planning::MarkupLine> given;
+    if (!o.entries.empty()) given = planning::loadMarkups(o.entries);
+    planning::SearchConstraints k;
+    k.reference = parseVec3(o.reference, "--reference");
+    if (!(k.reference.norm() > 0)) throw UsageError("--reference must not be zero");
+    k.maxAngleDeg = o.maxAngle;
+    k.maxLengthMm = o.maxLength;
+    k.minClearanceMm = o.minClearance;
+    k.allowBoneObstacles = o.allowBone;
+    if (!o.entryBox.empty()) k.entryBox = parseBox(o.entryBox);
+    const haptic::Scene scene = haptic::loadScene(o.scene);
+    const volume::TissueTable& table = tissueTable(o.common);
+    const bool terminal = stderrIsTerminal() && !o.common.json;
+
+    auto v = std::make_shared<volume::Volume>(loadVolumeWithProgress(o.in, o.reader, terminal));
+    {
+        const auto b = v->worldBounds();
+        if ((target.array() < b[0].array()).any() || (target.array() > b[1].array()).any()) {
+            throw UsageError("--target lies outside the volume's bounds");
+        }
+    }
+    ensureSegmented(*v, table, terminal);
+    planning::PlanOptions po;
+    po.speedMmPerS = o.speed;
+    po.minClearanceMm = o.minClearance;
+    po.marginMm = o.margin;
+    const planning::Planner planner(v, table, scene, po);
+
+    nlohmann::json report = planning::reportHeader(planner, o.in);
+    std::vector<planning::TrajectoryReport> paths;
+    std::optional<planning::SearchResult> found;
+    if (entry) {
+        paths.push_back(planner.analyze(*entry, target));
+    } else if (!given.empty()) {
+        for (const auto& l : given) paths.push_back(planner.analyze(l.entry, l.target));
+    } else {
+        planning::SearchOptions so;
+        so.stepDeg = o.step;
+        so.top = o.top;
+        found = planning::search(planner, target, k, so);
+        paths = found->ranked;
+        const auto& c = found->counts;
+        report["search"] = {{"directions", c.directions}, {"analysed", c.analysed}, {"feasible", c.feasible},
+                            {"seconds", found->seconds},
+                            {"candidates_per_s", found->seconds > 0 ? double(c.analysed) / found->seconds : 0.0},
+                            {"rejected", {{"no_skin_exit", c.noSkinExit}, {"not_skin", c.notSkin}, {"outside_box", c.outsideBox},
+                                          {"critical_breach", c.breach}, {"clearance", c.clearance}, {"bone", c.bone},
+                                          {"too_long", c.tooLong}}},
+                            {"constraints", {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}},
+                                             {"max_angle_deg", k.maxAngleDeg}, {"max_length_mm", k.maxLengthMm > 0 ? k.maxLengthMm : scene.needle.lengthMm},
+                                             {"min_clearance_mm", k.minClearanceMm}, {"step_deg", so.stepDeg}}}};
+        report["pareto"] = nlohmann::json::array();
+        for (const auto& p : found->pareto) report["pareto"].push_back(planning::pathJson(p, 0));
+    }
+    report["paths"] = nlohmann::json::array();
+    for (std::size_t i = 0; i < paths.size(); ++i) report["paths"].push_back(planning::pathJson(paths[i], int(i) + 1));
+
+    const PlanFiles files = writePlanOutputs(planner, paths, report, o.out, !o.noViews);
+    if (o.common.json) {
+        nlohmann::json j = report;
+        j["outputs"] = {{"report", files.report}, {"markups", files.markups}, {"views", files.views}, {"plot", files.plot}};
+        std::cout << j.dump(2) << '\n';
+    } else {
+        std::cout << "plan to (" << fixed(target.x()) << ", " << fixed(target.y()) << ", " << fixed(target.z()) << ") in " << o.in
+                  << ", scene " << scene.name << ", " << fixed(planner.speedMmPerS(), 0) << " mm/s\n";
+        if (found) {
+            std::cout << "searched " << found->counts.directions << " directions: " << found->counts.analysed << " analysed, "
+                      << found->counts.feasible << " feasible, " << found->pareto.size() << " on the Pareto front, in "
+                      << fixed(found->seconds, 3) << " s\n";
+        }
+        std::cout << "\n";
+        for (std::size_t i = 0; i < paths.size(); ++i) printPath(std::cout, paths[i], int(i) + 1);
+        if (paths.empty()) std::cout << "no path satisfies the constraints (see the report's rejection counts)\n";
+        std::cout << "\noutputs:\n";
+        printPlanFiles(std::cout, files);
+    }
+    if (files.plot.empty() && !paths.empty()) std::cerr << "voxhap plan: no plot: " << files.why << '\n';
+    return paths.empty() ? kExitFailure : 0;
+}
+
+} // namespace
+
+Action registerPlan(CLI::App& app)
+{
+    auto o = std::make_shared<PlanCliOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "plan", "Biopsy path planning: analyse a path (--entry) or search entries to a target; report, Slicer markups, "
+                "views and the predicted force-depth plot");
+    cmd->add_option("volume", o->in, "Volume: DICOM, .nii, .nrrd, .mha or .vdb (segmented if it has no labels and distance fields)")
+        ->required();
+    cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS]")->required();
+    cmd->add_option("--entry", o->entry, "Entry x,y,z [mm, LPS]: analyse this path instead of searching");
+    cmd->add_option("--entries", o->entries, "Analyse the Line markups of this 3D Slicer .mrk.json");
+    cmd->add_option("--top", o->top, "Ranked candidates to keep")->check(CLI::Range(1, 1000))->default_val(5);
+    cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-plan)");
+    cmd->add_option("--scene", o->scene, "Scene whose force model, needle and device are used (default kyung)");
+    cmd->add_option("--speed", o->speed, "Insertion speed of the force prediction [mm/s]; default the scene's")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--reference", o->reference, "Search: outward reference direction x,y,z (default 0,1,0: posterior)");
+    cmd->add_option("--max-angle", o->maxAngle, "Search: largest angle from the reference [deg]")->check(CLI::Range(0.0, 180.0))->default_val(45);
+    cmd->add_option("--max-length", o->maxLength, "Search: longest path [mm]; default the needle's length")->check(CLI::PositiveNumber);
+    cmd->add_option("--min-clearance", o->minClearance, "Smallest clearance to a critical structure [mm]")
+        ->check(CLI::NonNegativeNumber)->default_val(5);
+    cmd->add_option("--margin", o->margin, "Risk margin: structures nearer than this raise the risk [mm]")
+        ->check(CLI::PositiveNumber)->default_val(20);
+    cmd->add_option("--step", o->step, "Search: direction grid spacing [deg]")->check(CLI::Range(0.1, 45.0))->default_val(2);
+    cmd->add_option("--entry-box", o->entryBox, "Search: entries only in the box x0,y0,z0,x1,y1,z1 [mm, LPS]");
+    cmd->add_flag("--allow-bone", o->allowBone, "Search: accept paths that cross bone before the target's own");
+    cmd->add_flag("--no-views", o->noViews, "Do not render the slice views");
+    addReaderOptions(*cmd, o->reader);
+    addCommonOptions(*cmd, o->common);
+    return [o] { return run(*o); };
+}
+
+} // namespace voxhap::tools
