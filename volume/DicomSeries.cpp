@@ -260,6 +260,16 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             });
             decodeSeconds += since(t);
             t = std::chrono::steady_clock::now();
+            // Integer samples (at most 32 bits) under a rescale below 1e28 stay
+            // far inside float's range (2^32 · 1e28 < 3.4e38): no NaN or inf to look for.
+            constexpr double kFiniteRescale = 1e28;
+            bool finite = true;
+            for (int k = 0; k < n; ++k) {
+                const Slice& s = slices[stack.slices[std::size_t(k0 + k)].source];
+                const SampleType type = frames[std::size_t(k)]->type;
+                finite = finite && type != SampleType::Float32 && type != SampleType::Float64 &&
+                         std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
+            }
             sparse.addSlabRows(
                 [&](int z, int y, float* scratch) {
                     const Slice& s = slices[stack.slices[std::size_t(k0 + z)].source];
@@ -267,7 +277,7 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                                    s.intercept, source.header(s).padding, background, scratch);
                     return static_cast<const float*>(scratch);
                 },
-                nx, ny, k0, n);
+                nx, ny, k0, n, finite);
             sparseSeconds += since(t);
             if (options.progress) options.progress(double(k0 + n) / nz);
         }

@@ -39,10 +39,10 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
 {
     const std::size_t plane = std::size_t(nx) * std::size_t(ny);
     addSlabRows([&](int z, int y, float*) { return data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx); }, nx,
-                ny, k0, nz);
+                ny, k0, nz, false);
 }
 
-void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz)
+void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite)
 {
     using LeafT = FloatGrid::TreeType::LeafNodeType;
     constexpr int kDim = int(LeafT::DIM);
@@ -71,13 +71,23 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
             for (int z = 0; z < nz; ++z) {
                 for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
                     const float* in = rows(z, y, scratch.data());
+                    // One pass proves the row finite (or the source promised it),
+                    // so that the per-voxel loop has one test: air or not.
+                    bool rowFinite = finite;
+                    if (!rowFinite) {
+                        int ok = 1;
+                        for (int x = 0; x < nx; ++x) ok &= int(std::abs(in[x]) <= std::numeric_limits<float>::max());
+                        rowFinite = ok;
+                    }
+                    if (!rowFinite) {
+                        for (int x = 0; x < nx; ++x) {
+                            if (!(std::abs(in[x]) <= std::numeric_limits<float>::max())) fail(x, y, z); // NaN, ±inf
+                        }
+                    }
+                    const float airBelow = air; // a local: the compiler keeps it in a register
                     for (int x = 0; x < nx; ++x) {
                         const float v = in[x];
-                        if (v < air) { // air: the inactive background
-                            if (v == -std::numeric_limits<float>::infinity()) fail(x, y, z);
-                            continue;
-                        }
-                        if (!(v <= std::numeric_limits<float>::max())) fail(x, y, z); // NaN, +inf
+                        if (v < airBelow) continue; // air: the inactive background
                         const int b = x / kDim;
                         if (!row[b]) {
                             row[b] = new LeafT(openvdb::Coord(x - x % kDim, y0, k0), bg, false);

@@ -44,7 +44,9 @@ public:
     /// @brief As addSlab, with each row produced on demand (by any thread):
     /// a loader converts stored samples straight into the leaves, and the
     /// slab of floats never exists.
-    void addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz);
+    /// @param finite the rows are known finite (integer samples under a finite
+    ///               rescale): the per-row finiteness pass is skipped
+    void addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite = false);
 
     /// @brief The grid built so far (the builder is empty afterwards).
     Volume::GridPtr finish();
