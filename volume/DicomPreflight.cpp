@@ -9,6 +9,7 @@
 #include "volume/Errors.h"
 
 #include <gdcmReader.h>
+#include <gdcmTransferSyntax.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -77,7 +78,8 @@ public:
             if (t.is(0x0002, 0x0010)) {
                 transferSyntax.resize(len);
                 read(pos + header, transferSyntax.data(), len, t);
-                while (!transferSyntax.empty() && (transferSyntax.back() == '\0' || transferSyntax.back() == ' '))
+                // One padding byte, as GDCM drops it; any other is not part of a known UID.
+                if (!transferSyntax.empty() && (transferSyntax.back() == '\0' || transferSyntax.back() == ' '))
                     transferSyntax.pop_back();
             }
             if (t.is(0x0002, 0x0002) && len <= kMaxUid) {
@@ -290,6 +292,17 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
     Walker walk(file, in, size);
     std::string ts;
     const std::uint64_t start = walk.meta(132, ts);
+    // The data set is walked in the syntax GDCM will read it in: one it knows,
+    // named by the meta header. Without one GDCM guesses (a swapped-looking
+    // first tag makes it read big endian) and could read other lengths than
+    // this walk checked (fuzz finding: a 4 GB allocation).
+    const gdcm::TransferSyntax syntax = gdcm::TransferSyntax::GetTSType(ts.c_str());
+    if (ts.empty() || ts.find('\0') != std::string::npos || !syntax.IsValid()) {
+        walk.refuse(Tag{0x0002, 0x0010}, "TransferSyntaxUID '" + printable(ts) + "' is missing or unknown");
+    }
+    if (syntax == gdcm::TransferSyntax::ImplicitVRBigEndianPrivateGE) {
+        walk.refuse(Tag{0x0002, 0x0010}, "TransferSyntaxUID " + ts + " (GE private, mixed byte orders) is not supported");
+    }
     const auto refuseClass = [&walk](const std::pair<std::string, Tag>& sop) {
         if (!readableSopClass(sop.first)) {
             walk.refuse(sop.second, std::string(sop.second.element == 0x0002 ? "MediaStorageSOPClassUID" : "SOPClassUID") +
@@ -302,8 +315,8 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
         refuseClass({walk.sopClass().second.element == 0x0002 ? walk.sopClass().first : std::string(), Tag{0x0002, 0x0002}});
         return DicomKind::Dicom;
     }
-    const bool implicitVr = ts == "1.2.840.10008.1.2";
-    const bool big = ts == "1.2.840.10008.1.2.2";
+    const bool implicitVr = syntax.IsImplicit();
+    const bool big = syntax.GetSwapCode() == gdcm::SwapCode::BigEndian;
     walk.dataset(start, size, false, !implicitVr, big, 0);
     refuseClass(walk.sopClass());
     if (where) {
