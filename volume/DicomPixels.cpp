@@ -83,7 +83,7 @@ DicomFrames decodeDicomFrames(const std::filesystem::path& file)
     return f;
 }
 
-void decodeDicomFrames(const std::filesystem::path& file, DicomFrames& f)
+void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& f)
 {
     quietGdcm();
     const std::string name = file.string();

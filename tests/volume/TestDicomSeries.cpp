@@ -15,6 +15,9 @@
 #include "volume/T1Normalisation.h"
 
 #include <Eigen/Geometry>
+#include <gdcmImageChangeTransferSyntax.h>
+#include <gdcmImageReader.h>
+#include <gdcmImageWriter.h>
 #include <gdcmSequenceOfItems.h>
 #include <gtest/gtest.h>
 
@@ -245,6 +248,61 @@ TEST_F(DicomSeries, UncompressedSamplesReadDirectlyEqualGdcmsDecode)
 {
     for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
     voxhap::test::expectNativeEqualsGdcm({mDir});
+}
+
+TEST_F(DicomSeries, CompressedSeriesLoadExactlyAsUncompressed)
+{
+    // Lossless syntaxes go through GDCM's codecs in a child process: the
+    // values must be those of the uncompressed series, voxel for voxel.
+    for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+    const Volume plain = loadDicom({mDir});
+    for (const auto ts : {gdcm::TransferSyntax::JPEGLSLossless, gdcm::TransferSyntax::RLELossless,
+                          gdcm::TransferSyntax::JPEGLosslessProcess14_1}) {
+        const fs::path dir = mDir / ("ts" + std::to_string(int(ts)));
+        fs::create_directories(dir);
+        for (int k = 0; k < 3; ++k) {
+            const fs::path from = mDir / ("s" + std::to_string(k) + ".dcm"), to = dir / from.filename();
+            gdcm::ImageReader r;
+            r.SetFileName(from.string().c_str());
+            ASSERT_TRUE(r.Read());
+            gdcm::ImageChangeTransferSyntax change;
+            change.SetTransferSyntax(gdcm::TransferSyntax(ts));
+            change.SetInput(r.GetImage());
+            ASSERT_TRUE(change.Change()) << gdcm::TransferSyntax::GetTSString(ts);
+            gdcm::ImageWriter w;
+            w.SetFile(r.GetFile());
+            w.SetImage(change.GetOutput());
+            w.SetFileName(to.string().c_str());
+            ASSERT_TRUE(w.Write());
+        }
+        const Volume packed = loadDicom({dir});
+        auto a = huGrid(plain)->getConstAccessor();
+        auto b = huGrid(packed)->getConstAccessor();
+        for (int k = 0; k < 3; ++k) {
+            for (int j = 0; j < 12; ++j) {
+                for (int i = 0; i < 16; ++i) {
+                    const openvdb::Coord c(i, j, k);
+                    ASSERT_EQ(a.getValue(c), b.getValue(c)) << gdcm::TransferSyntax::GetTSString(ts) << " at " << c;
+                }
+            }
+        }
+    }
+}
+
+TEST_F(DicomSeries, CodecAbortInsideGdcmBecomesOneLineAndTheProcessLivesOn)
+{
+    // A fuzzing finding: a corrupt JPEG stream on which GDCM's JPEG codec
+    // asserts. The decode runs in a child process, so this test survives it.
+    const fs::path file = mDir / "corrupt-jpeg.dcm";
+    fs::copy_file(fs::path(VOXHAP_SOURCE_DIR) / "fuzz/regressions/DicomPreflight/jpeg-stream-gdcm-asserts-on.dcm", file);
+    try {
+        loadDicom({file});
+        FAIL() << "a corrupt JPEG stream loaded";
+    } catch (const voxhap::IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": (7FE0,0010) PixelData: GDCM aborted", 0), 0u) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
 }
 
 TEST_F(DicomSeries, ObliqueOrientationBecomesTheTransform)
