@@ -57,13 +57,11 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& out);
 /// @brief As above, into @p out, reusing its buffers: a thread that decodes
 /// many slices keeps one instance and avoids fresh page-faulting allocations.
 ///
-/// GDCM runs in a child process (DicomDecodeProcess.cpp): Debian's GDCM keeps
-/// its assertions, and its codecs (JPEG, JPEG-LS, JPEG 2000, RLE) assert on
-/// corrupt streams that no header check can foresee. A child that aborts
-/// becomes an IoError naming the file; the caller's process lives on.
+/// GDCM runs in a decoder process of its own (DicomDecodeProcess.h), started
+/// for this call; a load keeps one for all its files.
 void decodeDicomFrames(const std::filesystem::path& file, DicomFrames& out);
 
-/// @brief The decode itself, in this process (what the child runs).
+/// @brief The decode itself, in this process (what the decoder process runs).
 void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& out);
 
 } // namespace voxhap::volume

@@ -5,6 +5,7 @@
 #include "volume/DicomSeries.h"
 
 #include "volume/DicomHeaders.h"
+#include "volume/DicomDecodeProcess.h"
 #include "volume/DicomPixels.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
@@ -79,10 +80,15 @@ public:
         const DicomHeader& h = mHeaders[s.file];
         if (h.frames > 1) {
             std::lock_guard<std::mutex> lock(mMutex);
-            if (!mCache[s.file]) mCache[s.file] = std::make_shared<DicomFrames>(decodeDicomFrames(h.file));
+            if (!mCache[s.file]) {
+                auto decoded = std::make_shared<DicomFrames>();
+                if (!readNativeFrames(h, *decoded)) mDecoder.decode(h.file, *decoded);
+                mCache[s.file] = decoded;
+            }
             frames = mCache[s.file].get(); // lives as long as this source
         } else if (!readNativeFrames(h, scratch)) {
-            decodeDicomFrames(h.file, scratch);
+            std::lock_guard<std::mutex> lock(mMutex); // one decoder process, one request at a time
+            mDecoder.decode(h.file, scratch);
         }
         if (frames->rows != h.rows || frames->columns != h.columns || frames->frames != h.frames) {
             throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
@@ -103,6 +109,7 @@ public:
 private:
     const std::vector<DicomHeader>& mHeaders;
     std::vector<std::shared_ptr<const DicomFrames>> mCache;
+    DicomDecodeProcess mDecoder; // GDCM's decodes, for files not read directly
     std::mutex mMutex;
 };
 
