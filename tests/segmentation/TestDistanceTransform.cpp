@@ -82,7 +82,9 @@ TEST(Morphology, DilatingOneVoxelGivesTheEuclideanBallInMillimetres)
     // Erosion by 1 mm of the ball: voxels whose nearest outside centre is farther than 1 mm.
     const Mask inner = erode(lat, ball, 1.0, Span::Volume);
     for (std::size_t n = 0; n < m.size(); ++n) {
-        if (inner[n]) EXPECT_TRUE(ball[n]);
+        if (inner[n]) {
+            EXPECT_TRUE(ball[n]) << n;
+        }
     }
     EXPECT_TRUE(inner[lat.index(c.x(), c.y(), c.z())]);
     EXPECT_FALSE(inner[lat.index(c.x() + 8, c.y(), c.z())]); // 4.0 mm out: its neighbour at 4.5 mm is outside the ball
