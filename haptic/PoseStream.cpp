@@ -4,6 +4,8 @@
 
 #include "haptic/PoseStream.h"
 
+#include "haptic/detail/IgtlWire.h"
+
 #include "volume/Errors.h"
 
 #include <igtlTransformMessage.h>
@@ -28,32 +30,9 @@ namespace voxhap::haptic {
 
 namespace {
 
-constexpr std::size_t kPoseHeaderBytes = 58;        // OpenIGTLink v1/v2 header
-constexpr std::uint64_t kPoseTransformBytes = 48;   // 12 float32
 constexpr std::uint64_t kPoseMaxBodyBytes = 65536;  // larger bodies drop the connection
 constexpr double kPoseReadTimeoutS = 0.5;           // a message must arrive whole within this
 constexpr int kPoseConnectTimeoutMs = 200;          // a viewer on loopback or a LAN answers far sooner
-
-double poseWallS()
-{
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-bool poseReadExactly(int fd, unsigned char* buf, std::size_t n, double timeoutS)
-{
-    const double end = poseWallS() + timeoutS;
-    std::size_t got = 0;
-    while (got < n) {
-        const double left = end - poseWallS();
-        if (left <= 0.0) return false;
-        pollfd p{fd, POLLIN, 0};
-        if (::poll(&p, 1, int(std::ceil(left * 1000.0))) <= 0) return false;
-        const ssize_t r = ::recv(fd, buf + got, n - got, 0);
-        if (r <= 0) return false;
-        got += std::size_t(r);
-    }
-    return true;
-}
 
 } // namespace
 
@@ -96,7 +75,7 @@ PoseSender::~PoseSender()
 
 bool PoseSender::connectNow()
 {
-    const double now = poseWallS();
+    const double now = detail::steadySeconds();
     if (now - mLastAttemptS < mRetryS) return false;
     mLastAttemptS = now;
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
@@ -157,25 +136,7 @@ bool PoseSender::send(const StreamedPose& pose)
 
 PoseReceiver::PoseReceiver(int port, const std::string& bindAddress)
 {
-    mListen = ::socket(AF_INET, SOCK_STREAM, 0);
-    if (mListen < 0) throw IoError("pose stream: cannot create a socket: " + std::string(std::strerror(errno)));
-    const int one = 1;
-    ::setsockopt(mListen, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(std::uint16_t(port));
-    if (::inet_pton(AF_INET, bindAddress.c_str(), &addr.sin_addr) != 1) {
-        ::close(mListen);
-        throw IoError("pose stream: bad bind address '" + bindAddress + "'");
-    }
-    if (::bind(mListen, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(mListen, 1) != 0) {
-        const std::string why = std::strerror(errno);
-        ::close(mListen);
-        throw IoError("pose stream: cannot listen on " + bindAddress + ":" + std::to_string(port) + ": " + why);
-    }
-    socklen_t len = sizeof addr;
-    ::getsockname(mListen, reinterpret_cast<sockaddr*>(&addr), &len);
-    mPort = ntohs(addr.sin_port);
+    mListen = detail::listenTcp(bindAddress, port, "pose stream", mPort);
     mThread = std::thread([this] { serve(); });
 }
 
@@ -194,48 +155,16 @@ std::optional<StreamedPose> PoseReceiver::latest() const
 
 bool PoseReceiver::handleMessage(int fd) noexcept
 {
-    unsigned char header[kPoseHeaderBytes];
-    if (!poseReadExactly(fd, header, kPoseHeaderBytes, kPoseReadTimeoutS)) return false;
-    const unsigned version = (unsigned(header[0]) << 8) | header[1];
-    char type[13] = {};
-    std::memcpy(type, header + 2, 12);
-    std::uint64_t bodySize = 0;
-    for (int i = 0; i < 8; ++i) bodySize = (bodySize << 8) | header[42 + i];
-    const auto reject = [this] {
-        mRejected.fetch_add(1);
-        return false;
-    };
-    // The library trusts headers (toolchain.md): check before allocating anything.
-    if (version < 1 || version > 2 || bodySize > kPoseMaxBodyBytes) return reject();
-    const bool transform = std::strncmp(type, "TRANSFORM", 12) == 0;
-    if (transform && (version == 1 ? bodySize != kPoseTransformBytes : bodySize < kPoseTransformBytes)) return reject();
+    StreamedPose p;
+    switch (detail::readTransform(fd, kPoseReadTimeoutS, kPoseMaxBodyBytes, p.tip, p.direction)) {
+    case detail::WireRead::Broken: return false;
+    case detail::WireRead::BadHeader: mRejected.fetch_add(1); return false;
+    case detail::WireRead::BadPose: mRejected.fetch_add(1); return true; // a bad pose, not a broken stream
+    case detail::WireRead::Skipped: return true;
+    case detail::WireRead::Pose: break;
+    }
     try {
-        if (!transform) { // read and ignore, bounded
-            std::vector<unsigned char> body(bodySize);
-            return bodySize == 0 || poseReadExactly(fd, body.data(), body.size(), kPoseReadTimeoutS);
-        }
-        auto head = igtl::MessageHeader::New();
-        head->InitPack();
-        std::memcpy(head->GetPackPointer(), header, kPoseHeaderBytes);
-        head->Unpack();
-        auto msg = igtl::TransformMessage::New();
-        msg->SetMessageHeader(head);
-        msg->AllocatePack();
-        if (std::uint64_t(msg->GetPackBodySize()) != bodySize) return reject();
-        if (!poseReadExactly(fd, static_cast<unsigned char*>(msg->GetPackBodyPointer()), bodySize, kPoseReadTimeoutS)) {
-            return false;
-        }
-        if (!(msg->Unpack(1) & igtl::MessageHeader::UNPACK_BODY)) return reject(); // CRC mismatch
-        igtl::Matrix4x4 m;
-        msg->GetMatrix(m);
-        StreamedPose p;
-        p.tip = Vec3d(m[0][3], m[1][3], m[2][3]);
-        p.direction = Vec3d(m[0][2], m[1][2], m[2][2]);
         const double norm = p.direction.norm();
-        if (!p.tip.allFinite() || !p.direction.allFinite() || !(norm > 1e-6)) {
-            mRejected.fetch_add(1);
-            return true; // a bad pose, not a broken stream: ignore it
-        }
         // A unit column arrives unit to float precision; keep it as sent then,
         // so that the receiver returns exactly the float values on the wire.
         if (std::abs(norm - 1.0) > 1e-5) p.direction /= norm;

@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file IgtlWire.h
+/// @brief What the two OpenIGTLink servers (IgtlDevice, PoseReceiver) share:
+/// a loopback/LAN listening socket and one validated TRANSFORM read. Network
+/// threads only: these allocate and block (never the servo thread).
+#pragma once
+
+#include "volume/Math.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace voxhap::haptic::detail {
+
+/// @brief A TCP socket listening on @p bindAddress:@p port (0: any free port).
+/// @param what names the server in error messages ("igtl", "pose stream")
+/// @param boundPort receives the port actually bound
+/// @throw IoError naming the address and the system's reason
+int listenTcp(const std::string& bindAddress, int port, const std::string& what, int& boundPort);
+
+/// @brief Read exactly @p n bytes within @p timeoutS; false on timeout, error or close.
+bool readExactly(int fd, unsigned char* buf, std::size_t n, double timeoutS);
+
+/// @brief Seconds on the steady clock.
+double steadySeconds();
+
+/// @brief The outcome of reading one message.
+enum class WireRead {
+    Pose,       ///< a TRANSFORM with a finite tip and a non-zero z column
+    Skipped,    ///< another message type, read and discarded
+    BadPose,    ///< a TRANSFORM whose pose is unusable: count it, keep the link
+    BadHeader,  ///< version, size or CRC wrong: count it, drop the link
+    Broken,     ///< timeout, error or close: drop the link
+};
+
+/// @brief Read one message from @p fd. The raw header is checked before
+/// anything is allocated (the library trusts headers; toolchain.md): version
+/// 1 or 2, body at most @p maxBodyBytes, a TRANSFORM body of the right size.
+/// @param tip, direction for Pose: the translation and the z column as sent (not normalised)
+WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction) noexcept;
+
+} // namespace voxhap::haptic::detail
