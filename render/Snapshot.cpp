@@ -23,19 +23,6 @@ namespace {
 
 bool has(const std::vector<ViewKind>& views, ViewKind v) { return std::find(views.begin(), views.end(), v) != views.end(); }
 
-std::string sliceTitle(ViewKind v, const Vec3d& p)
-{
-    std::ostringstream os;
-    os << std::fixed << std::setprecision(1) << viewName(v);
-    switch (v) {
-    case ViewKind::Axial: os << "  z " << p.z() << " mm"; break;
-    case ViewKind::Sagittal: os << "  x " << p.x() << " mm"; break;
-    case ViewKind::Coronal: os << "  y " << p.y() << " mm"; break;
-    case ViewKind::ThreeD: break;
-    }
-    return os.str();
-}
-
 } // namespace
 
 Snapshot::Snapshot(const volume::Volume& v, const RenderRequest& request, const volume::TissueTable& table)

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 namespace voxhap::render {
 
@@ -107,6 +109,19 @@ WindowLevel parseWindow(std::string_view text)
         throw ValueError("window '" + std::string(t) + "': expected bone, soft, lung or WIDTH,LEVEL with a positive width");
     }
     return w;
+}
+
+std::string sliceTitle(ViewKind v, const Vec3d& p)
+{
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(1) << viewName(v);
+    switch (v) {
+    case ViewKind::Axial: os << "  z " << p.z() << " mm"; break;
+    case ViewKind::Sagittal: os << "  x " << p.x() << " mm"; break;
+    case ViewKind::Coronal: os << "  y " << p.y() << " mm"; break;
+    case ViewKind::ThreeD: break;
+    }
+    return os.str();
 }
 
 } // namespace voxhap::render

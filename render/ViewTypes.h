@@ -3,6 +3,8 @@
 /// @brief The views, blend modes and CT window presets a render request names.
 #pragma once
 
+#include "volume/Math.h"
+
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +37,8 @@ enum class WindowPreset { Bone, SoftTissue, Lung };
 WindowLevel windowLevel(WindowPreset p);
 
 std::string_view viewName(ViewKind v);      ///< "axial", "sagittal", "coronal", "3d"
+/// @brief A pane's title: its name and, for a slice, where it cuts ("axial  z 12.5 mm").
+std::string sliceTitle(ViewKind v, const Vec3d& point);
 std::string_view blendModeName(BlendMode m); ///< "colour", "grey", "mip", "sum"
 
 /// @brief Parse a comma-separated list of view names; duplicates collapse,

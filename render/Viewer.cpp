@@ -22,19 +22,6 @@ const Rgb kViewerBackground{30, 30, 30};      ///< panes' margins and the status
 const Rgb kMeasureColour{255, 230, 0};        ///< distance and angle segments, picked points
 const WindowPreset kViewerPresets[] = {WindowPreset::SoftTissue, WindowPreset::Bone, WindowPreset::Lung};
 
-std::string viewerSliceTitle(ViewKind v, const Vec3d& p)
-{
-    std::ostringstream os;
-    os << std::fixed << std::setprecision(1) << viewName(v);
-    switch (v) {
-    case ViewKind::Axial: os << "  z " << p.z() << " mm"; break;
-    case ViewKind::Sagittal: os << "  x " << p.x() << " mm"; break;
-    case ViewKind::Coronal: os << "  y " << p.y() << " mm"; break;
-    case ViewKind::ThreeD: break;
-    }
-    return os.str();
-}
-
 std::string fixed1(double v)
 {
     std::ostringstream os;
@@ -230,7 +217,7 @@ Image Viewer::renderSlicePane(ViewKind v)
     o.paths = mEditor.plan().paths;
     o.needle = mNeedle;
     o.crosshair = mPoint;
-    o.title = viewerSliceTitle(v, mPoint);
+    o.title = sliceTitle(v, mPoint);
     const OverlayStyle style;
     drawSliceOverlays(img, f, o, style);
     // What the editor is picking: points so far, then the finished measurements.
