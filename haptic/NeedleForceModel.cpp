@@ -52,6 +52,27 @@ void NeedleForceModel::reset() noexcept
     mLastTimeS = 0;
 }
 
+double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept
+{
+    const int current = tip.currentLayer();
+    if (!terms.cutting || current < 0) return 0.0;
+    double f = tip.cuttingSumN;                                                                           // §2.1 Eq. 3, nested boxes
+    if (tip.pushLayer < 0 && tip.inLayer >= 0) f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm); // §3.1
+    if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN;           // §4 Eq. 3
+    return f;
+}
+
+DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits& device, double b, double v) noexcept
+{
+    if (!(v > 0.0)) return {};
+    b = std::max(0.0, b);
+    const double rendered = std::min(b, device.maxDampingNsPerMm);
+    DampingSplit s;
+    s.viscousN = std::min(rendered * v, damping.capN);
+    s.frictionN = std::clamp((b - rendered) * damping.referenceSpeedMmPerS, 0.0, damping.capN - s.viscousN);
+    return s;
+}
+
 bool NeedleForceModel::touchingCritical() const noexcept
 {
     const TipState& tip = mState.tip();
@@ -120,20 +141,12 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     double threshold = 0.0; // Coulomb-type terms: the proxy's slip force (§6.2)
     if (mTerms.tip && tip.pushLayer >= 0) f.elastic = layers[std::size_t(tip.pushLayer)].elasticForceN(tip.pushMm);
     const int current = tip.currentLayer();
-    if (mTerms.cutting && current >= 0) {
-        threshold += tip.cuttingSumN;                                       // §2.1 Eq. 3, nested boxes
-        if (tip.pushLayer < 0 && tip.inLayer >= 0) threshold += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm); // §3.1
-        if (current >= 0 && std::abs(v) >= mTerms.karnoppDeltaVMmPerS) threshold += layers[std::size_t(current)].coulombN; // §4 Eq. 3
-    }
+    threshold += tipSlipForceN(mTerms, tip, layers, v);
     if (mTerms.viscous && current >= 0) f.viscous = tip.viscousNsPerMm * v; // §4 Eq. 3: Σ b_i·l_i·v
-    if (mTerms.damping.on && v > 0.0) {
-        // §1.2 Eq. 5 (advancing only), chord-weighted; the damping the device can
-        // render is rendered as damping, the rest as friction at the reference speed
-        // (§6.2), both within the 6 N cap of §1.1.
-        const double b = std::max(0.0, mIntegral.dampingIntegral);
-        const double rendered = std::min(b, mDevice.maxDampingNsPerMm);
-        f.damping = std::min(rendered * v, mTerms.damping.capN);
-        threshold += std::clamp((b - rendered) * mTerms.damping.referenceSpeedMmPerS, 0.0, mTerms.damping.capN - f.damping);
+    if (mTerms.damping.on && v > 0.0) { // §1.2 Eq. 5, advancing only, chord-weighted
+        const DampingSplit split = splitDamping(mTerms.damping, mDevice, mIntegral.dampingIntegral, v);
+        f.damping = split.viscousN;
+        threshold += split.frictionN;
     }
     if (popped && v > 0.0) mProxy.preload(d, threshold); // the drop at a pop is exact (§3.1 T_f)
     if (current >= 0) f.proxy = mProxy.update(d, threshold);

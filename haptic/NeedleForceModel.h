@@ -92,6 +92,20 @@ struct NeedlePath {
     Vec3d direction{0, 0, 1};
 };
 
+/// @brief The Coulomb-type resistance at the tip, the stick-slip proxy's slip
+/// force before damping: nested-box cutting (§2.1 Eq. 3), the plateau past a
+/// puncture (§3.1) and the layer's C while |v| >= Δv (§4 Eq. 3). Shared by the
+/// servo model and the planner's prediction; noexcept, no allocation.
+double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept;
+
+/// @brief Kyung's voxel damping (§1.2 Eq. 5) for damping integral @p b
+/// [N·s/mm] at speed @p v: what the device can render as viscous force, the
+/// rest as friction at the reference speed (§6.2), both within the cap (§1.1).
+struct DampingSplit {
+    double viscousN = 0.0, frictionN = 0.0;
+};
+DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits& device, double b, double v) noexcept;
+
 class NeedleForceModel {
 public:
     /// @param layers the layers along @p path (LayerTables.h)

@@ -3,26 +3,12 @@
 #include "planning/ForcePrediction.h"
 
 #include "haptic/InsertionState.h"
+#include "haptic/NeedleForceModel.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace voxhap::planning {
-
-namespace {
-
-/// The damping share of the model (NeedleForceModel::step, §1.2 and §6.2): what the
-/// device renders as damping, the rest as friction at the reference speed, within the cap.
-double dampingForce(const haptic::ForceTerms& t, const haptic::DeviceLimits& dev, double b, double v)
-{
-    if (!t.damping.on || v <= 0.0) return 0.0;
-    b = std::max(0.0, b);
-    const double rendered = std::min(b, dev.maxDampingNsPerMm);
-    const double viscous = std::min(rendered * v, t.damping.capN);
-    return viscous + std::clamp((b - rendered) * t.damping.referenceSpeedMmPerS, 0.0, t.damping.capN - viscous);
-}
-
-} // namespace
 
 DampingLine::DampingLine(std::vector<DampingPiece> pieces) : mPieces(std::move(pieces))
 {
@@ -53,6 +39,9 @@ ForceProfile predictForce(const ForceModelInputs& in, double lengthMm)
     haptic::InsertionState state(layers);
     haptic::EventBuffer events;
 
+    // The model's rule (NeedleForceModel::touchingCritical: a punctured critical
+    // layer, or a critical voxel anywhere on the shaft) on a straight path with
+    // a label field: a critical layer overlapping the shaft [d - L, d].
     const auto touchesCritical = [&](double d) {
         if (!in.terms.critical) return false;
         for (const auto& l : layers) {
@@ -73,17 +62,13 @@ ForceProfile predictForce(const ForceModelInputs& in, double lengthMm)
         state.update(d, d / std::max(v, 1e-9), L, events);
         const haptic::TipState& tip = state.tip();
 
-        double nonElastic = 0.0; // every term but the elastic stage
-        const int current = tip.currentLayer();
-        if (in.terms.cutting && current >= 0) {
-            const auto& cur = layers[std::size_t(current)];
-            nonElastic += tip.cuttingSumN;
-            if (tip.pushLayer < 0 && tip.inLayer >= 0) nonElastic += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm);
-            if (std::abs(v) >= in.terms.karnoppDeltaVMmPerS) nonElastic += cur.coulombN;
-        }
-        if (in.terms.viscous && current >= 0) nonElastic += tip.viscousNsPerMm * v;
+        // Every term but the elastic stage, as the servo model computes them.
+        double nonElastic = haptic::tipSlipForceN(in.terms, tip, layers, v);
+        if (in.terms.viscous && tip.currentLayer() >= 0) nonElastic += tip.viscousNsPerMm * v; // §4 Eq. 3
         if (in.terms.damping.on && in.damping) {
-            nonElastic += dampingForce(in.terms, in.device, in.damping->integral(std::max(0.0, d - L), d), v);
+            const haptic::DampingSplit split =
+                haptic::splitDamping(in.terms.damping, in.device, in.damping->integral(std::max(0.0, d - L), d), v);
+            nonElastic += split.viscousN + split.frictionN;
         }
         const bool critical = touchesCritical(d);
 
