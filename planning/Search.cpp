@@ -106,7 +106,7 @@ SearchResult search(const Planner& planner, const Vec3d& target, const SearchCon
             s.analysed = true;
             const TrajectoryReport& r = s.report;
             if (r.minClearanceMm <= 0.0) s.outcome = Outcome::Breach;
-            else if (r.minClearanceMm < k.minClearanceMm) s.outcome = Outcome::Clearance;
+            else if (r.minClearanceMm < planner.options().minClearanceMm) s.outcome = Outcome::Clearance;
             else if (!k.allowBoneObstacles && r.boneObstacles > 0) s.outcome = Outcome::Bone;
             else if (r.lengthMm > maxLen) s.outcome = Outcome::TooLong;
             else s.outcome = Outcome::Feasible;

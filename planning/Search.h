@@ -25,7 +25,6 @@ struct SearchConstraints {
     Vec3d reference{0, 1, 0};
     double maxAngleDeg = 45.0;      ///< largest angle between a path (target → entry) and the reference
     double maxLengthMm = 0;         ///< longest path; 0: the scene's needle length
-    double minClearanceMm = 5.0;    ///< to every critical structure
     bool skinEntry = true;          ///< the entry must lie on the skin label (when the table has one)
     std::optional<Box> entryBox;    ///< the entry must lie in this box
     bool allowBoneObstacles = false; ///< accept paths that cross bone other than the target's own

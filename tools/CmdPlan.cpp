@@ -158,7 +158,6 @@ int run(const PlanCliOptions& o)
     if (!(k.reference.norm() > 0)) throw UsageError("--reference must not be zero");
     k.maxAngleDeg = o.maxAngle;
     k.maxLengthMm = o.maxLength;
-    k.minClearanceMm = o.minClearance;
     k.allowBoneObstacles = o.allowBone;
     if (!o.entryBox.empty()) k.entryBox = parseBox(o.entryBox);
     const haptic::Scene scene = haptic::loadScene(o.scene);
@@ -201,7 +200,7 @@ int run(const PlanCliOptions& o)
                                           {"too_long", c.tooLong}}},
                             {"constraints", {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}},
                                              {"max_angle_deg", k.maxAngleDeg}, {"max_length_mm", k.maxLengthMm > 0 ? k.maxLengthMm : scene.needle.lengthMm},
-                                             {"min_clearance_mm", k.minClearanceMm}, {"step_deg", so.stepDeg}}}};
+                                             {"min_clearance_mm", planner.options().minClearanceMm}, {"step_deg", so.stepDeg}}}};
         report["pareto"] = nlohmann::json::array();
         for (const auto& p : found->pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     }
