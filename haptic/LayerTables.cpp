@@ -5,9 +5,10 @@
 
 #include "haptic/LayerTables.h"
 
+#include "haptic/LabelTrace.h"
+
 #include "haptic/LumbarPunctureModel.h"
 #include "haptic/SenacModel.h"
-#include "haptic/detail/FieldReaders.h"
 #include "volume/Errors.h"
 
 #include <algorithm>
@@ -18,29 +19,7 @@ namespace voxhap::haptic {
 std::vector<LabelRun> traceLabelRuns(const MaterialField& field, const Vec3d& origin, const Vec3d& direction,
                                      double lengthMm)
 {
-    detail::FieldReaders r(field, /*trackLabels=*/true, /*needDamping=*/false, "layer trace");
-    if (!r.labels) throw ValueError("layer trace: the material field has no label grid");
-    const double n = direction.norm();
-    if (!origin.allFinite() || !direction.allFinite() || !(n > 0.0) || !(lengthMm > 0.0) || !std::isfinite(lengthMm)) {
-        throw ValueError("layer trace: the path is degenerate (zero or non-finite direction or length)");
-    }
-    const Vec3d u = direction / n;
-    const detail::IndexSegment s = detail::toIndex(*r.xform, Segment{origin, origin + lengthMm * u}, 0.5);
-    openvdb::Vec3d lo, hi;
-    r.box(1.0, lo, hi);
-    double t0 = 0.0, t1 = 0.0;
-    std::vector<LabelRun> runs;
-    if (!s.valid || !detail::clip(s, lo, hi, t0, t1)) return runs;
-    detail::LabelReader& labels = *r.labelPtr();
-    const auto add = [&](const openvdb::Coord& c, double ta, double tb) {
-        const int label = labels.get(c);
-        const double a = ta * s.lengthMm, b = tb * s.lengthMm;
-        if (!runs.empty() && runs.back().label == label) runs.back().endMm = b;
-        else if (!runs.empty() || label != 0) runs.push_back({label, a, b});
-    };
-    detail::walkCellsSkipping(s, t0, t1, 0, [&](const openvdb::Coord& c) { return labels.uniformBlock(c); }, add, add);
-    while (!runs.empty() && runs.back().label == 0) runs.pop_back();
-    return runs;
+    return LabelTracer(field).trace(origin, direction, lengthMm);
 }
 
 LayerModel parseLayerModel(const std::string& name)

@@ -10,7 +10,7 @@
 
 namespace voxhap::planning {
 
-DampingLine::DampingLine(std::vector<DampingPiece> pieces) : mPieces(std::move(pieces))
+DampingLine::DampingLine(std::vector<haptic::DampingPiece> pieces) : mPieces(std::move(pieces))
 {
     mBefore.reserve(mPieces.size());
     double sum = 0.0;
@@ -23,10 +23,10 @@ DampingLine::DampingLine(std::vector<DampingPiece> pieces) : mPieces(std::move(p
 double DampingLine::to(double x) const
 {
     // The last piece starting before x.
-    const auto it = std::upper_bound(mPieces.begin(), mPieces.end(), x, [](double v, const DampingPiece& p) { return v < p.startMm; });
+    const auto it = std::upper_bound(mPieces.begin(), mPieces.end(), x, [](double v, const haptic::DampingPiece& p) { return v < p.startMm; });
     if (it == mPieces.begin()) return 0.0;
     const std::size_t k = std::size_t(it - mPieces.begin()) - 1;
-    const DampingPiece& p = mPieces[k];
+    const haptic::DampingPiece& p = mPieces[k];
     return mBefore[k] + p.beta * (std::min(x, p.endMm) - p.startMm);
 }
 

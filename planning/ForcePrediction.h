@@ -23,7 +23,7 @@
 
 #include "haptic/Layer.h"
 #include "haptic/NeedleForceModel.h"
-#include "planning/LabelTrace.h"
+#include "haptic/LabelTrace.h"
 #include "planning/Trajectory.h"
 
 #include <vector>
@@ -35,13 +35,13 @@ class DampingLine {
 public:
     DampingLine() = default;
     /// @param pieces in order along the line, not overlapping (LabelTracer's output)
-    explicit DampingLine(std::vector<DampingPiece> pieces);
+    explicit DampingLine(std::vector<haptic::DampingPiece> pieces);
     /// @brief ∫β ds over [a, b] [N·s/mm].
     double integral(double a, double b) const { return to(b) - to(a); }
 
 private:
     double to(double x) const;
-    std::vector<DampingPiece> mPieces;
+    std::vector<haptic::DampingPiece> mPieces;
     std::vector<double> mBefore; ///< ∫β up to each piece's start
 };
 

@@ -7,7 +7,7 @@
 
 #include "planning/Clearance.h"
 #include "planning/ForcePrediction.h"
-#include "planning/LabelTrace.h"
+#include "haptic/LabelTrace.h"
 #include "planning/RiskScore.h"
 
 #include "haptic/MaterialField.h"
@@ -28,7 +28,7 @@ bool TrajectoryReport::hasWarning(const std::string& code) const
 
 struct Planner::Impl {
     std::unique_ptr<haptic::MaterialField> field;
-    std::unique_ptr<LabelTracer> tracer;
+    std::unique_ptr<haptic::LabelTracer> tracer;
     std::vector<std::pair<std::string, volume::Volume::GridConstPtr>> sdf;
     double toleranceMm = 0.25;
 };
@@ -64,7 +64,7 @@ Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTa
     mo.device = scene.device;
     mo.tipAreaMm2 = scene.needle.tipAreaMm2();
     mImpl->field = std::make_unique<haptic::MaterialField>(*mVolume, table, mo);
-    mImpl->tracer = std::make_unique<LabelTracer>(*mImpl->field);
+    mImpl->tracer = std::make_unique<haptic::LabelTracer>(*mImpl->field);
     // Distance fields: their band is the largest value they hold (DistanceField.h).
     const Vec3d vox = volume::fromVdb(mVolume->transform().voxelSize());
     mImpl->toleranceMm = options.clearanceToleranceMm > 0 ? options.clearanceToleranceMm : 0.5 * vox.minCoeff();
@@ -94,7 +94,7 @@ int Planner::labelAt(const Vec3d& w) const
 }
 
 std::vector<haptic::LabelRun> Planner::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                             std::vector<DampingPiece>* damping) const
+                                             std::vector<haptic::DampingPiece>* damping) const
 {
     return mImpl->tracer->trace(origin, direction, lengthMm, mScene.terms.damping.on ? damping : nullptr);
 }
@@ -106,14 +106,14 @@ TrajectoryReport Planner::analyze(const Vec3d& entry, const Vec3d& target) const
     if (!(len > 1e-6)) throw ValueError("planning: entry and target coincide");
     TrajectoryReport r;
     r.entry = entry, r.target = target, r.lengthMm = len;
-    std::vector<DampingPiece> damping;
+    std::vector<haptic::DampingPiece> damping;
     auto runs = trace(entry, target - entry, len, &damping);
     return finish(std::move(r), std::move(runs), std::move(damping));
 }
 
 TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
                                         const std::vector<haptic::LabelRun>& fromTarget,
-                                        const std::vector<DampingPiece>& dampingFromTarget) const
+                                        const std::vector<haptic::DampingPiece>& dampingFromTarget) const
 {
     TrajectoryReport r;
     r.entry = entry, r.target = target, r.lengthMm = (target - entry).norm();
@@ -122,7 +122,7 @@ TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
     for (auto it = fromTarget.rbegin(); it != fromTarget.rend(); ++it) {
         runs.push_back({it->label, std::max(0.0, r.lengthMm - it->endMm), r.lengthMm - it->startMm});
     }
-    std::vector<DampingPiece> damping;
+    std::vector<haptic::DampingPiece> damping;
     damping.reserve(dampingFromTarget.size());
     for (auto it = dampingFromTarget.rbegin(); it != dampingFromTarget.rend(); ++it) {
         if (it->startMm >= r.lengthMm) continue; // beyond the entry: outside the body
@@ -131,7 +131,7 @@ TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
     return finish(std::move(r), std::move(runs), std::move(damping));
 }
 
-TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<DampingPiece> damping) const
+TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const
 {
     const int targetLabel = labelAt(r.target);
     if (const auto* t = mTable.find(targetLabel)) r.targetTissue = t->name;

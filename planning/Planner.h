@@ -8,7 +8,7 @@
 
 #include "haptic/LayerTables.h"
 #include "haptic/Scene.h"
-#include "planning/LabelTrace.h"
+#include "haptic/LabelTrace.h"
 #include "planning/Trajectory.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
@@ -45,12 +45,12 @@ public:
     /// @brief The same, from the label runs already traced outward from the target along
     /// -direction up to the entry (Search.h traces them to find the entry).
     TrajectoryReport analyzeTraced(const Vec3d& entry, const Vec3d& target, const std::vector<haptic::LabelRun>& runsFromTarget,
-                                   const std::vector<DampingPiece>& dampingFromTarget) const;
+                                   const std::vector<haptic::DampingPiece>& dampingFromTarget) const;
 
     /// @brief The label runs from @p origin along @p direction over @p lengthMm (leading and
     /// trailing air dropped), and β along it when @p damping is given and the scene damps.
     std::vector<haptic::LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                        std::vector<DampingPiece>* damping = nullptr) const;
+                                        std::vector<haptic::DampingPiece>* damping = nullptr) const;
 
     const volume::Volume& volume() const { return *mVolume; }
     const volume::TissueTable& table() const { return mTable; }
@@ -65,7 +65,7 @@ public:
 
 private:
     struct Impl;
-    TrajectoryReport finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<DampingPiece> damping) const;
+    TrajectoryReport finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const;
 
     std::shared_ptr<const volume::Volume> mVolume;
     const volume::TissueTable& mTable;

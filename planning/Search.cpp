@@ -90,7 +90,7 @@ SearchResult search(const Planner& planner, const Vec3d& target, const SearchCon
             // Outward from the target: the last tissue run ends where the body does.
             // Tracing a little past the maximum tells "ends in reach" from "goes on".
             const double reach = maxLen + 1.0;
-            std::vector<DampingPiece> damping;
+            std::vector<haptic::DampingPiece> damping;
             const auto runs = planner.trace(target, dirs[i], reach, &damping);
             if (runs.empty() || runs.back().endMm >= reach - 1e-6) continue; // NoExit
             if (skin >= 0 && runs.back().label != skin) {

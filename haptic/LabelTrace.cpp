@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file LabelTrace.cpp
-#include "planning/LabelTrace.h"
+#include "haptic/LabelTrace.h"
 
 #include "haptic/detail/FieldReaders.h"
 #include "haptic/detail/Traversal.h"
@@ -11,38 +11,38 @@
 #include <cmath>
 #include <optional>
 
-namespace voxhap::planning {
+namespace voxhap::haptic {
 
 struct LabelTracer::Impl {
-    haptic::detail::FieldReaders prototype;
+    detail::FieldReaders prototype;
     openvdb::Vec3d lo, hi;
-    mutable tbb::enumerable_thread_specific<std::optional<haptic::detail::FieldReaders>> readers;
+    mutable tbb::enumerable_thread_specific<std::optional<detail::FieldReaders>> readers;
 
-    explicit Impl(const haptic::MaterialField& field) : prototype(field, /*trackLabels=*/true, /*needDamping=*/false, "label trace")
+    explicit Impl(const MaterialField& field) : prototype(field, /*trackLabels=*/true, /*needDamping=*/false, "layer trace")
     {
-        if (!prototype.labels) throw ValueError("label trace: the material field has no label grid");
-        prototype.box(1.0, lo, hi); // once: the padding and frame of haptic::traceLabelRuns
+        if (!prototype.labels) throw ValueError("layer trace: the material field has no label grid");
+        prototype.box(1.0, lo, hi); // once per tracer: the field's active box, padded one voxel
     }
 };
 
-LabelTracer::LabelTracer(const haptic::MaterialField& field) : mImpl(std::make_unique<Impl>(field)) {}
+LabelTracer::LabelTracer(const MaterialField& field) : mImpl(std::make_unique<Impl>(field)) {}
 LabelTracer::~LabelTracer() = default;
 
-std::vector<haptic::LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
+std::vector<LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
                                                  std::vector<DampingPiece>* damping) const
 {
-    namespace d = haptic::detail;
+    namespace d = detail;
     const double n = direction.norm();
     if (!origin.allFinite() || !direction.allFinite() || !(n > 0.0) || !(lengthMm > 0.0) || !std::isfinite(lengthMm)) {
-        throw ValueError("label trace: the path is degenerate (zero or non-finite direction or length)");
+        throw ValueError("layer trace: the path is degenerate (zero or non-finite direction or length)");
     }
     auto& mine = mImpl->readers.local();
     if (!mine) mine.emplace(mImpl->prototype); // fresh accessors for this thread
     d::FieldReaders& r = *mine;
     const Vec3d u = direction / n;
-    const d::IndexSegment s = d::toIndex(*r.xform, haptic::Segment{origin, origin + lengthMm * u}, 0.5);
+    const d::IndexSegment s = d::toIndex(*r.xform, Segment{origin, origin + lengthMm * u}, 0.5);
     double t0 = 0.0, t1 = 0.0;
-    std::vector<haptic::LabelRun> runs;
+    std::vector<LabelRun> runs;
     if (!s.valid || !d::clip(s, mImpl->lo, mImpl->hi, t0, t1)) return runs;
     d::LabelReader& labels = *r.labelPtr();
     d::FloatReader* beta = damping ? r.betaPtr() : nullptr;
@@ -68,4 +68,4 @@ std::vector<haptic::LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3
     return runs;
 }
 
-} // namespace voxhap::planning
+} // namespace voxhap::haptic
