@@ -4,6 +4,7 @@
 
 #include "tools/Cli.h"
 
+#include <csignal>
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -66,6 +67,21 @@ Mat3d rotationFromDegrees(const Vec3d& degrees)
             AngleAxisd(degToRad(degrees.x()), Vec3d::UnitX()))
         .toRotationMatrix();
 }
+
+namespace {
+volatile std::sig_atomic_t gInterrupted = 0;
+extern "C" void onInterrupt(int) { gInterrupted = 1; }
+} // namespace
+
+InterruptGuard::InterruptGuard()
+{
+    gInterrupted = 0;
+    mPrevious = std::signal(SIGINT, onInterrupt);
+}
+
+InterruptGuard::~InterruptGuard() { std::signal(SIGINT, mPrevious); }
+
+bool InterruptGuard::interrupted() { return gInterrupted != 0; }
 
 bool stderrIsTerminal() { return ::isatty(STDERR_FILENO) == 1; }
 

@@ -56,6 +56,22 @@ Vec3d parseSpacing(const std::string& text, const std::string& option);
 /// @brief Rotation from Euler angles in degrees (about x, then y, then z).
 Mat3d rotationFromDegrees(const Vec3d& degrees);
 
+/// @brief Ctrl-C as a request to stop: while a guard lives, SIGINT sets a flag
+/// that the command polls (interrupted()) instead of killing the process, so
+/// that it can stop cleanly and write what it has; the previous handler comes
+/// back when the guard goes, also when the command throws.
+class InterruptGuard {
+public:
+    InterruptGuard();
+    ~InterruptGuard();
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+    static bool interrupted();
+
+private:
+    void (*mPrevious)(int);
+};
+
 /// @brief True when stderr is a terminal (progress output is shown only then).
 bool stderrIsTerminal();
 

@@ -32,23 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-volatile std::sig_atomic_t gInterrupted = 0;
-extern "C" void onInterrupt(int) { gInterrupted = 1; }
-
-/// Ctrl-C handling for the whole command, set-up included: an interrupt that
-/// arrives while the scene loads still ends in a clean stop with the session
-/// and metrics written (an empty session then), never in a killed process.
-class InterruptGuard {
-public:
-    InterruptGuard() : mPrevious(std::signal(SIGINT, onInterrupt)) { }
-    ~InterruptGuard() { std::signal(SIGINT, mPrevious); }
-    InterruptGuard(const InterruptGuard&) = delete;
-    InterruptGuard& operator=(const InterruptGuard&) = delete;
-
-private:
-    void (*mPrevious)(int);
-};
-
 struct ServeOptions {
     CommonOptions common;
     std::string scene, device = "hand", out = "voxhap-serve", viewer;
@@ -101,7 +84,8 @@ std::string layerName(const haptic::NeedleForceModel& m, int i)
 
 int run(const ServeOptions& o, const CLI::App& cmd)
 {
-    gInterrupted = 0;
+    // Ctrl-C from the start, set-up included: an interrupt while the scene
+    // loads still ends in a clean stop with the (empty) session written.
     const InterruptGuard guard;
     const volume::TissueTable& table = tissueTable(o.common);
     haptic::Scene scene = haptic::loadScene(o.scene);
@@ -138,8 +122,8 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         haptic::Event e;
         while (loop.popEvent(e)) session.events.push_back(e);
     };
-    if (!gInterrupted) loop.start();
-    while (!gInterrupted && loop.running() && (duration <= 0.0 || elapsed() < duration)) {
+    if (!InterruptGuard::interrupted()) loop.start();
+    while (!InterruptGuard::interrupted() && loop.running() && (duration <= 0.0 || elapsed() < duration)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(viewer ? 20 : 100));
         drain();
         if (viewer && session.records.size() > sentRecords) {
@@ -181,14 +165,14 @@ int run(const ServeOptions& o, const CLI::App& cmd)
                         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)},
                         {"overruns", loop.overruns()},
                         {"dropped_records", loop.droppedRecords()},
-                        {"interrupted", bool(gInterrupted)}};
+                        {"interrupted", InterruptGuard::interrupted()}};
     volume::writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
     if (o.common.json) {
         std::cout << j.dump(2) << '\n';
         return 0;
     }
     std::cout << "voxhap serve: " << scene.name << ", device " << device->name() << ", " << loop.ticks() << " ticks in "
-              << std::fixed << std::setprecision(1) << wall << " s" << (gInterrupted ? " (interrupted)" : "") << "\n"
+              << std::fixed << std::setprecision(1) << wall << " s" << (InterruptGuard::interrupted() ? " (interrupted)" : "") << "\n"
               << "  dura            " << (m.success ? "intact (success)" : "punctured") << "\n"
               << "  pops            " << m.pops << ", bone contacts " << m.boneContacts << "\n"
               << "  speed           " << std::setprecision(2) << m.speedMeanMmPerS << " mm/s mean, variance "

@@ -32,9 +32,6 @@ namespace voxhap::tools {
 
 namespace {
 
-volatile std::sig_atomic_t gViewInterrupted = 0;
-extern "C" void onViewInterrupt(int) { gViewInterrupted = 1; }
-
 struct ViewOptions {
     CommonOptions common;
     ReaderOptions reader;
@@ -207,8 +204,7 @@ int run(const ViewOptions& o)
     }
     render::Viewer viewer(v, vo, table);
 
-    gViewInterrupted = 0;
-    const auto previous = std::signal(SIGINT, onViewInterrupt);
+    const InterruptGuard guard;
     const auto start = std::chrono::steady_clock::now();
     long frames = 0;
     std::string why = "script done";
@@ -216,7 +212,7 @@ int run(const ViewOptions& o)
         render::ViewerWindow win(width, height, "voxhap view: " + o.input);
         bool running = true;
         why = "quit";
-        while (running && !gViewInterrupted) {
+        while (running && !InterruptGuard::interrupted()) {
             for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15)) {
                 switch (in.kind) {
                 case render::WindowInput::Kind::Click: running = viewer.clickWindow(in.x, in.y) && running; break;
@@ -245,7 +241,7 @@ int run(const ViewOptions& o)
     } else {
         feed.pump(viewer);
         bool running = true;
-        while (running && !script.done() && !gViewInterrupted) {
+        while (running && !script.done() && !InterruptGuard::interrupted()) {
             running = script.advance(viewer, feed);
             feed.pump(viewer);
             if (running && !script.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -260,8 +256,7 @@ int run(const ViewOptions& o)
         render::writePng(viewer.render(), o.snapshot);
         ++frames;
     }
-    std::signal(SIGINT, previous);
-    if (gViewInterrupted) why = "interrupted";
+    if (InterruptGuard::interrupted()) why = "interrupted";
 
     if (o.common.json) {
         nlohmann::json j;
