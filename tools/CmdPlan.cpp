@@ -147,12 +147,18 @@ namespace {
 int run(const PlanCliOptions& o)
 {
     // Cheap checks first: bad values fail before the volume loads.
-    const Vec3d target = parseVec3(o.target, "--target");
+    // The Lines of a markups file carry their own targets: --target is for the others.
+    if (o.entries.empty() && o.target.empty()) throw UsageError("--target is required (unless --entries gives the paths)");
+    if (!o.entries.empty() && !o.target.empty()) {
+        throw UsageError("--target and --entries exclude each other: the markups' Lines give the targets");
+    }
     std::optional<Vec3d> entry;
     if (!o.entry.empty()) entry = parseVec3(o.entry, "--entry");
     if (entry && !o.entries.empty()) throw UsageError("--entry and --entries exclude each other");
     std::vector<planning::MarkupLine> given;
     if (!o.entries.empty()) given = planning::loadMarkups(o.entries);
+    if (!o.entries.empty() && given.empty()) throw IoError(o.entries + ": no Line markup with two control points");
+    const Vec3d target = given.empty() ? parseVec3(o.target, "--target") : given.front().target;
     planning::SearchConstraints k;
     k.reference = parseVec3(o.reference, "--reference");
     if (!(k.reference.norm() > 0)) throw UsageError("--reference must not be zero");
@@ -240,7 +246,7 @@ Action registerPlan(CLI::App& app)
                 "views and the predicted force-depth plot");
     cmd->add_option("volume", o->in, "Volume: DICOM, .nii, .nrrd, .mha or .vdb (segmented if it has no labels and distance fields)")
         ->required();
-    cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS]")->required();
+    cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS] (required unless --entries)");
     cmd->add_option("--entry", o->entry, "Entry x,y,z [mm, LPS]: analyse this path instead of searching");
     cmd->add_option("--entries", o->entries, "Analyse the Line markups of this 3D Slicer .mrk.json");
     cmd->add_option("--top", o->top, "Ranked candidates to keep")->check(CLI::Range(1, 1000))->default_val(5);

@@ -44,7 +44,7 @@ TEST_F(CliPlan, SearchWritesReportAndMarkupsThatReadBackAsInput)
     EXPECT_TRUE(fs::exists(mDir / "out/force-depth.png")) << r.err; // gnuplot is one of the packages tools/setup.sh installs
 
     // The markups go back in: the same paths, analysed again, give the same lengths.
-    const Result again = run("plan torso.vdb --target 5,-78,0 --entries out/paths.mrk.json --out again --no-views --json");
+    const Result again = run("plan torso.vdb --entries out/paths.mrk.json --out again --no-views --json");
     ASSERT_EQ(again.exitCode, 0) << again.err;
     const auto j = nlohmann::json::parse(again.out);
     ASSERT_EQ(j["paths"].size(), report["paths"].size());
@@ -76,7 +76,11 @@ TEST_F(CliPlan, BadInputIsOneLineAndLeavesNoReport)
     EXPECT_NE(r.err.find("--target"), std::string::npos);
 
     ASSERT_EQ(run("phantom slab --spacing 1 -o slab.vdb").exitCode, 0);
-    r = run("plan slab.vdb --target 0,-5,0 --entries missing.mrk.json --out bad");
+    r = run("plan slab.vdb --target 0,-5,0 --entries p.mrk.json --out bad"); // the markups give the targets
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("exclude each other"), std::string::npos) << r.err;
+
+    r = run("plan slab.vdb --entries missing.mrk.json --out bad");
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_EQ(r.errLines(), 1u) << r.err;
     EXPECT_NE(r.err.find("missing.mrk.json"), std::string::npos);
