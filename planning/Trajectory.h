@@ -62,7 +62,7 @@ struct TrajectoryReport {
     double minClearanceMm = kNoDepth;         ///< smallest of clearances
     std::string nearestStructure;
     int boneEntries = 0;                      ///< separate bone runs entered before the target
-    int boneObstacles = 0;                    ///< ... of them not the bone holding the target (see Trajectory.cpp)
+    int boneObstacles = 0;                    ///< ... of them not the bone holding the target (see Planner.cpp)
     double firstBoneMm = kNoDepth;            ///< depth of the first bone [mm]
     double speedMmPerS = 0;                   ///< of the force prediction
     std::vector<ForceSample> force;           ///< predicted profile, entry to first rigid contact or target

@@ -143,7 +143,7 @@ bool Viewer::handle(const ViewerEvent& e)
     else if (k == "a") mEditor.setTool(Tool::Angle);
     else if (k == "c") mEditor.clearMeasurements();
     else if (k == "s") savePlan();
-    else if (k == "w") {
+    else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) { // HU presets mean nothing on T1
         mWindowPreset = (mWindowPreset + 1) % 3;
         mWindow = windowLevel(kViewerPresets[mWindowPreset]);
         mSliceStale = {true, true, true};
@@ -159,7 +159,7 @@ bool Viewer::handle(const ViewerEvent& e)
 
 void Viewer::savePlan()
 {
-    if (!mEditor.hasEditedPath() && mEditor.plan().paths.empty()) {
+    if (mEditor.plan().paths.empty()) { // an edited path is in the plan
         mMessage = "nothing to save: click an entry and a target with the plan tool (p)";
         return;
     }

@@ -17,7 +17,7 @@ const PaneRect& ViewerLayout::pane(ViewKind v) const { return panes[std::size_t(
 ViewerLayout viewerLayout(int width, int height, int statusPx, int gapPx)
 {
     ViewerLayout l;
-    l.width = width, l.height = height, l.gapPx = gapPx, l.statusPx = statusPx;
+    l.width = width, l.height = height;
     const int cw = (width - gapPx) / 2, ch = (height - statusPx - gapPx) / 2;
     if (cw < kMinPanePx || ch < kMinPanePx || gapPx < 0 || statusPx < 0) {
         throw ValueError("viewer: a " + std::to_string(width) + " x " + std::to_string(height) +

@@ -25,8 +25,6 @@ struct PaneRect {
 
 struct ViewerLayout {
     int width = 0, height = 0;  ///< window [px]
-    int gapPx = 4;              ///< between panes
-    int statusPx = 0;           ///< status bar height at the bottom
     std::array<PaneRect, 4> panes; ///< axial, sagittal, coronal, 3d
     const PaneRect& pane(ViewKind v) const;
 };

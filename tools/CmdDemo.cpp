@@ -127,7 +127,10 @@ int run(const DemoOptions& o)
     say("simulated insertion");
     const haptic::SceneInstance inst(scene, v, table, best.entry, best.target);
     auto forceModel = inst.makeModel();
-    const double depth = std::isfinite(best.contactMm) ? best.contactMm + 1.0 : best.lengthMm;
+    // 1 mm past the predicted contact: far enough that the tip reaches the bone's
+    // surface whatever the tick spacing, within the contact's stiffness range.
+    constexpr double kPastContactMm = 1.0;
+    const double depth = std::isfinite(best.contactMm) ? best.contactMm + kPastContactMm : best.lengthMm;
     const haptic::InsertionResult r = haptic::runInsertion(
         *forceModel, haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, scene.speedMmPerS), scene.rateHz);
     const SimulationFiles sim = writeSimulation(r, inst, (fs::path(o.outDir) / "insertion").string(), true);
