@@ -148,6 +148,10 @@ public:
 
     /// The SOP class GDCM goes by: the meta header's (0002,0002), else the
     /// data set's (0008,0016); with the tag it came from.
+    /// The meta header's (0002,0002) alone (a deflated data set is not walked).
+    std::pair<std::string, Tag> metaSopClass() const { return {mMetaSopClass, Tag{0x0002, 0x0002}}; }
+    /// Where the top-level PixelData of defined length lies: offset, length.
+    const std::optional<std::pair<std::uint64_t, std::uint64_t>>& pixels() const { return mPixels; }
     std::pair<std::string, Tag> sopClass() const
     {
         if (!mMetaSopClass.empty()) return {mMetaSopClass, Tag{0x0002, 0x0002}};
@@ -253,9 +257,7 @@ private:
     std::uint64_t mSize;
     bool mFunctionalGroups = false;
     std::string mMetaSopClass, mSopClass;
-
-public:
-    std::optional<std::pair<std::uint64_t, std::uint64_t>> mPixels; ///< top-level PixelData of defined length: offset, length
+    std::optional<std::pair<std::uint64_t, std::uint64_t>> mPixels;
 };
 
 
@@ -312,7 +314,7 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
     // A deflated data set cannot be walked before GDCM inflates it; its meta
     // header must name the class.
     if (ts == "1.2.840.10008.1.2.1.99") {
-        refuseClass({walk.sopClass().second.element == 0x0002 ? walk.sopClass().first : std::string(), Tag{0x0002, 0x0002}});
+        refuseClass(walk.metaSopClass());
         return DicomKind::Dicom;
     }
     const bool implicitVr = syntax.IsImplicit();
@@ -321,8 +323,8 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
     refuseClass(walk.sopClass());
     if (where) {
         where->transferSyntax = ts;
-        where->found = walk.mPixels.has_value();
-        if (walk.mPixels) std::tie(where->offset, where->length) = *walk.mPixels;
+        where->found = walk.pixels().has_value();
+        if (walk.pixels()) std::tie(where->offset, where->length) = *walk.pixels();
     }
     if (walk.functionalGroups()) {
         // Structurally sound, so gdcm::Reader parses it safely; the values
