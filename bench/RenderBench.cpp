@@ -3,6 +3,7 @@
 #include "bench/RenderBench.h"
 
 #include "bench/SamplerBench.h" // for machineDescription
+#include "bench/Stats.h"
 #include "render/Display.h"
 #include "render/Viewer.h"
 #include "volume/Errors.h"
@@ -26,12 +27,8 @@ double renderSecondsSince(RenderClock::time_point t) { return std::chrono::durat
 
 Seconds renderStat(const std::vector<double>& x)
 {
-    Seconds s;
-    s.n = int(x.size());
-    for (double v : x) s.mean += v / double(x.size());
-    for (double v : x) s.sd += (v - s.mean) * (v - s.mean) / double(std::max<std::size_t>(1, x.size() - 1));
-    s.sd = std::sqrt(s.sd);
-    return s;
+    const SampleStats st = sampleStats(x);
+    return {st.mean, st.sd, st.n};
 }
 
 RenderCase benchVolume(const std::string& name, const volume::Volume& v, double loadS, const RenderBenchOptions& o,

@@ -17,6 +17,9 @@
 #include "volume/Grids.h"
 #include "volume/Phantoms.h"
 
+#include "bench/SamplerBench.h" // machineDescription
+#include "bench/Stats.h"
+
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
@@ -32,30 +35,6 @@
 namespace {
 
 using namespace voxhap;
-
-struct Stat {
-    double median = 0, mean = 0, sd = 0;
-};
-
-Stat stat(std::vector<double> x)
-{
-    Stat s;
-    for (double v : x) s.mean += v / double(x.size());
-    for (double v : x) s.sd += (v - s.mean) * (v - s.mean) / double(std::max<std::size_t>(1, x.size() - 1));
-    s.sd = std::sqrt(s.sd);
-    std::sort(x.begin(), x.end());
-    s.median = x.size() % 2 ? x[x.size() / 2] : 0.5 * (x[x.size() / 2 - 1] + x[x.size() / 2]);
-    return s;
-}
-
-std::string cpuModel()
-{
-    std::ifstream in("/proc/cpuinfo");
-    for (std::string line; std::getline(in, line);) {
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    }
-    return "unknown";
-}
 
 /// Distance from segment a–b to the nearest voxel centre of @p id, by brute force [mm].
 double bruteForce(const volume::Volume& v, int id, const Vec3d& a, const Vec3d& b)
@@ -130,7 +109,7 @@ int main(int argc, char** argv)
         }
         ratio.push_back(perThreads[1] / perThreads[0]);
     }
-    const Stat one = stat(rate[0]), two = stat(rate[1]), speedup = stat(ratio);
+    const bench::SampleStats one = bench::sampleStats(rate[0]), two = bench::sampleStats(rate[1]), speedup = bench::sampleStats(ratio);
 
     // Error of the same configuration: the best path's clearances against brute force
     // to voxel centres, less the half voxel between centre and surface (DistanceField.h).
@@ -146,7 +125,7 @@ int main(int argc, char** argv)
         }
     }
 
-    const std::string cpu = cpuModel();
+    const std::string cpu = bench::machineDescription();
     if (json) {
         nlohmann::json j{{"benchmark", "plan-search"},
                          {"machine", {{"cpu", cpu}, {"hardware_threads", std::thread::hardware_concurrency()}}},

@@ -14,6 +14,8 @@
 #include "volume/Phantoms.h"
 #include "volume/VolumeFile.h"
 
+#include "bench/Stats.h"
+
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
@@ -30,19 +32,6 @@
 namespace {
 
 using namespace voxhap;
-
-struct Stat {
-    double mean = 0, sd = 0;
-};
-
-Stat stat(const std::vector<double>& x)
-{
-    Stat s;
-    for (double v : x) s.mean += v / double(x.size());
-    for (double v : x) s.sd += (v - s.mean) * (v - s.mean) / double(std::max<std::size_t>(1, x.size() - 1));
-    s.sd = std::sqrt(s.sd);
-    return s;
-}
 
 double peakRssMb()
 {
@@ -87,7 +76,7 @@ int main(int argc, char** argv)
             segmentation::segment(v, table);
             t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
         }
-        const Stat s = stat(t);
+        const bench::SampleStats s = bench::sampleStats(t);
         means.push_back(s.mean);
         out["threads_" + std::to_string(threads)] = {{"mean_s", s.mean}, {"sd_s", s.sd}, {"repeats", repeats}};
     }
