@@ -66,6 +66,24 @@ nlohmann::json reportHeader(const Planner& p, const std::string& volumeName)
             {"risk_formula", kRiskFormula}};
 }
 
+nlohmann::json searchJson(const Planner& planner, const SearchResult& found, const SearchConstraints& k,
+                          const SearchOptions& options)
+{
+    const SearchCounts& c = found.counts;
+    return {{"directions", c.directions},
+            {"analysed", c.analysed},
+            {"feasible", c.feasible},
+            {"seconds", found.seconds},
+            {"candidates_per_s", found.seconds > 0 ? double(c.analysed) / found.seconds : 0.0},
+            {"rejected", {{"no_skin_exit", c.noSkinExit}, {"not_skin", c.notSkin}, {"outside_box", c.outsideBox},
+                          {"critical_breach", c.breach}, {"clearance", c.clearance}, {"bone", c.bone}, {"too_long", c.tooLong}}},
+            {"constraints", {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}},
+                             {"max_angle_deg", k.maxAngleDeg},
+                             {"max_length_mm", found.maxLengthMm},
+                             {"min_clearance_mm", planner.options().minClearanceMm},
+                             {"step_deg", options.stepDeg}}}};
+}
+
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file)
 {
     volume::writeStreamAtomically(file, [&](std::ostream& os) { os << report.dump(2) << '\n'; });

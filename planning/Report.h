@@ -40,6 +40,10 @@ inline constexpr const char* kRiskFormula =
 nlohmann::json pathJson(const TrajectoryReport& r, int rank);
 /// @brief The report's header: volume name, scene, speed, needle, device, margin, formula.
 nlohmann::json reportHeader(const Planner& planner, const std::string& volumeName);
+
+/// @brief The "search" block of a report: counts, rejections by reason, time and the constraints used.
+nlohmann::json searchJson(const Planner& planner, const SearchResult& found, const SearchConstraints& k,
+                          const SearchOptions& options);
 /// @brief Write @p report atomically (volume/AtomicFile.h). @throw IoError
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file);
 

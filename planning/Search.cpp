@@ -114,6 +114,7 @@ SearchResult search(const Planner& planner, const Vec3d& target, const SearchCon
     });
 
     SearchResult out;
+    out.maxLengthMm = maxLen;
     out.counts.directions = std::int64_t(dirs.size());
     std::vector<TrajectoryReport> feasible;
     for (Slot& s : slots) {

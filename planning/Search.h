@@ -51,6 +51,7 @@ struct SearchResult {
     std::vector<TrajectoryReport> pareto;   ///< non-dominated feasible candidates, by clearance (descending)
     SearchCounts counts;
     double seconds = 0;
+    double maxLengthMm = 0;                 ///< the longest path allowed (the constraint, or the needle's length)
 };
 
 /// @brief The unit directions of the grid: rings at polar angles 0, s, 2s, … ≤ the

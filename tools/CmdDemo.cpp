@@ -118,8 +118,7 @@ int run(const DemoOptions& o)
     for (std::size_t i = 0; i < found.ranked.size(); ++i) report["paths"].push_back(planning::pathJson(found.ranked[i], int(i) + 1));
     report["pareto"] = nlohmann::json::array();
     for (const auto& p : found.pareto) report["pareto"].push_back(planning::pathJson(p, 0));
-    report["search"] = {{"directions", found.counts.directions}, {"analysed", found.counts.analysed},
-                        {"feasible", found.counts.feasible}, {"seconds", found.seconds}};
+    report["search"] = planning::searchJson(planner, found, k, sopt);
     const PlanFiles plan = writePlanOutputs(planner, found.ranked, report, (fs::path(o.outDir) / "plan").string(), true);
 
     // 5. The simulated insertion along the best path, at the scene's speed, to the

@@ -197,16 +197,7 @@ int run(const PlanCliOptions& o)
         so.top = o.top;
         found = planning::search(planner, target, k, so);
         paths = found->ranked;
-        const auto& c = found->counts;
-        report["search"] = {{"directions", c.directions}, {"analysed", c.analysed}, {"feasible", c.feasible},
-                            {"seconds", found->seconds},
-                            {"candidates_per_s", found->seconds > 0 ? double(c.analysed) / found->seconds : 0.0},
-                            {"rejected", {{"no_skin_exit", c.noSkinExit}, {"not_skin", c.notSkin}, {"outside_box", c.outsideBox},
-                                          {"critical_breach", c.breach}, {"clearance", c.clearance}, {"bone", c.bone},
-                                          {"too_long", c.tooLong}}},
-                            {"constraints", {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}},
-                                             {"max_angle_deg", k.maxAngleDeg}, {"max_length_mm", k.maxLengthMm > 0 ? k.maxLengthMm : scene.needle.lengthMm},
-                                             {"min_clearance_mm", planner.options().minClearanceMm}, {"step_deg", so.stepDeg}}}};
+        report["search"] = planning::searchJson(planner, *found, k, so);
         report["pareto"] = nlohmann::json::array();
         for (const auto& p : found->pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     }
