@@ -22,6 +22,8 @@ void initializeOpenVdb();
 FloatGrid::ConstPtr huGrid(const Volume& v);
 /// @brief The `t1` grid, or nullptr if absent.
 FloatGrid::ConstPtr t1Grid(const Volume& v);
+/// @brief The `intensity` grid (MR that is not T1), or nullptr if absent.
+FloatGrid::ConstPtr intensityGrid(const Volume& v);
 /// @brief The `label` grid, or nullptr if absent.
 LabelGrid::ConstPtr labelGrid(const Volume& v);
 

@@ -51,6 +51,8 @@ void saveVdb(const Volume& v, const std::filesystem::path& file)
     putString(meta, "description", md.description);
     putString(meta, "hu_units", md.huUnits);
     putString(meta, "t1_units", md.t1Units);
+    putString(meta, "intensity_units", md.intensityUnits);
+    putString(meta, "mr_weighting", md.mrWeighting);
     for (const auto& [key, value] : md.extra) putString(meta, "extra." + key, value);
     meta.insertMeta("voxhap.index_min", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().min.data())));
     meta.insertMeta("voxhap.index_max", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().max.data())));
@@ -80,7 +82,7 @@ Volume loadVdb(const std::filesystem::path& file)
         throw IoError(file.string() + ": cannot read (" + std::string(e.what()) + ")");
     }
 
-    std::array<openvdb::GridBase::Ptr, 3> byChannel{};
+    std::array<openvdb::GridBase::Ptr, kChannels.size()> byChannel{};
     std::vector<openvdb::GridBase::Ptr> derived; // float grids besides the channels, e.g. distance fields
     std::string others;
     for (const auto& g : *grids) {
@@ -100,7 +102,7 @@ Volume loadVdb(const std::filesystem::path& file)
         if (g && !first) first = g;
     }
     if (!first) {
-        throw IoError(file.string() + ": no grid named hu, t1 or label" + (others.empty() ? "" : " (found: " + others + ")"));
+        throw IoError(file.string() + ": no grid named hu, t1, label or intensity" + (others.empty() ? "" : " (found: " + others + ")"));
     }
     for (const auto& g : byChannel) {
         if (g && g->transform() != first->transform()) {
@@ -149,6 +151,8 @@ Volume loadVdb(const std::filesystem::path& file)
     md.description = getString(*meta, "description");
     md.huUnits = getString(*meta, "hu_units", "HU");
     md.t1Units = getString(*meta, "t1_units", "ms");
+    md.intensityUnits = getString(*meta, "intensity_units", "arbitrary units");
+    md.mrWeighting = getString(*meta, "mr_weighting");
     const std::string extraPrefix = std::string(kPrefix) + "extra.";
     for (auto it = meta->beginMeta(); it != meta->endMeta(); ++it) {
         if (it->first.rfind(extraPrefix, 0) == 0) {

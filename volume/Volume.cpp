@@ -18,6 +18,7 @@ std::string_view channelName(Channel c)
     case Channel::Hu: return "hu";
     case Channel::T1: return "t1";
     case Channel::Label: return "label";
+    case Channel::Intensity: return "intensity";
     }
     return "?";
 }
@@ -132,7 +133,7 @@ void Volume::setGrid(Channel c, GridPtr grid)
     } else {
         auto typed = openvdb::gridPtrCast<FloatGrid>(grid);
         if (!typed) throw ValueError("volume: grid '" + name + "' must be float, got " + grid->valueType());
-        const float air = c == Channel::Hu ? kAirHu : kAirT1;
+        const float air = c == Channel::Hu ? kAirHu : c == Channel::T1 ? kAirT1 : kAirIntensity;
         if (typed->background() != air) {
             throw ValueError("volume: grid '" + name + "' background must be " + std::to_string(air) + " (air)");
         }
@@ -168,6 +169,10 @@ Volume::GridConstPtr Volume::derived(const std::string& name) const
 
 FloatGrid::ConstPtr huGrid(const Volume& v) { return openvdb::gridConstPtrCast<FloatGrid>(v.grid(Channel::Hu)); }
 FloatGrid::ConstPtr t1Grid(const Volume& v) { return openvdb::gridConstPtrCast<FloatGrid>(v.grid(Channel::T1)); }
+FloatGrid::ConstPtr intensityGrid(const Volume& v)
+{
+    return openvdb::gridConstPtrCast<FloatGrid>(v.grid(Channel::Intensity));
+}
 LabelGrid::ConstPtr labelGrid(const Volume& v) { return openvdb::gridConstPtrCast<LabelGrid>(v.grid(Channel::Label)); }
 
 } // namespace voxhap::volume

@@ -30,12 +30,19 @@ class GridBase;
 namespace voxhap::volume {
 
 /// @brief The grids a Volume may hold.
+///
+/// `t1` holds T1 in milliseconds and nothing else: a T1 map, or a T1-weighted
+/// scan normalised per scan (T1Normalisation.h). Every other MR image (PD, T2,
+/// FLAIR, diffusion, field maps, phase, T1-weighted scans that could not be
+/// normalised, MR of unknown weighting) is an `intensity` grid, which no force
+/// law reads as T1; metadata().mrWeighting says what it is.
 enum class Channel {
-    Hu,    ///< float, CT Hounsfield units
-    T1,    ///< float, MR T1 [ms] or T1-weighted intensity (see metadata)
-    Label, ///< int32, tissue id from data/tissues.json
+    Hu,        ///< float, CT Hounsfield units
+    T1,        ///< float, MR T1 [ms]
+    Label,     ///< int32, tissue id from data/tissues.json
+    Intensity, ///< float, MR signal intensity [arbitrary units], never T1
 };
-inline constexpr std::array<Channel, 3> kChannels{Channel::Hu, Channel::T1, Channel::Label};
+inline constexpr std::array<Channel, 4> kChannels{Channel::Hu, Channel::T1, Channel::Label, Channel::Intensity};
 
 /// @brief The grid name of a channel in .vdb files: "hu", "t1" or "label".
 std::string_view channelName(Channel c);
@@ -44,6 +51,7 @@ std::string_view channelName(Channel c);
 /// @{
 inline constexpr float kAirHu = -1000.0f;
 inline constexpr float kAirT1 = 0.0f;
+inline constexpr float kAirIntensity = 0.0f;
 inline constexpr std::int32_t kAirLabel = 0;
 /// @}
 
@@ -85,7 +93,12 @@ struct VolumeMetadata {
     std::string source;       ///< file or generator that made the volume
     std::string description;  ///< free text, patient-free
     std::string huUnits = "HU";
-    std::string t1Units = "ms"; ///< "ms" for T1 maps, "normalised" for T1-weighted intensity
+    std::string t1Units = "ms"; ///< always "ms": the t1 grid holds T1 only
+    std::string intensityUnits = "arbitrary units"; ///< of the intensity grid
+    /// MR only: what the series is, as decided from its headers (MrWeighting.h):
+    /// "T1 map", "T1-weighted", "PD-weighted", "T2-weighted", "diffusion", ...;
+    /// "unknown" when nothing says; empty for CT and phantoms.
+    std::string mrWeighting;
     /// Further keys (saved as "voxhap.<key>"), e.g. "layers": a phantom's layer
     /// table along its reference path, as JSON.
     std::map<std::string, std::string> extra;
@@ -152,7 +165,7 @@ private:
 
     openvdb::math::Transform::Ptr mTransform;
     IndexBox mBox;
-    std::array<GridPtr, 3> mGrids{};
+    std::array<GridPtr, kChannels.size()> mGrids{};
     std::map<std::string, GridPtr> mDerived;
     VolumeMetadata mMeta;
 };

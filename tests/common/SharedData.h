@@ -18,6 +18,24 @@ inline std::filesystem::path realCtDir()
     return std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
 }
 
+/// The shared data folder beside the project.
+inline std::filesystem::path sharedDataDir() { return std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data"; }
+
+/// Siemens Trio 3 T head: a T1-weighted MPRAGE (sagittal, 256 × 256 × 176).
+inline std::filesystem::path mprageDir() { return sharedDataDir() / "mr-head-trio" / "t1-mprage"; }
+
+/// Siemens Trio 3 T head: a two-echo gradient-echo field map (magnitude), not T1.
+inline std::filesystem::path fieldMapDir() { return sharedDataDir() / "mr-head-trio" / "gre-field-map"; }
+
+/// Siemens Prisma 3 T: diffusion mosaics (13 volumes × 25 slices, one file each).
+inline std::filesystem::path dwiMosaicDir() { return sharedDataDir() / "mr-dwi-prisma" / "dwi-mosaic"; }
+
+/// Siemens Prisma 3 T: a T1-weighted sagittal 2D spoiled gradient echo (35 slices).
+inline std::filesystem::path flash2dDir() { return sharedDataDir() / "mr-dwi-prisma" / "t1-fl2d-sag"; }
+
+/// The reference converter's (dcm2niix) sidecars for the two Prisma series.
+inline std::filesystem::path prismaReferenceDir() { return sharedDataDir() / "mr-dwi-prisma" / "reference"; }
+
 inline bool sharedDataRequired() { return std::getenv("VOXHAP_REQUIRE_SHARED_DATA") != nullptr; }
 
 } // namespace voxhap::test
