@@ -57,18 +57,41 @@ int run(const ConvertOptions& o)
         j["memory_vs_dense_float"] = denseFloatBytes > 0 ? double(info.memoryBytes) / denseFloatBytes : 0.0;
         if (!dicom.series.uid.empty()) {
             j["series_uid"] = dicom.series.uid;
+            j["series_index"] = dicom.series.index;
             j["series_count"] = dicom.allSeries.size();
+            if (dicom.volume) j["volume"] = dicom.volume;
             j["resampled"] = dicom.resampled;
+            if (dicom.resampled) {
+                j["interpolation"] = dicom.interpolation;
+                j["source_voxels_outside_grid"] = dicom.sourceVoxelsOutside;
+            }
+            j["skipped_files"] = dicom.skipped.size();
+            j["skipped_bad_files"] = dicom.skippedBad.size();
         }
+        if (!v.metadata().mrWeighting.empty()) j["mr_weighting"] = v.metadata().mrWeighting;
+        if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end()) j["modality_source"] = it->second;
         std::cout << j.dump(2) << '\n';
         return 0;
     }
     std::cout << std::fixed << std::setprecision(3);
     std::cout << "read   " << o.in << " (" << volume::formatName(volume::formatOf(o.in)) << ") in " << loadSeconds << " s\n";
     if (!dicom.series.uid.empty()) {
-        std::cout << "series " << dicom.series.uid << " (" << dicom.series.modality << ", " << dicom.series.slices
-                  << " slices; " << dicom.allSeries.size() << " series in the input)\n";
-        if (dicom.resampled) std::cout << "resampled: " << dicom.irregularity << "\n";
+        std::cout << "series #" << dicom.series.index << " " << dicom.series.uid << " (" << dicom.series.modality << ", "
+                  << dicom.series.slices << " slices" << (dicom.volume ? ", volume " + std::to_string(dicom.volume) : "")
+                  << "; " << dicom.allSeries.size() << " series in the input, " << dicom.skipped.size()
+                  << " file(s) set aside)\n";
+        if (dicom.resampled) {
+            std::cout << "resampled: " << dicom.irregularity << "\n          " << dicom.interpolation
+                      << "; source voxels outside the grid: " << dicom.sourceVoxelsOutside << "\n";
+        }
+        for (const auto& s : dicom.skippedBad) std::cout << "left out (--skip-bad): " << s.reason << "\n";
+    }
+    if (!v.metadata().mrWeighting.empty()) {
+        std::cout << "MR     " << v.metadata().mrWeighting << " -> " << (v.has(volume::Channel::T1) ? "t1 [ms]" : "intensity (not T1)")
+                  << "\n";
+    }
+    if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end()) {
+        std::cout << "modality " << v.metadata().modality << ": " << it->second << "\n";
     }
     std::cout << "grid   " << d.x() << " x " << d.y() << " x " << d.z() << " voxels, spacing " << info.geometry.spacing.x()
               << " x " << info.geometry.spacing.y() << " x " << info.geometry.spacing.z() << " mm\n";

@@ -53,7 +53,8 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
     j["modality"] = info.metadata.modality;
     j["source"] = info.metadata.source;
     j["description"] = info.metadata.description;
-    j["units"] = {{"hu", info.metadata.huUnits}, {"t1", info.metadata.t1Units}};
+    j["units"] = {{"hu", info.metadata.huUnits}, {"t1", info.metadata.t1Units}, {"intensity", info.metadata.intensityUnits}};
+    if (!info.metadata.mrWeighting.empty()) j["mr_weighting"] = info.metadata.mrWeighting;
     j["dimensions"] = vec(info.box.dims());
     j["index_min"] = vec(info.box.min);
     j["index_max"] = vec(info.box.max);
@@ -104,6 +105,29 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
     row("source") << info.metadata.source << (info.metadata.description.empty() ? "" : " — ")
                   << info.metadata.description << '\n';
     row("modality") << (info.metadata.modality.empty() ? "unknown" : info.metadata.modality) << '\n';
+    const auto extra = [&info](const char* key) {
+        const auto it = info.metadata.extra.find(key);
+        return it == info.metadata.extra.end() ? std::string() : it->second;
+    };
+    if (const std::string why = extra("modality_source"); !why.empty()) row("") << why << '\n';
+    if (!info.metadata.mrWeighting.empty()) {
+        row("weighting") << info.metadata.mrWeighting << '\n';
+        if (const std::string why = extra("mr_weighting_reason"); !why.empty()) row("") << why << '\n';
+        if (const std::string refused = extra("t1_norm_refused"); !refused.empty()) {
+            row("") << "not normalised to T1: " << refused << '\n';
+        } else if (const std::string field = extra("t1_norm_field"); !field.empty()) {
+            row("") << "normalised per scan to T1 [ms] at " << field << " (fat " << extra("t1_norm_fat") << ", muscle "
+                    << extra("t1_norm_muscle") << ")\n";
+        }
+        if (const std::string bg = extra("mr_background"); !bg.empty()) row("background") << bg << '\n';
+        if (const std::string fs = extra("field_strength_source"); !fs.empty()) row("field") << fs << '\n';
+    }
+    if (const std::string vol = extra("volume"); !vol.empty()) row("volume") << vol << '\n';
+    if (const std::string r = extra("resampled"); !r.empty()) {
+        row("resampled") << r << '\n';
+        row("") << "interpolation: " << extra("interpolation") << "; source voxels outside the grid: "
+                << extra("source_voxels_outside_grid") << '\n';
+    }
     std::string grids;
     for (const auto& c : info.channels) grids += (grids.empty() ? "" : ", ") + c.name + " (" + c.valueType + ")";
     row("grids") << grids << '\n';
@@ -128,7 +152,9 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
     row("memory") << mib(info.memoryBytes) << " sparse, " << mib(denseBytes(info)) << " as dense float/int32 arrays\n";
     for (const auto& c : info.channels) {
         if (c.name == "label") continue;
-        const std::string unit = c.name == "hu" ? info.metadata.huUnits : info.metadata.t1Units;
+        const std::string unit = c.name == "hu"  ? info.metadata.huUnits
+                                 : c.name == "t1" ? info.metadata.t1Units
+                                                  : info.metadata.intensityUnits;
         row(c.name.c_str()) << "min " << fixed(c.min, 1) << ", max " << fixed(c.max, 1) << ", mean "
                             << fixed(c.mean, 1) << ' ' << unit << " (active voxels)\n";
     }

@@ -16,11 +16,14 @@ namespace voxhap::tools {
 /// @brief Command-line form of volume::LoadOptions.
 struct ReaderOptions {
     std::string series;        ///< --series
+    std::size_t volume = 0;    ///< --volume (from 1; 0: the series must hold one)
     bool resample = false;     ///< --resample
+    bool skipBad = false;      ///< --skip-bad
     double airHu = -950.0;     ///< --air-hu
     double memoryCapMb = 4096; ///< --memory-cap [MiB]
     bool t1Map = false;        ///< --t1-map
-    std::string channel = "hu"; ///< --channel
+    bool t1Weighted = false;   ///< --t1-weighted
+    std::string channel = "auto"; ///< --channel
 };
 
 /// @brief Add the reader options to a subcommand.

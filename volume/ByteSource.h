@@ -23,8 +23,18 @@ public:
     ByteSource(const ByteSource&) = delete;
     ByteSource& operator=(const ByteSource&) = delete;
     /// @brief Read up to @p n bytes; fewer only at the end of the data.
+    /// Concatenated gzip members are one stream (RFC 1952 §2.2).
     /// @throw IoError naming the file on corrupt compressed data
     std::size_t read(void* out, std::size_t n);
+
+    /// @brief Compressed data: inflate the rest of the stream (discarding it)
+    /// and require that it ends with verified trailers — the CRC-32 and length
+    /// of every gzip member, the Adler-32 of a zlib stream — and that no byte
+    /// follows the last member. A reader that stops once it has its voxels
+    /// would otherwise accept bit flips and a cut or flipped trailer.
+    /// Raw data: nothing to check.
+    /// @throw IoError naming the file and the byte offset of the problem
+    void finish();
 
 private:
     struct Impl;

@@ -34,7 +34,7 @@ constexpr const char* kDecoderVariable = "VOXHAP_DICOM_DECODER_FD";
 /// A reply's fixed part; then the message (if any), then the samples.
 struct DecodeReply {
     std::int32_t ok = 0;
-    std::int32_t rows = 0, columns = 0, frames = 0, type = 0, bitsStored = 0;
+    std::int32_t rows = 0, columns = 0, frames = 0, type = 0, bitsStored = 0, highBit = -1;
     std::uint64_t rawBytes = 0;
     std::uint32_t messageBytes = 0;
 };
@@ -87,7 +87,7 @@ bool receiveAll(int fd, void* data, std::size_t n)
             decodeDicomFramesInProcess(path, f);
             r.ok = 1;
             r.rows = f.rows, r.columns = f.columns, r.frames = f.frames;
-            r.type = std::int32_t(f.type), r.bitsStored = f.bitsStored;
+            r.type = std::int32_t(f.type), r.bitsStored = f.bitsStored, r.highBit = f.highBit;
             r.rawBytes = f.raw.size();
         } catch (const std::exception& e) {
             message = e.what();
@@ -171,7 +171,7 @@ void DicomDecodeProcess::decode(const std::filesystem::path& file, DicomFrames& 
     }
     if (complete && r.ok) {
         f.rows = r.rows, f.columns = r.columns, f.frames = r.frames;
-        f.type = SampleType(r.type), f.bitsStored = r.bitsStored;
+        f.type = SampleType(r.type), f.bitsStored = r.bitsStored, f.highBit = r.highBit;
         f.raw.resize(r.rawBytes);
         complete = receiveAll(mSocket, f.raw.data(), f.raw.size());
     }

@@ -20,11 +20,13 @@ namespace voxhap::volume {
 
 namespace {
 
-/// Stored samples → rescaled floats in one pass. Unused high bits
-/// (BitsStored < BitsAllocated) may hold overlays: masked off, sign-extended
-/// for signed data. The four variants keep the per-sample loop branch-free.
+/// Stored samples → rescaled floats in one pass. The value sits in bits
+/// HighBit − BitsStored + 1 .. HighBit of each word (PS3.5 §8.1.1); the other
+/// bits may hold overlays or garbage: the value is shifted down, masked and,
+/// for signed data, sign-extended. The four variants keep the per-sample loop
+/// branch-free.
 template <typename T>
-void toFloat(const char* raw, std::size_t count, int bitsStored, double slope, double intercept,
+void toFloat(const char* raw, std::size_t count, int bitsStored, int shift, double slope, double intercept,
              std::optional<double> padding, float air, float* out)
 {
     constexpr int bits = int(sizeof(T) * 8);
@@ -37,7 +39,7 @@ void toFloat(const char* raw, std::size_t count, int bitsStored, double slope, d
             T v;
             std::memcpy(&v, raw + n * sizeof(T), sizeof(T));
             if constexpr (decltype(masked)::value) {
-                U u = U(v) & mask;
+                U u = U(U(v) >> shift) & mask;
                 if constexpr (std::is_signed_v<T>) {
                     if (u & sign) u = U(u | U(~mask));
                 }
@@ -52,7 +54,7 @@ void toFloat(const char* raw, std::size_t count, int bitsStored, double slope, d
         }
     };
     bool masked = false;
-    if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) masked = bitsStored > 0 && bitsStored < bits;
+    if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) masked = bitsStored > 0 && (bitsStored < bits || shift > 0);
     using Yes = std::true_type;
     using No = std::false_type;
     if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) {
@@ -132,6 +134,7 @@ void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& 
         throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid + ": cannot decode the pixel data (unsupported or corrupt)");
     }
     f.bitsStored = pf.GetBitsStored();
+    f.highBit = pf.GetHighBit();
     switch (pf.GetScalarType()) {
     case gdcm::PixelFormat::UINT8: f.type = SampleType::UInt8; break;
     case gdcm::PixelFormat::INT8: f.type = SampleType::Int8; break;
@@ -163,11 +166,13 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
     case 16: f.type = sign ? SampleType::Int16 : SampleType::UInt16; break;
     default: f.type = sign ? SampleType::Int32 : SampleType::UInt32; break;
     }
-    f.rows = h.rows;
-    f.columns = h.columns;
-    f.frames = h.frames;
+    f.rows = h.storedRows;
+    f.columns = h.storedColumns;
+    f.frames = h.storedFrames;
     f.bitsStored = h.bitsStored;
-    const std::uint64_t expected = std::uint64_t(h.rows) * std::uint64_t(h.columns) * std::uint64_t(h.frames) * sampleBytes(f.type);
+    f.highBit = h.highBit;
+    const std::uint64_t expected =
+        std::uint64_t(f.rows) * std::uint64_t(f.columns) * std::uint64_t(f.frames) * sampleBytes(f.type);
     const std::string name = h.file.string();
     if (h.pixelLength < expected) {
         throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(h.pixelLength) + " bytes, expected " +
@@ -193,15 +198,17 @@ void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::siz
 {
     const std::size_t framePlane = std::size_t(f.rows) * std::size_t(f.columns);
     const char* raw = f.raw.data() + (framePlane * std::size_t(frame) + first) * sampleBytes(f.type);
+    // A HighBit outside bitsStored − 1 .. the word was refused with the header.
+    const int shift = f.highBit < 0 ? 0 : std::max(0, f.highBit + 1 - f.bitsStored);
     switch (f.type) {
-    case SampleType::UInt8: toFloat<std::uint8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::Int8: toFloat<std::int8_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::UInt16: toFloat<std::uint16_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::Int16: toFloat<std::int16_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::UInt32: toFloat<std::uint32_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::Int32: toFloat<std::int32_t>(raw, plane, f.bitsStored, slope, intercept, padding, air, out); break;
-    case SampleType::Float32: toFloat<float>(raw, plane, 0, slope, intercept, padding, air, out); break;
-    case SampleType::Float64: toFloat<double>(raw, plane, 0, slope, intercept, padding, air, out); break;
+    case SampleType::UInt8: toFloat<std::uint8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::Int8: toFloat<std::int8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::UInt16: toFloat<std::uint16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::Int16: toFloat<std::int16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::UInt32: toFloat<std::uint32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::Int32: toFloat<std::int32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
+    case SampleType::Float32: toFloat<float>(raw, plane, 0, 0, slope, intercept, padding, air, out); break;
+    case SampleType::Float64: toFloat<double>(raw, plane, 0, 0, slope, intercept, padding, air, out); break;
     }
 }
 

@@ -20,7 +20,8 @@ namespace voxhap::volume {
 struct DicomFrames {
     int rows = 0, columns = 0, frames = 0;
     SampleType type = SampleType::Int16;
-    int bitsStored = 0;    ///< (0028,0101); higher bits may hold overlays
+    int bitsStored = 0;    ///< (0028,0101); other bits may hold overlays
+    int highBit = -1;      ///< (0028,0102); -1: bitsStored − 1 (the value in the low bits)
     std::vector<char> raw; ///< kept between calls so that a reused instance does not reallocate
 };
 

@@ -53,7 +53,10 @@ std::string printable(std::string text)
 
 class Walker {
 public:
-    Walker(const std::filesystem::path& file, std::ifstream& in, std::uint64_t size) : mFile(file), mIn(in), mSize(size) {}
+    Walker(const std::filesystem::path& file, std::ifstream& in, std::uint64_t size, DicomPreflightNotes& notes)
+        : mFile(file), mIn(in), mSize(size), mNotes(notes)
+    {
+    }
 
     /// Meta header (always explicit VR little endian); returns the offset after it.
     std::uint64_t meta(std::uint64_t pos, std::string& transferSyntax)
@@ -61,6 +64,7 @@ public:
         std::uint64_t groupEnd = 0;
         for (;;) {
             if (pos >= mSize) break;
+            mAt = pos;
             unsigned char h[12]; // 8 bytes, 12 for the long VRs (length() reads the rest)
             read(pos, h, 8, Tag{0x0002, 0x0000});
             const Tag t{u16(h, false), u16(h + 2, false)};
@@ -94,6 +98,7 @@ public:
             pos += header + len;
         }
         // GDCM trusts the group length and the presence of a data set.
+        mAt = pos;
         if (groupEnd && groupEnd != pos) fail(Tag{0x0002, 0x0000}, "FileMetaInformationGroupLength does not match the meta header (truncated or corrupt file)");
         if (pos >= mSize) fail(Tag{0x0002, 0x0000}, "no data set after the meta header (truncated file)");
         return pos;
@@ -104,6 +109,14 @@ public:
     {
         if (depth > kMaxDepth) fail(Tag{}, "sequences nested deeper than " + std::to_string(kMaxDepth) + " levels");
         while (untilDelimiter || pos < end) {
+            mAt = pos;
+            // Zero bytes to the end of the file after a complete top-level
+            // element: padding to a block size, which other readers accept.
+            if (depth == 0 && !untilDelimiter && pos > mDataSetStart && zerosToEnd(pos)) {
+                mNotes.trailingPadding = mSize - pos;
+                mNotes.paddingOffset = pos;
+                return mSize;
+            }
             if (!untilDelimiter && pos + 8 > end) fail(Tag{}, "element header runs past its sequence item");
             unsigned char h[12];
             read(pos, h, 8, Tag{});
@@ -137,6 +150,17 @@ public:
                     read(pos, mSopClass.data(), len, t);
                 }
                 if (depth == 0 && t.is(0x0008, 0x0010)) recognitionCode(pos, len, t);
+                if (depth == 0 && (t.group == 0x0019 || t.group == 0x0043 || t.group == 0x2001) && len <= 64) {
+                    std::string value(len, '\0');
+                    read(pos, value.data(), len, t);
+                    mNotes.privateValues[std::uint32_t(t.group) << 16 | t.element] = value;
+                }
+                if (depth == 0 && t.is(0x0020, 0x000E) && len <= kMaxUid) {
+                    std::string uid(len, '\0');
+                    read(pos, uid.data(), len, t);
+                    while (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
+                    mNotes.seriesUid = uid;
+                }
                 if (!untilDelimiter) {
                     if (pos + len > end) fail(t, "element runs past its sequence item");
                 }
@@ -158,6 +182,8 @@ public:
         return {mSopClass, Tag{0x0008, 0x0016}};
     }
     [[noreturn]] void refuse(const Tag& t, const std::string& what) { fail(t, what); }
+    /// Where the data set starts (after the meta header): padding needs an element before it.
+    void setDataSetStart(std::uint64_t pos) { mDataSetStart = pos; }
 
     /// True when the data set holds functional groups (or ultrasound regions):
     /// GDCM reads their values on paths that assert (DicomElementRules.h).
@@ -181,6 +207,7 @@ private:
     {
         if (depth > kMaxDepth) fail(owner, "sequences nested deeper than " + std::to_string(kMaxDepth) + " levels");
         for (;;) {
+            mAt = pos;
             unsigned char h[8];
             read(pos, h, 8, owner);
             const Tag t{u16(h, big), u16(h + 2, big)};
@@ -231,6 +258,21 @@ private:
         return u16(h + 6, big);
     }
 
+    /// True if every byte from @p pos to the end of the file is zero.
+    bool zerosToEnd(std::uint64_t pos)
+    {
+        char buf[4096];
+        mIn.clear();
+        mIn.seekg(std::streamoff(pos));
+        for (std::uint64_t left = mSize - pos; left > 0;) {
+            const std::uint64_t n = std::min<std::uint64_t>(left, sizeof buf);
+            if (!mIn.read(buf, std::streamsize(n))) return false;
+            if (std::any_of(buf, buf + n, [](char c) { return c != 0; })) return false;
+            left -= n;
+        }
+        return true;
+    }
+
     void read(std::uint64_t pos, void* out, std::uint64_t n, const Tag& t)
     {
         need(pos + n, t);
@@ -241,9 +283,12 @@ private:
     {
         if (end > mSize) fail(t, "runs past the end of the file (truncated file)");
     }
+    /// One line: the file, the element (when its tag was read) and the byte
+    /// offset of its header, then what is wrong.
     [[noreturn]] void fail(const Tag& t, const std::string& what)
     {
-        throw IoError(mFile.string() + ": " + (t.group || t.element ? t.text() + " " : std::string("element ")) + what);
+        throw IoError(mFile.string() + ": " + (t.group || t.element ? t.text() + " " : std::string("element ")) + "at byte " +
+                      std::to_string(mAt) + ": " + what);
     }
     static std::uint16_t u16(const unsigned char* p, bool big) { return big ? std::uint16_t(p[0] << 8 | p[1]) : std::uint16_t(p[1] << 8 | p[0]); }
     static std::uint32_t u32(const unsigned char* p, bool big)
@@ -255,6 +300,9 @@ private:
     const std::filesystem::path& mFile;
     std::ifstream& mIn;
     std::uint64_t mSize;
+    DicomPreflightNotes& mNotes;
+    std::uint64_t mAt = 0;           ///< offset of the element being read, for messages
+    std::uint64_t mDataSetStart = 0; ///< first byte after the meta header
     bool mFunctionalGroups = false;
     std::string mMetaSopClass, mSopClass;
     std::optional<std::pair<std::uint64_t, std::uint64_t>> mPixels;
@@ -280,10 +328,60 @@ bool readableSopClass(std::string uid)
     return std::any_of(std::begin(kClasses), std::end(kClasses), [&](const char* k) { return uid == k; });
 }
 
+std::string withoutPadding(std::string uid)
+{
+    while (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
+    return uid;
+}
+
 } // namespace
 
-DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* where)
+std::string sopClassName(const std::string& uid)
 {
+    // The classes a CD or PACS export puts beside CT and MR images (PS3.4 Annex B,
+    // PS3.6 Annex A); anything else is named by its UID.
+    static const std::pair<const char*, const char*> kNames[] = {
+        {"1.2.840.10008.1.3.10", "Media Storage Directory (DICOMDIR)"},
+        {"1.2.840.10008.5.1.4.1.1.7", "Secondary Capture Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.7.1", "Multi-frame Single Bit Secondary Capture"},
+        {"1.2.840.10008.5.1.4.1.1.7.2", "Multi-frame Grayscale Byte Secondary Capture"},
+        {"1.2.840.10008.5.1.4.1.1.7.3", "Multi-frame Grayscale Word Secondary Capture"},
+        {"1.2.840.10008.5.1.4.1.1.7.4", "Multi-frame True Color Secondary Capture"},
+        {"1.2.840.10008.5.1.4.1.1.11.1", "Grayscale Softcopy Presentation State"},
+        {"1.2.840.10008.5.1.4.1.1.11.2", "Color Softcopy Presentation State"},
+        {"1.2.840.10008.5.1.4.1.1.66", "Raw Data Storage"},
+        {"1.2.840.10008.5.1.4.1.1.66.4", "Segmentation Storage"},
+        {"1.2.840.10008.5.1.4.1.1.88.11", "Basic Text SR"},
+        {"1.2.840.10008.5.1.4.1.1.88.22", "Enhanced SR"},
+        {"1.2.840.10008.5.1.4.1.1.88.33", "Comprehensive SR"},
+        {"1.2.840.10008.5.1.4.1.1.88.67", "X-Ray Radiation Dose SR"},
+        {"1.2.840.10008.5.1.4.1.1.104.1", "Encapsulated PDF Storage"},
+        {"1.2.840.10008.5.1.4.1.1.481.1", "RT Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.481.2", "RT Dose Storage"},
+        {"1.2.840.10008.5.1.4.1.1.481.3", "RT Structure Set Storage"},
+        {"1.2.840.10008.5.1.4.1.1.481.5", "RT Plan Storage"},
+        {"1.2.840.10008.5.1.4.1.1.4.2", "MR Spectroscopy Storage"},
+        {"1.2.840.10008.5.1.4.1.1.128", "Positron Emission Tomography Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.20", "Nuclear Medicine Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.6.1", "Ultrasound Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.1", "Computed Radiography Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.1.1", "Digital X-Ray Image Storage"},
+        {"1.2.840.10008.5.1.4.1.1.9.1.1", "12-lead ECG Waveform Storage"},
+        {"1.2.840.10008.5.1.4.1.1.9.1.2", "General ECG Waveform Storage"},
+        {"1.3.12.2.1107.5.9.1", "Siemens CSA Non-Image Storage"},
+    };
+    const std::string u = withoutPadding(uid);
+    for (const auto& [k, name] : kNames) {
+        if (u == k) return name;
+    }
+    return u.empty() ? std::string("no SOP class") : "SOP class " + printable(u);
+}
+
+DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* where, DicomPreflightNotes* notesOut)
+{
+    DicomPreflightNotes scratch;
+    DicomPreflightNotes& notes = notesOut ? *notesOut : scratch;
+    notes = {};
     std::error_code ec;
     const std::uint64_t size = std::filesystem::file_size(file, ec);
     if (ec) throw IoError(file.string() + ": cannot read (" + ec.message() + ")");
@@ -291,9 +389,19 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
     char magic[132] = {};
     if (!in.read(magic, sizeof magic) || std::memcmp(magic + 128, "DICM", 4) != 0) return DicomKind::NotDicom;
 
-    Walker walk(file, in, size);
+    Walker walk(file, in, size, notes);
     std::string ts;
     const std::uint64_t start = walk.meta(132, ts);
+    walk.setDataSetStart(start);
+    // The meta header names the class: an object voxhap does not load is set
+    // aside before its data set is walked, so that a report or a DICOMDIR
+    // whose structure this walk would refuse cannot stop a load.
+    const auto metaClass = walk.metaSopClass();
+    if (!withoutPadding(metaClass.first).empty() && !readableSopClass(metaClass.first)) {
+        notes.sopClass = withoutPadding(metaClass.first);
+        notes.nonImageReason = sopClassName(notes.sopClass);
+        return DicomKind::NonImage;
+    }
     // The data set is walked in the syntax GDCM will read it in: one it knows,
     // named by the meta header. Without one GDCM guesses (a swapped-looking
     // first tag makes it read big endian) and could read other lengths than
@@ -305,22 +413,23 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
     if (syntax == gdcm::TransferSyntax::ImplicitVRBigEndianPrivateGE) {
         walk.refuse(Tag{0x0002, 0x0010}, "TransferSyntaxUID " + ts + " (GE private, mixed byte orders) is not supported");
     }
-    const auto refuseClass = [&walk](const std::pair<std::string, Tag>& sop) {
-        if (!readableSopClass(sop.first)) {
-            walk.refuse(sop.second, std::string(sop.second.element == 0x0002 ? "MediaStorageSOPClassUID" : "SOPClassUID") +
-                                        " '" + printable(sop.first) + "' is not a CT or MR image storage class");
-        }
-    };
     // A deflated data set cannot be walked before GDCM inflates it; its meta
-    // header must name the class.
+    // header must name the class (a readable one, from the test above).
     if (ts == "1.2.840.10008.1.2.1.99") {
-        refuseClass(walk.metaSopClass());
+        if (withoutPadding(metaClass.first).empty()) {
+            walk.refuse(metaClass.second, "MediaStorageSOPClassUID is missing from a deflated file's meta header");
+        }
+        notes.sopClass = withoutPadding(metaClass.first);
         return DicomKind::Dicom;
     }
     const bool implicitVr = syntax.IsImplicit();
     const bool big = syntax.GetSwapCode() == gdcm::SwapCode::BigEndian;
     walk.dataset(start, size, false, !implicitVr, big, 0);
-    refuseClass(walk.sopClass());
+    notes.sopClass = withoutPadding(walk.sopClass().first);
+    if (!readableSopClass(walk.sopClass().first)) {
+        notes.nonImageReason = sopClassName(notes.sopClass);
+        return DicomKind::NonImage;
+    }
     if (where) {
         where->transferSyntax = ts;
         where->found = walk.pixels().has_value();

@@ -28,6 +28,7 @@ Volume loadMetaImage(const std::filesystem::path& file, const RasterOptions& opt
     ByteSource src(h.dataFile, h.dataOffset, h.compressed);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
     v.setGrid(options.channel, readRaster(src, h.layout, options.channel, options, h.dataFile.string()));
+    src.finish(); // the whole compressed stream must check out, not just the bytes the voxels took
     v.metadata().source = file.filename().string();
     return v;
 }

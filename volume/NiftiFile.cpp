@@ -16,6 +16,7 @@ Volume loadNifti(const std::filesystem::path& file, const RasterOptions& options
     ByteSource src(h.dataFile, h.gzip ? 0 : h.dataOffset, h.gzip, h.gzip ? h.dataOffset : 0);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
     v.setGrid(options.channel, readRaster(src, h.layout, options.channel, options, h.dataFile.string()));
+    src.finish(); // the whole compressed stream must check out, not just the bytes the voxels took
     v.metadata().source = file.filename().string();
     v.metadata().extra["nifti_transform"] = h.frame;
     return v;

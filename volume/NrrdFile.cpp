@@ -114,7 +114,13 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
     h << "encoding: " << (encoding == NrrdEncoding::Gzip ? "gzip" : "raw") << "\n";
     h << "space origin: (" << origin.x() << ',' << origin.y() << ',' << origin.z() << ")\n";
     h << "voxhap_channel:=" << channelName(c) << "\n";
-    h << "voxhap_units:=" << (c == Channel::Hu ? v.metadata().huUnits : c == Channel::T1 ? v.metadata().t1Units : "tissue id") << "\n";
+    h << "voxhap_units:="
+      << (c == Channel::Hu ? v.metadata().huUnits
+          : c == Channel::T1 ? v.metadata().t1Units
+          : c == Channel::Intensity ? v.metadata().intensityUnits
+                                    : std::string("tissue id"))
+      << "\n";
+    if (!v.metadata().mrWeighting.empty()) h << "voxhap_mr_weighting:=" << v.metadata().mrWeighting << "\n";
     if (!v.metadata().modality.empty()) h << "voxhap_modality:=" << v.metadata().modality << "\n";
     h << "\n";
 
@@ -123,7 +129,7 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
         out.write(header.data(), std::streamsize(header.size()));
         Sink sink(out, encoding);
         if (c == Channel::Label) writeVoxels(*labelGrid(v), box, sink);
-        else writeVoxels(c == Channel::Hu ? *huGrid(v) : *t1Grid(v), box, sink);
+        else writeVoxels(c == Channel::Hu ? *huGrid(v) : c == Channel::T1 ? *t1Grid(v) : *intensityGrid(v), box, sink);
         sink.finish();
     });
 }
@@ -149,7 +155,8 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
         if (it->second == "hu") channel = Channel::Hu;
         else if (it->second == "t1") channel = Channel::T1;
         else if (it->second == "label") channel = Channel::Label;
-        else throw IoError(name + ": voxhap_channel: '" + it->second + "' (hu, t1 or label)");
+        else if (it->second == "intensity") channel = Channel::Intensity;
+        else throw IoError(name + ": voxhap_channel: '" + it->second + "' (hu, t1, intensity or label)");
     }
     ByteSource src(file, h.dataOffset, h.gzip);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
@@ -174,12 +181,15 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     } else {
         v.setGrid(channel, readRaster(src, h.layout, channel, options, name));
     }
+    src.finish(); // the whole compressed stream must check out, not just the bytes the voxels took
     auto& md = v.metadata();
     md.source = file.filename().string();
     if (auto it = h.keyValues.find("voxhap_modality"); it != h.keyValues.end()) md.modality = it->second;
     if (auto it = h.keyValues.find("voxhap_units"); it != h.keyValues.end()) {
-        (channel == Channel::T1 ? md.t1Units : md.huUnits) = it->second;
+        (channel == Channel::T1 ? md.t1Units : channel == Channel::Intensity ? md.intensityUnits : md.huUnits) = it->second;
     }
+    if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end()) md.extra["declared_channel"] = it->second;
+    if (auto it = h.keyValues.find("voxhap_mr_weighting"); it != h.keyValues.end()) md.mrWeighting = it->second;
     return v;
 }
 

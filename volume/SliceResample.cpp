@@ -29,7 +29,7 @@ float SliceResampler::bilinear(std::size_t slice, double u, double v) const
     return float((1 - fv) * ((1 - fu) * at(i0, j0) + fu * at(i1, j0)) + fv * ((1 - fu) * at(i0, j1) + fu * at(i1, j1)));
 }
 
-void SliceResampler::sample(const Vec3d& planeOrigin, float* out) const
+void SliceResampler::sample(const Vec3d& planeOrigin, int outNx, int outNy, float* out) const
 {
     const double a = planeOrigin.dot(mStack.normal);
     const auto hi = std::lower_bound(mAlong.begin(), mAlong.end(), a);
@@ -38,15 +38,15 @@ void SliceResampler::sample(const Vec3d& planeOrigin, float* out) const
     double t = 0; // weight of s1
     if (s1 != s0 && mAlong[s1] > mAlong[s0]) t = std::clamp((a - mAlong[s0]) / (mAlong[s1] - mAlong[s0]), 0.0, 1.0);
     if (t == 1.0) s0 = s1;
-    for (int j = 0; j < mNy; ++j) {
-        for (int i = 0; i < mNx; ++i) {
+    for (int j = 0; j < outNy; ++j) {
+        for (int i = 0; i < outNx; ++i) {
             const Vec3d w = planeOrigin + i * mSpacing[0] * mRow + j * mSpacing[1] * mCol;
             const auto pixel = [&](std::size_t s) {
                 const Vec3d rel = w - mStack.slices[s].position;
                 return bilinear(s, rel.dot(mRow) / mSpacing[0], rel.dot(mCol) / mSpacing[1]);
             };
             const float v0 = pixel(s0);
-            out[std::size_t(j) * std::size_t(mNx) + std::size_t(i)] =
+            out[std::size_t(j) * std::size_t(outNx) + std::size_t(i)] =
                 (t == 0.0 || s0 == s1) ? v0 : float((1 - t) * v0 + t * pixel(s1));
         }
     }

@@ -24,8 +24,9 @@ public:
     SliceResampler(const SliceStackGeometry& stack, const float* input, int nx, int ny, const Vec3d& row,
                    const Vec3d& col, const Eigen::Vector2d& spacing, float outside);
 
-    /// @brief Fill @p out (nx × ny) with the plane whose first pixel centre is at @p planeOrigin.
-    void sample(const Vec3d& planeOrigin, float* out) const;
+    /// @brief Fill @p out (@p outNx × @p outNy, x fastest) with the plane whose
+    /// first pixel centre is at @p planeOrigin, pixels spaced as the input's.
+    void sample(const Vec3d& planeOrigin, int outNx, int outNy, float* out) const;
 
 private:
     float bilinear(std::size_t slice, double u, double v) const;

@@ -14,7 +14,8 @@
 
 namespace voxhap::volume {
 
-SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& normal, double toleranceMm)
+SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& normal, double toleranceMm,
+                               double directionTolerance)
 {
     SliceStackGeometry g;
     g.normal = normal.normalized();
@@ -67,14 +68,18 @@ SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& 
     }
 
     // Tilt: each position's drift off the line through the first along the normal.
-    double maxDrift = 0;
+    // A normal known only to the stored digits lets positions far along the
+    // stack drift a little without any tilt: that much is tolerated too.
+    double maxDrift = 0, maxExcess = -1;
     for (const auto& s : g.slices) {
         const Vec3d rel = s.position - g.slices.front().position;
-        maxDrift = std::max(maxDrift, (rel - rel.dot(n) * n).norm());
+        const double drift = (rel - rel.dot(n) * n).norm();
+        maxDrift = std::max(maxDrift, drift);
+        maxExcess = std::max(maxExcess, drift - (toleranceMm + std::abs(rel.dot(n)) * directionTolerance));
     }
     const Vec3d axis = g.slices.back().position - g.slices.front().position;
     g.tiltDeg = std::acos(std::clamp(axis.normalized().dot(n), -1.0, 1.0)) * 180.0 / kPi;
-    if (maxDrift > toleranceMm) {
+    if (maxExcess > 0) {
         g.tilted = true;
         g.uniform = false;
         std::ostringstream tilt;

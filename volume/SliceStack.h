@@ -21,9 +21,9 @@ struct SlicePlacement {
 };
 
 /// @brief How far slice positions may stray from a uniform grid and still be
-/// taken as uniform. DICOM writes positions as decimal strings, commonly with
-/// two decimals (±0.005 mm), and scanners jitter by a few micrometres; 0.05 mm
-/// is an order of magnitude above that and a twentieth of a typical pixel.
+/// taken as uniform, when nothing better is known. The DICOM loader derives
+/// its tolerance from the digits the positions were stored with instead
+/// (StoredPrecision.h).
 inline constexpr double kSlicePositionToleranceMm = 0.05;
 
 /// @brief What the ordered positions say about the stack.
@@ -42,8 +42,11 @@ struct SliceStackGeometry {
 /// @param slices    positions in any order (file order is never used)
 /// @param normal    unit slice normal (row × column direction cosines)
 /// @param toleranceMm positions within this of the uniform grid count as uniform
+/// @param directionTolerance how far the stored normal may be off (norm of the
+///        difference of unit vectors): a position |d| mm along the stack may
+///        drift |d|·directionTolerance off the normal line without a tilt
 /// @throw ValueError if two slices share a position along the normal
 SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& normal,
-                               double toleranceMm = kSlicePositionToleranceMm);
+                               double toleranceMm = kSlicePositionToleranceMm, double directionTolerance = 0.0);
 
 } // namespace voxhap::volume

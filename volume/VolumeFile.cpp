@@ -5,13 +5,22 @@
 #include "volume/VolumeFile.h"
 
 #include "volume/Errors.h"
+#include "volume/Grids.h"
 #include "volume/MetaImageFile.h"
+#include "volume/ModalityInference.h"
+#include "volume/MrMaterial.h"
+#include "volume/MrWeighting.h"
 #include "volume/NiftiFile.h"
 #include "volume/NrrdFile.h"
 #include "volume/VdbFile.h"
 
+#include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tree/LeafManager.h>
+
 #include <algorithm>
 #include <cctype>
+#include <limits>
 
 namespace voxhap::volume {
 
@@ -58,7 +67,7 @@ std::string formatName(VolumeFormat f)
 RasterOptions rasterOptions(const LoadOptions& o)
 {
     RasterOptions r;
-    r.channel = o.channel;
+    r.channel = Channel::Hu;
     r.airHu = o.dicom.airHu;
     r.airT1 = o.dicom.airT1;
     r.memoryCapBytes = o.dicom.memoryCapBytes;
@@ -66,15 +75,114 @@ RasterOptions rasterOptions(const LoadOptions& o)
     return r;
 }
 
+namespace {
+
+/// Give the raw grid (every voxel active, background −1000) its channel's
+/// background and make the voxels below @p airBelow inactive: CT air, or the
+/// zeros and negatives of an MR image.
+Volume::GridPtr withAir(const Volume& raw, float background, float airBelow, bool atOrBelow)
+{
+    FloatGrid::Ptr g = huGrid(raw)->deepCopy();
+    openvdb::tools::changeBackground(g->tree(), background);
+    openvdb::tree::LeafManager<FloatGrid::TreeType>(g->tree()).foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            if (*it < airBelow || (atOrBelow && *it == airBelow)) {
+                it.setValue(background);
+                it.setValueOff();
+            }
+        }
+    });
+    for (auto it = g->tree().beginValueOn(); it; ++it) { // tiles
+        if (!it.isVoxelValue() && (*it < airBelow || (atOrBelow && *it == airBelow))) {
+            it.setValue(background);
+            it.setActiveState(false);
+        }
+    }
+    openvdb::tools::pruneInactive(g->tree());
+    return g;
+}
+
+/// NIfTI, NRRD, MetaImage: read every value, decide CT or MR, then the material.
+Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, const LoadOptions& options)
+{
+    RasterOptions all = rasterOptions(options);
+    all.airHu = -std::numeric_limits<float>::max(); // keep every voxel: the census needs the air
+    Volume raw = format == VolumeFormat::Nrrd        ? loadNrrd(path, all)
+                 : format == VolumeFormat::Nifti     ? loadNifti(path, all)
+                                                     : loadMetaImage(path, all);
+    VolumeMetadata& rawMd = raw.metadata();
+    // A voxhap NRRD names its channel: t1, label and intensity are read as they are.
+    const bool declared = rawMd.extra.erase("declared_channel") > 0;
+    if (!raw.has(Channel::Hu)) return raw;
+    const std::string name = path.string();
+
+    std::optional<BidsSidecar> sidecar = readBidsSidecarBeside(path);
+    ModalityGuess::Kind kind = ModalityGuess::Kind::Unknown;
+    std::string why;
+    if (declared) {
+        kind = ModalityGuess::Kind::Ct;
+        why = "declared by the file's voxhap_channel:=hu";
+    } else if (options.modality != DeclaredModality::Infer) {
+        kind = options.modality == DeclaredModality::Ct ? ModalityGuess::Kind::Ct : ModalityGuess::Kind::Mr;
+        why = std::string("declared by the user (--channel ") + (kind == ModalityGuess::Kind::Ct ? "hu)" : "mr)");
+    } else if (sidecar && (sidecar->modality == "MR" || sidecar->modality == "CT")) {
+        kind = sidecar->modality == "CT" ? ModalityGuess::Kind::Ct : ModalityGuess::Kind::Mr;
+        why = "Modality " + sidecar->modality + " in the BIDS sidecar " + sidecar->file.filename().string();
+    } else {
+        const ModalityGuess guess = inferModality(*raw.grid(Channel::Hu));
+        kind = guess.kind;
+        why = "inferred from the data: " + guess.reason;
+        if (kind == ModalityGuess::Kind::Unknown) {
+            throw IoError(name + ": modality: " + guess.reason + "; declare it with --channel hu (CT) or --channel mr (MR)");
+        }
+    }
+
+    Volume v(raw.transformPtr()->copy(), raw.indexBox());
+    VolumeMetadata& md = v.metadata();
+    md = rawMd;
+    md.extra["modality_source"] = why;
+    if (kind == ModalityGuess::Kind::Ct) {
+        v.setGrid(Channel::Hu, withAir(raw, kAirHu, options.dicom.airHu, false));
+        md.modality = "CT";
+        return v;
+    }
+    v.setGrid(Channel::Intensity, withAir(raw, kAirIntensity, options.dicom.airT1, true));
+    md.modality = "MR";
+    MrWeighting weighting;
+    if (sidecar) {
+        weighting = classifyMrWeighting(sidecar->fields);
+    } else {
+        weighting.kind = MrWeightingKind::Unknown;
+        weighting.name = std::string(mrWeightingName(MrWeightingKind::Unknown));
+        weighting.reason = "no BIDS sidecar (" + bidsSidecarPath(path).filename().string() +
+                           ") beside the file: declare a T1-weighted image with --t1-weighted, a T1 map with --t1-map";
+    }
+    MrMaterialOptions mo;
+    mo.t1Map = options.dicom.t1Map;
+    mo.t1Weighted = options.dicom.t1Weighted;
+    mo.normaliseT1Weighted = options.dicom.normaliseT1Weighted;
+    mo.removeBackground = options.dicom.removeMrBackground;
+    mo.assumedField = options.dicom.assumedField;
+    const std::optional<double> field = sidecar ? sidecar->fieldStrengthT : std::nullopt;
+    assignMrMaterial(v, weighting, field, mo, name);
+    if (!field) {
+        md.extra["field_strength_source"] =
+            "assumed " + std::string(fieldStrengthName(mo.assumedField)) + ": no MagneticFieldStrength in a sidecar";
+    }
+    return v;
+}
+
+} // namespace
+
 Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options, DicomLoadReport* report)
 {
     if (!std::filesystem::exists(path)) throw IoError(path.string() + ": no such file or directory");
-    switch (formatOf(path)) {
+    switch (const VolumeFormat f = formatOf(path)) {
     case VolumeFormat::Dicom: return loadDicom({path}, options.dicom, report);
     case VolumeFormat::Vdb: return loadVdb(path);
-    case VolumeFormat::Nrrd: return loadNrrd(path, rasterOptions(options));
-    case VolumeFormat::Nifti: return loadNifti(path, rasterOptions(options));
-    case VolumeFormat::MetaImage: return loadMetaImage(path, rasterOptions(options));
+    case VolumeFormat::Nrrd:
+    case VolumeFormat::Nifti:
+    case VolumeFormat::MetaImage: return loadRasterVolume(path, f, options);
     case VolumeFormat::Unknown: break;
     }
     throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd, .mha, .mhd or .vdb)");
@@ -85,7 +193,10 @@ void saveVolume(const Volume& v, const std::filesystem::path& file)
     switch (formatOf(file)) {
     case VolumeFormat::Vdb: saveVdb(v, file); return;
     case VolumeFormat::Nrrd: {
-        const Channel c = v.has(Channel::Hu) ? Channel::Hu : v.has(Channel::T1) ? Channel::T1 : Channel::Label;
+        const Channel c = v.has(Channel::Hu)          ? Channel::Hu
+                          : v.has(Channel::T1)        ? Channel::T1
+                          : v.has(Channel::Intensity) ? Channel::Intensity
+                                                      : Channel::Label;
         try {
             saveNrrd(v, c, file);
         } catch (const ValueError& e) {

@@ -52,6 +52,7 @@ VolumeInfo describe(const Volume& v, const TissueTable& table)
 
     if (auto g = huGrid(v)) info.channels.push_back(summarise(*g, "hu", "float"));
     if (auto g = t1Grid(v)) info.channels.push_back(summarise(*g, "t1", "float"));
+    if (auto g = intensityGrid(v)) info.channels.push_back(summarise(*g, "intensity", "float"));
     if (auto g = labelGrid(v)) {
         info.channels.push_back(summarise(*g, "label", "int32"));
         std::map<int, std::int64_t> counts;

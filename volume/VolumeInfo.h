@@ -17,7 +17,7 @@ namespace voxhap::volume {
 
 /// @brief Summary of one grid over its active voxels.
 struct ChannelSummary {
-    std::string name;            ///< "hu", "t1" or "label"
+    std::string name;            ///< "hu", "t1", "intensity" or "label"
     std::string valueType;       ///< "float" or "int32"
     std::int64_t activeVoxels = 0;
     std::uint64_t memoryBytes = 0;

@@ -15,6 +15,7 @@
 #include <gdcmUIDs.h>
 
 #include <cstdint>
+#include <sstream>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -35,6 +36,13 @@ struct SyntheticSlice {
     double slope = 1.0, intercept = -1024.0;
     double gantryTilt = 0.0;             ///< written to (0018,1120) [deg]
     double fieldStrength = 0.0;          ///< written to (0018,0087) [T] if > 0
+    /// MR sequence fields (written when not empty / > 0): what the weighting rule reads.
+    std::string scanningSequence, sequenceVariant, sequenceName, imageType;
+    double repetitionTimeMs = 0, echoTimeMs = 0, flipAngleDeg = 0;
+    int echoNumber = 0;                  ///< (0018,0086) if > 0
+    int acquisitionNumber = 0;           ///< (0020,0012) if > 0
+    int instanceNumber = 0;              ///< (0020,0013) if > 0
+    std::string seriesNumber;            ///< (0020,0011) if not empty
     std::vector<std::int16_t> pixels;    ///< rows × columns stored values, column fastest
 };
 
@@ -110,6 +118,33 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
         field.SetValue(s.fieldStrength);
         ds.Replace(field.GetAsDataElement());
     }
+    // Strings and numbers as decimal strings, each only when given.
+    const auto text = [&ds](std::uint16_t g, std::uint16_t e, const gdcm::VR& vr, const std::string& v) {
+        if (v.empty()) return;
+        std::string padded = v;
+        if (padded.size() % 2) padded += ' ';
+        gdcm::DataElement de(gdcm::Tag(g, e));
+        de.SetVR(vr);
+        de.SetByteValue(padded.data(), std::uint32_t(padded.size()));
+        ds.Replace(de);
+    };
+    const auto number = [&](std::uint16_t g, std::uint16_t e, const gdcm::VR& vr, double v) {
+        if (v <= 0) return;
+        std::ostringstream os;
+        os << v;
+        text(g, e, vr, os.str());
+    };
+    text(0x0018, 0x0020, gdcm::VR::CS, s.scanningSequence);
+    text(0x0018, 0x0021, gdcm::VR::CS, s.sequenceVariant);
+    text(0x0018, 0x0024, gdcm::VR::SH, s.sequenceName);
+    text(0x0008, 0x0008, gdcm::VR::CS, s.imageType);
+    text(0x0020, 0x0011, gdcm::VR::IS, s.seriesNumber);
+    number(0x0018, 0x0080, gdcm::VR::DS, s.repetitionTimeMs);
+    number(0x0018, 0x0081, gdcm::VR::DS, s.echoTimeMs);
+    number(0x0018, 0x1314, gdcm::VR::DS, s.flipAngleDeg);
+    number(0x0018, 0x0086, gdcm::VR::IS, s.echoNumber);
+    number(0x0020, 0x0012, gdcm::VR::IS, s.acquisitionNumber);
+    number(0x0020, 0x0013, gdcm::VR::IS, s.instanceNumber);
 
     w.SetFileName(file.string().c_str());
     if (!w.Write()) throw std::runtime_error("GDCM could not write " + file.string());
