@@ -133,6 +133,13 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
 
     if (options.needs.damping) {
         if (!labels && !v.has(Channel::T1)) {
+            if (v.has(Channel::Intensity)) {
+                // MR that is not T1 (MrMaterial.h): never read as T1 silently.
+                const std::string w = v.metadata().mrWeighting.empty() ? "unknown" : v.metadata().mrWeighting;
+                throw ValueError("material field: tissue damping needs T1 or tissue labels, and this MR (" + w +
+                                 ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
+                                 "image with --t1-weighted or a T1 map with --t1-map");
+            }
             throw ValueError("material field: tissue damping needs a label or t1 grid (segment the volume first)");
         }
         BetaRule rule;

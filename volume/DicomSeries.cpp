@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -636,7 +637,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
 
             // MR goes to the intensity channel first; assignMrMaterial moves it.
             const float background = isMr ? kAirIntensity : kAirHu;
-            const float airBelow = isMr ? options.airT1 : options.airHu;
+            // MR: zero and below is background (magnitude images hold no tissue there).
+            const float airBelow = isMr ? std::nextafter(options.airT1, std::numeric_limits<float>::max()) : options.airHu;
             SparseSlabs sparse(background, airBelow);
             FrameSource source(work.headers);
             const auto& order = plan.stack.slices;

@@ -80,7 +80,7 @@ struct DicomOptions {
     /// §5.2), so -950 keeps lung active and drops the air around the patient.
     float airHu = -950.0f;
     /// MR voxels at or below this become inactive before the background rule
-    /// [scanner units].
+    /// [scanner units] (magnitude images hold no tissue at zero).
     float airT1 = 0.0f;
     /// Refuse, before allocating, a series whose grid could exceed this [bytes].
     std::uint64_t memoryCapBytes = std::uint64_t(4) << 30;

@@ -7,7 +7,9 @@
 #include "volume/Errors.h"
 #include "volume/SparseSlabs.h"
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -36,7 +38,9 @@ Volume::GridPtr readRaster(ByteSource& src, const RasterLayout& l, Channel chann
 {
     if (channel == Channel::Label) throw IoError(file + ": reading a label volume from this format is not supported");
     const float background = channel == Channel::Hu ? kAirHu : kAirT1;
-    const float air = channel == Channel::Hu ? o.airHu : o.airT1;
+    // MR (t1, intensity): zero and below is background, for magnitude images
+    // have no tissue there (a grid saved by voxhap stores its air as 0).
+    const float air = channel == Channel::Hu ? o.airHu : std::nextafter(o.airT1, std::numeric_limits<float>::max());
     const std::size_t plane = std::size_t(l.dims.x()) * std::size_t(l.dims.y());
     const std::size_t bytesPerSample = sampleBytes(l.type);
     const bool swap = l.bigEndian && bytesPerSample > 1; // hosts are little-endian (static_assert in NrrdFile.cpp)

@@ -121,6 +121,29 @@ TEST_F(LumbarField, OnlyTheNeededGridsAreBuilt)
     EXPECT_TRUE(bone.boneStiffness());
 }
 
+TEST_F(LumbarField, MrIntensityIsNeverReadAsT1)
+{
+    // The phantom's t1 moved to the intensity channel, labels removed: an MR
+    // of some other weighting. Damping needs T1 or labels: refused in one line
+    // that names the weighting and the declarations that would make it T1.
+    volume::Volume mr(vol->transformPtr()->copy(), vol->indexBox());
+    mr.setGrid(volume::Channel::Intensity, vol->grid(volume::Channel::T1)->deepCopyGrid());
+    mr.metadata().mrWeighting = "PD-weighted";
+    try {
+        const MaterialField f(mr, table(), MaterialOptions{});
+        FAIL() << "damping was built from an intensity grid";
+    } catch (const ValueError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("PD-weighted"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("--t1-weighted"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    // Bone stiffness alone does not read T1, but needs HU: refused too, for its own reason.
+    MaterialOptions bone;
+    bone.needs.damping = false;
+    EXPECT_THROW(MaterialField(mr, table(), bone), ValueError);
+}
+
 TEST_F(LumbarField, CorruptT1StaysFinite)
 {
     volume::Volume copy = *vol;
