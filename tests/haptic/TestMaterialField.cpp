@@ -141,6 +141,7 @@ TEST_F(LumbarField, MrIntensityIsNeverReadAsT1)
     // Bone stiffness alone does not read T1, but needs HU: refused too, for its own reason.
     MaterialOptions bone;
     bone.needs.damping = false;
+    bone.needs.boneStiffness = true;
     EXPECT_THROW(MaterialField(mr, table(), bone), ValueError);
 }
 
