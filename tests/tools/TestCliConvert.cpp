@@ -118,4 +118,58 @@ TEST_F(CliConvert, BadInputsFailWithOneLineAndNoOutput)
     }
 }
 
+TEST_F(CliConvert, RealMrAsAUserBringsIt)
+{
+    // The two-echo field map: the table is shown, the load refused in one
+    // line naming --volume; one echo loads with --volume and --resample, as
+    // an intensity grid called a field map.
+    VOXHAP_REQUIRE_DIR(voxhap::test::fieldMapDir());
+    const std::string fieldMap = "'" + voxhap::test::fieldMapDir().string() + "'";
+    const Result refused = run("info " + fieldMap);
+    expectFailure(refused, 1, "--volume 1..2");
+    EXPECT_NE(refused.out.find("field map"), std::string::npos) << refused.out;
+    EXPECT_NE(refused.out.find("volumes by echo"), std::string::npos) << refused.out;
+    const Result echo = run("convert " + fieldMap + " echo1.vdb --volume 1 --resample --json");
+    ASSERT_EQ(echo.exitCode, 0) << echo.err;
+    const auto j = nlohmann::json::parse(echo.out);
+    EXPECT_EQ(j["mr_weighting"], "field map");
+    EXPECT_EQ(j["volume"], 1);
+    EXPECT_TRUE(j["resampled"].get<bool>());
+    EXPECT_EQ(j["source_voxels_outside_grid"], 0);
+
+    // The diffusion mosaics: one volume of 128 × 128 × 25.
+    VOXHAP_REQUIRE_DIR(voxhap::test::dwiMosaicDir());
+    const Result b0 = run("convert '" + voxhap::test::dwiMosaicDir().string() + "' b0.vdb --volume 1 --json");
+    ASSERT_EQ(b0.exitCode, 0) << b0.err;
+    EXPECT_EQ(nlohmann::json::parse(b0.out)["dims"], nlohmann::json({128, 128, 25}));
+    EXPECT_EQ(nlohmann::json::parse(b0.out)["mr_weighting"], "diffusion");
+
+    // The MPRAGE: T1-weighted, normalised; the text file beside it set aside.
+    VOXHAP_REQUIRE_DIR(voxhap::test::mprageDir());
+    const Result info = run("info '" + voxhap::test::mprageDir().string() + "' --json");
+    ASSERT_EQ(info.exitCode, 0) << info.err;
+    const auto m = nlohmann::json::parse(info.out);
+    EXPECT_EQ(m["mr_weighting"], "T1-weighted");
+    EXPECT_EQ(m["dicom_skipped"]["counts"]["not DICOM"], 1);
+    EXPECT_EQ(m["units"]["t1"], "ms");
+}
+
+TEST_F(CliConvert, SkipBadAndDeclarationsFromTheCommandLine)
+{
+    writeSeries(mDir / "cut", 4, "1.2.826.0.1.3680043.2.1125.99.5");
+    fs::resize_file(mDir / "cut" / "5-3.dcm", 700);
+    expectFailure(run("convert cut out.vdb"), 1, "--skip-bad");
+    EXPECT_FALSE(fs::exists(mDir / "out.vdb"));
+    const Result kept = run("convert cut out.vdb --skip-bad --json");
+    ASSERT_EQ(kept.exitCode, 0) << kept.err;
+    EXPECT_EQ(nlohmann::json::parse(kept.out)["dims"], nlohmann::json({16, 12, 3}));
+    EXPECT_EQ(nlohmann::json::parse(kept.out)["skipped_bad_files"], 1);
+    const Result listed = run("info cut --skip-bad");
+    ASSERT_EQ(listed.exitCode, 0) << listed.err;
+    EXPECT_NE(listed.out.find("5-3.dcm"), std::string::npos) << listed.out;
+
+    // --channel takes auto, hu, mr (and t1, read as mr); anything else is a usage error.
+    expectFailure(run("info cut --channel ct"), 2, "--channel");
+}
+
 } // namespace
