@@ -453,30 +453,6 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
     DicomScan scan;
     std::vector<fs::path> all = expand(inputs);
 
-    // gzip-compressed files (.dcm.gz from some archives) are inflated, whole
-    // stream verified, into a private folder and read from there.
-    std::shared_ptr<TemporaryFolder> unpacked;
-    for (fs::path& f : all) {
-        if (!isGzipFile(f)) continue;
-        if (!unpacked) unpacked = std::make_shared<TemporaryFolder>("voxhap-dicom-gz");
-        const fs::path copy = unpacked->path() / (std::to_string(scan.inflatedFrom.size()) + ".dcm");
-        try {
-            if (!inflateDicomGzip(f, copy, inflateCapBytes)) {
-                scan.skipped.push_back({f, "not DICOM", f.string() + ": gzip data that is not a DICOM file", {}});
-                f.clear();
-                continue;
-            }
-        } catch (const IoError& e) {
-            scan.skipped.push_back({f, "damaged", e.what(), {}});
-            f.clear();
-            continue;
-        }
-        scan.inflatedFrom[copy.string()] = f.string();
-        f = copy;
-    }
-    scan.unpacked = unpacked;
-    all.erase(std::remove_if(all.begin(), all.end(), [](const fs::path& f) { return f.empty(); }), all.end());
-
     // Only files that pass the structural walk reach GDCM (it aborts on truncated
     // ones). Walk and scan run in parallel over chunks of files, each chunk with
     // its own scanner: the header pass is a third of a load when serial.
@@ -484,17 +460,40 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
     std::vector<DicomPixelLocation> where(all.size());
     std::vector<DicomPreflightNotes> notes(all.size());
     std::vector<std::string> damage(all.size());
-    tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t n) {
+    const auto walk = [&](std::size_t n) {
         try {
             kind[n] = preflightDicom(all[n], &where[n], &notes[n]);
         } catch (const IoError& e) {
             damage[n] = e.what();
         }
-    });
+    };
+    tbb::parallel_for(std::size_t(0), all.size(), walk);
+    // gzip-compressed files (.dcm.gz from some archives) have no DICM preamble:
+    // they are inflated, the whole stream verified, into a private folder and
+    // walked from there. Only files that are not DICOM are looked at again.
+    std::shared_ptr<TemporaryFolder> unpacked;
+    std::vector<std::string> gzipDamage(all.size());
+    for (std::size_t n = 0; n < all.size(); ++n) {
+        if (!damage[n].empty() || kind[n] != DicomKind::NotDicom || !isGzipFile(all[n])) continue;
+        if (!unpacked) unpacked = std::make_shared<TemporaryFolder>("voxhap-dicom-gz");
+        const fs::path copy = unpacked->path() / (std::to_string(scan.inflatedFrom.size()) + ".dcm");
+        try {
+            if (!inflateDicomGzip(all[n], copy, inflateCapBytes)) continue; // gzip, but not DICOM inside
+        } catch (const IoError& e) {
+            gzipDamage[n] = e.what();
+            continue;
+        }
+        scan.inflatedFrom[copy.string()] = all[n].string();
+        all[n] = copy;
+        walk(n);
+    }
+    scan.unpacked = unpacked;
     std::map<fs::path, std::size_t> located;
     std::vector<fs::path> files;
     for (std::size_t n = 0; n < all.size(); ++n) {
-        if (!damage[n].empty()) {
+        if (!gzipDamage[n].empty()) {
+            scan.skipped.push_back({all[n], "damaged", gzipDamage[n], {}});
+        } else if (!damage[n].empty()) {
             scan.skipped.push_back({all[n], "damaged", damage[n], notes[n].seriesUid});
         } else if (kind[n] == DicomKind::NotDicom) {
             scan.skipped.push_back({all[n], "not DICOM", all[n].string() + ": no DICM preamble: not a DICOM Part 10 file", {}});

@@ -42,6 +42,17 @@ struct Tag {
     }
 };
 
+/// The private elements the loader reads b-values from (DicomHeaders.cpp),
+/// and their groups' creator slots: Siemens (0019,xx0C), GE (0043,xx39),
+/// Philips (2001,xx03).
+bool wantedPrivate(const Tag& t)
+{
+    if (t.group != 0x0019 && t.group != 0x0043 && t.group != 0x2001) return false;
+    if (t.element >= 0x0010 && t.element <= 0x00FF) return true; // a private creator
+    const unsigned low = t.element & 0xFFu;
+    return (t.group == 0x0019 && low == 0x0C) || (t.group == 0x0043 && low == 0x39) || (t.group == 0x2001 && low == 0x03);
+}
+
 /// @p text with bytes outside printable ASCII shown as '?', for messages on one line.
 std::string printable(std::string text)
 {
@@ -150,7 +161,7 @@ public:
                     read(pos, mSopClass.data(), len, t);
                 }
                 if (depth == 0 && t.is(0x0008, 0x0010)) recognitionCode(pos, len, t);
-                if (depth == 0 && (t.group == 0x0019 || t.group == 0x0043 || t.group == 0x2001) && len <= 64) {
+                if (depth == 0 && len <= 64 && wantedPrivate(t)) {
                     std::string value(len, '\0');
                     read(pos, value.data(), len, t);
                     mNotes.privateValues[std::uint32_t(t.group) << 16 | t.element] = value;
