@@ -38,6 +38,8 @@ packages=(
   clang libclang-rt-14-dev
   # benchmark plots (pngcairo, no X needed)
   gnuplot-nox
+  # real DICOM test files of other encodings and object classes (pydicom's test data)
+  python3-pydicom
 )
 
 missing=()
