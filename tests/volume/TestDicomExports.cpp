@@ -392,3 +392,75 @@ TEST_F(DicomExports, NonImageObjectsInASeriesFolderDoNotStopIt)
 }
 
 } // namespace
+
+namespace {
+
+/// Set, in every per-frame functional group of @p file, the frame's plane
+/// position and its temporal position index: frames 0..n-1 at positions
+/// z0 + (f mod slices)·step, time point 1 + f / slices.
+void makeEnhancedTimeSeries(const fs::path& file, int slices, double z0, double step)
+{
+    voxhap::test::rewrite(file, [&](gdcm::File& f) {
+        gdcm::DataSet& ds = f.GetDataSet();
+        gdcm::DataElement perFrame = ds.GetDataElement(gdcm::Tag(0x5200, 0x9230));
+        gdcm::SmartPointer<gdcm::SequenceOfItems> sq = perFrame.GetValueAsSQ();
+        ASSERT_TRUE(sq);
+        for (gdcm::SequenceOfItems::SizeType i = 1; i <= sq->GetNumberOfItems(); ++i) {
+            const int frame = int(i) - 1;
+            gdcm::DataSet& item = sq->GetItem(i).GetNestedDataSet();
+            // (0020,9113) PlanePosition → (0020,0032)
+            gdcm::Attribute<0x0020, 0x0032> ipp = {{-20.0, -30.0, z0 + (frame % slices) * step}};
+            gdcm::Item positionItem;
+            positionItem.GetNestedDataSet().Insert(ipp.GetAsDataElement());
+            gdcm::SmartPointer<gdcm::SequenceOfItems> positions = new gdcm::SequenceOfItems;
+            positions->AddItem(positionItem);
+            gdcm::DataElement pp(gdcm::Tag(0x0020, 0x9113));
+            pp.SetVR(gdcm::VR::SQ);
+            pp.SetValue(*positions);
+            item.Replace(pp);
+            // (0020,9111) FrameContent → (0020,9128) TemporalPositionIndex (UL)
+            const std::uint32_t t = std::uint32_t(1 + frame / slices);
+            gdcm::DataElement index(gdcm::Tag(0x0020, 0x9128));
+            index.SetVR(gdcm::VR::UL);
+            index.SetByteValue(reinterpret_cast<const char*>(&t), 4);
+            gdcm::Item contentItem;
+            contentItem.GetNestedDataSet().Insert(index);
+            gdcm::SmartPointer<gdcm::SequenceOfItems> content = new gdcm::SequenceOfItems;
+            content->AddItem(contentItem);
+            gdcm::DataElement fc(gdcm::Tag(0x0020, 0x9111));
+            fc.SetVR(gdcm::VR::SQ);
+            fc.SetValue(*content);
+            item.Replace(fc);
+        }
+        perFrame.SetValue(*sq);
+        ds.Replace(perFrame);
+    });
+}
+
+TEST_F(DicomExports, EnhancedMultiFrameTimeSeriesLoadsOneTimePoint)
+{
+    // One enhanced file, 3 slices × 2 time points: the frames repeat
+    // positions and differ in TemporalPositionIndex (0020,9128).
+    std::vector<SyntheticSlice> frames;
+    for (int f = 0; f < 6; ++f) frames.push_back(ctSlice(f)); // values differ by frame
+    const fs::path file = mDir / "enhanced.dcm";
+    voxhap::test::writeSyntheticMultiFrame(frames, 2.0, file);
+    makeEnhancedTimeSeries(file, 3, 10.0, 2.0);
+    const DicomCatalog c = catalogDicom({mDir});
+    ASSERT_EQ(c.series.size(), 1u);
+    EXPECT_EQ(c.series.front().volumes, 2u);
+    EXPECT_EQ(c.series.front().separatedBy, "temporal position");
+    EXPECT_THROW(loadDicom({mDir}), voxhap::IoError);
+    for (std::size_t t = 1; t <= 2; ++t) {
+        DicomOptions o;
+        o.volume = t;
+        const Volume v = loadDicom({mDir}, o);
+        ASSERT_EQ(v.indexBox().dims().z(), 3);
+        auto acc = huGrid(v)->getConstAccessor();
+        // Slice k of time point t is frame 3·(t − 1) + k, whose stored values are storedAt(·, ·, frame).
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(acc.getValue({5, 4, k}), float(storedAt(5, 4, int(3 * (t - 1)) + k))) << t << "," << k;
+        EXPECT_NE(v.metadata().extra.at("volume").find("time point " + std::to_string(t)), std::string::npos);
+    }
+}
+
+} // namespace
