@@ -113,6 +113,7 @@ void drawAnnotations(Image& img, const ViewFrame& f, const Overlays& o, const Ov
         }
     }
     if (!o.title.empty()) drawText(img, kMarginPx, kMarginPx, o.title, s.text, scale);
+    if (!o.legend.empty()) drawText(img, kMarginPx, kMarginPx + th + 2 * scale, o.legend, s.text, scale);
 }
 
 void drawSliceOverlays(Image& img, const ViewFrame& f, const Overlays& o, const OverlayStyle& s)

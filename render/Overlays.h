@@ -2,7 +2,7 @@
 /// @file Overlays.h
 /// @brief What is drawn over a view, in software: planned paths and the needle
 /// (projected onto a slice, and marked where they cross it), the crosshair,
-/// a millimetre scale bar, orientation letters and a title.
+/// a millimetre scale bar, orientation letters, a title and a legend.
 #pragma once
 
 #include "render/Image.h"
@@ -37,6 +37,7 @@ struct Overlays {
     std::string title;
     bool scaleBar = true;
     bool letters = true;
+    std::string legend; ///< a second line under the title: the window and its unit (MR)
 };
 
 /// @brief Text scale for an image: 5×7 glyphs at 2× from 400 px up.
@@ -50,7 +51,7 @@ double scaleBarLengthMm(double widthMm);
 /// draws these as 3D lines), then the annotations.
 void drawSliceOverlays(Image& img, const ViewFrame& f, const Overlays& o, const OverlayStyle& s);
 
-/// @brief Scale bar, orientation letters and title only.
+/// @brief Scale bar, orientation letters, title and legend only.
 void drawAnnotations(Image& img, const ViewFrame& f, const Overlays& o, const OverlayStyle& s);
 
 } // namespace voxhap::render

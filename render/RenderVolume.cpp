@@ -17,7 +17,10 @@
 #include <vtkShortArray.h>
 
 #include <algorithm>
+#include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 
 namespace voxhap::render {
 
@@ -69,7 +72,64 @@ std::vector<T> reslice(vtkImageData* img, const RenderVolume::Impl& v, const Vie
     return std::vector<T>(p, p + std::size_t(f.width) * std::size_t(f.height));
 }
 
+/// The kBodyLowPercentile and kBodyHighPercentile of @p grid's active voxels
+/// (a tile counts as all its voxels); [lo, hi] if none is active. From a
+/// histogram of kPercentileBins bins over the active values' range, as VTK's
+/// vtkImageHistogramStatistics bins float data (65536 bins): exact to half a
+/// bin, without a copy of the values (an MR volume may hold tens of millions).
+std::array<double, 2> activePercentiles(const volume::FloatGrid& grid, double lo, double hi)
+{
+    constexpr int kPercentileBins = 1 << 16;
+    double a = std::numeric_limits<double>::infinity(), b = -a;
+    std::int64_t n = 0;
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        if (!std::isfinite(*it)) continue;
+        a = std::min(a, double(*it)), b = std::max(b, double(*it));
+        n += std::int64_t(it.getVoxelCount());
+    }
+    if (n == 0) return {lo, hi};
+    if (!(b > a)) return {a, a};
+    const double scale = kPercentileBins / (b - a);
+    std::vector<std::int64_t> histogram(kPercentileBins, 0);
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        if (!std::isfinite(*it)) continue;
+        histogram[std::size_t(std::min(kPercentileBins - 1, int((*it - a) * scale)))] += std::int64_t(it.getVoxelCount());
+    }
+    const auto at = [&](double percent) {
+        const auto rank = std::int64_t(std::floor(percent / 100.0 * double(n - 1))); // 0-based, as a sorted array's index
+        std::int64_t seen = 0;
+        for (int bin = 0; bin < kPercentileBins; ++bin) {
+            seen += histogram[std::size_t(bin)];
+            if (seen > rank) return std::clamp(a + (bin + 0.5) / scale, a, b);
+        }
+        return b;
+    };
+    return {at(kBodyLowPercentile), at(kBodyHighPercentile)};
+}
+
 } // namespace
+
+std::string_view scalarUnits(ScalarChannel c)
+{
+    switch (c) {
+    case ScalarChannel::Hu: return "HU";
+    case ScalarChannel::T1: return "ms";
+    case ScalarChannel::Intensity: return "a.u.";
+    }
+    return "?";
+}
+
+std::string windowLegend(ScalarChannel c, const WindowLevel& w)
+{
+    const char* name = c == ScalarChannel::Hu ? "CT" : c == ScalarChannel::T1 ? "T1" : "MR";
+    const auto number = [](double x) {
+        std::ostringstream os;
+        os << std::setprecision(x != 0.0 && std::abs(x) < 10.0 ? 2 : 0) << std::fixed << x;
+        return os.str();
+    };
+    return std::string(name) + " " + number(w.level - 0.5 * w.width) + ".." + number(w.level + 0.5 * w.width) + " " +
+           std::string(scalarUnits(c));
+}
 
 vtkSmartPointer<vtkMatrix4x4> RenderVolume::Impl::dataToWorld() const
 {
@@ -101,7 +161,11 @@ RenderVolume::RenderVolume(const volume::Volume& v, bool withLabels)
         image = volume::t1Grid(v);
         d.channel = ScalarChannel::T1;
     }
-    if (!image) throw ValueError("render: the volume has neither a hu nor a t1 grid");
+    if (!image) {
+        image = volume::intensityGrid(v);
+        d.channel = ScalarChannel::Intensity;
+    }
+    if (!image) throw ValueError("render: the volume has no hu, t1 or intensity grid");
     d.background = image->background();
     d.scalars = denseCopy<vtkFloatArray>(*image, box, g.spacing);
 
@@ -118,6 +182,7 @@ RenderVolume::RenderVolume(const volume::Volume& v, bool withLabels)
     }
     d.lo = lo, d.hi = hi;
     d.tissueMean = tissue ? sum / double(tissue) : hi;
+    d.bodyRange = d.channel == ScalarChannel::Hu ? std::array<double, 2>{lo, hi} : activePercentiles(*image, lo, hi);
 
     if (withLabels) {
         if (const volume::LabelGrid::ConstPtr labels = volume::labelGrid(v)) {
@@ -139,6 +204,18 @@ double RenderVolume::finestSpacing() const { return mImpl->spacing.minCoeff(); }
 double RenderVolume::scalarMin() const { return mImpl->lo; }
 double RenderVolume::scalarMax() const { return mImpl->hi; }
 double RenderVolume::tissueMean() const { return mImpl->tissueMean; }
+std::array<double, 2> RenderVolume::bodyRange() const { return mImpl->bodyRange; }
+
+WindowLevel RenderVolume::defaultWindow(BlendMode mode) const
+{
+    if (mImpl->channel == ScalarChannel::Hu) {
+        return windowLevel(mode == BlendMode::Mip ? WindowPreset::Bone : WindowPreset::SoftTissue);
+    }
+    const auto [lo, hi] = mImpl->bodyRange;
+    // A body of one value (a phantom block) still needs a ramp: a width of one unit.
+    const double width = hi > lo ? hi - lo : 1.0;
+    return {width, hi > lo ? 0.5 * (lo + hi) : lo};
+}
 
 std::size_t RenderVolume::denseBytes() const
 {

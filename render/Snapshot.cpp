@@ -60,14 +60,15 @@ Image Snapshot::render(ViewKind v)
     Overlays o;
     o.paths = mRequest.plan.paths;
     o.needle = mRequest.needle;
-    const bool ct = mVolume->channel() == ScalarChannel::Hu;
-    const WindowLevel valueRange{std::max(1e-6, mVolume->scalarMax() - mVolume->scalarMin()),
-                                 0.5 * (mVolume->scalarMax() + mVolume->scalarMin())};
+    // MR says what its grey means (a window of its own values, ms or arbitrary
+    // units); CT keeps its familiar look, the presets' HU.
+    const bool mr = mVolume->channel() != ScalarChannel::Hu;
     if (v != ViewKind::ThreeD) {
         o.crosshair = mPoint;
         o.title = sliceTitle(v, mPoint);
         SliceStyle style;
-        style.window = mRequest.window ? *mRequest.window : ct ? windowLevel(WindowPreset::SoftTissue) : valueRange;
+        style.window = mRequest.window ? *mRequest.window : mVolume->defaultWindow();
+        if (mr) o.legend = windowLegend(mVolume->channel(), style.window);
         style.labels = mRequest.labels;
         Image img = renderSlice(*mVolume, f, style, mTable);
         drawSliceOverlays(img, f, o, OverlayStyle{});
@@ -78,9 +79,11 @@ Image Snapshot::render(ViewKind v)
         style.mode = mRequest.mode;
         style.caster = mRequest.caster;
         style.criticalSurfaces = mRequest.criticalSurfaces;
-        const WindowPreset preset = mRequest.mode == BlendMode::Mip ? WindowPreset::Bone : WindowPreset::SoftTissue;
-        style.window = mRequest.window ? *mRequest.window : ct ? windowLevel(preset) : valueRange;
+        style.window = mRequest.window ? *mRequest.window : mVolume->defaultWindow(mRequest.mode);
         o.title = "3d " + std::string(blendModeName(mRequest.mode));
+        if (mr && mRequest.mode != BlendMode::Sum) { // the sum has no window
+            o.legend = windowLegend(mVolume->channel(), style.window);
+        }
         m3d = std::make_unique<View3d>();
         m3d->view = std::make_unique<VolumeView3d>(*mVolume, f, style, mTable, o);
     }

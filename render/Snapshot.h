@@ -29,8 +29,8 @@ struct RenderRequest {
     std::vector<ViewKind> views{ViewKind::Axial, ViewKind::Sagittal, ViewKind::Coronal, ViewKind::ThreeD};
     BlendMode mode = BlendMode::Colour;   ///< of the 3D view
     RayCaster caster = RayCaster::Auto;   ///< of the 3D view
-    /// Slices' window; default soft tissue on CT, the value range on T1. The 3D
-    /// grey and MIP modes default to soft tissue and bone.
+    /// Slices' and 3D window; default RenderVolume::defaultWindow: on CT soft
+    /// tissue (MIP: bone), on MR the body's robust range, never a CT preset.
     std::optional<WindowLevel> window;
     /// Where the slices cut and the crosshair sits [mm, LPS]; default the first
     /// path's target, else the centre of the volume.

@@ -96,6 +96,12 @@ BlendMode parseBlendMode(std::string_view text)
     throw ValueError("unknown mode '" + std::string(t) + "' (expected colour, grey, mip, sum)");
 }
 
+bool namesCtPreset(std::string_view text)
+{
+    const std::string_view t = trim(text);
+    return t == "bone" || t == "soft" || t == "soft-tissue" || t == "lung";
+}
+
 WindowLevel parseWindow(std::string_view text)
 {
     const std::string_view t = trim(text);

@@ -53,4 +53,9 @@ BlendMode parseBlendMode(std::string_view text);
 /// @throw ValueError
 WindowLevel parseWindow(std::string_view text);
 
+/// @brief Whether @p text names a CT preset ("bone", "soft", "soft-tissue",
+/// "lung"): values in HU, which mean nothing on MR. A caller showing MR refuses
+/// such a name (WIDTH,LEVEL in the MR grid's own unit stays valid).
+bool namesCtPreset(std::string_view text);
+
 } // namespace voxhap::render

@@ -51,11 +51,7 @@ Viewer::Viewer(const volume::Volume& v, const ViewerOptions& options, const volu
         const double w = std::abs(ext.dot(right)), h = std::abs(ext.dot(down));
         mPixelMm = std::max({mPixelMm, w / p.width, h / p.height});
     }
-    const bool ct = mVolume->channel() == ScalarChannel::Hu;
-    mWindow = mOpt.window ? *mOpt.window
-              : ct        ? windowLevel(WindowPreset::SoftTissue)
-                          : WindowLevel{std::max(1e-6, mVolume->scalarMax() - mVolume->scalarMin()),
-                                 0.5 * (mVolume->scalarMax() + mVolume->scalarMin())};
+    mWindow = mOpt.window ? *mOpt.window : mVolume->defaultWindow();
     mFrames[std::size_t(ViewKind::ThreeD)] = viewFrame(ViewKind::ThreeD, mBox, centre, mPixelMm, 1 << 20);
     updateFrames();
 }
@@ -143,10 +139,12 @@ bool Viewer::handle(const ViewerEvent& e)
     else if (k == "a") mEditor.setTool(Tool::Angle);
     else if (k == "c") mEditor.clearMeasurements();
     else if (k == "s") savePlan();
-    else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) { // HU presets mean nothing on T1
+    else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) {
         mWindowPreset = (mWindowPreset + 1) % 3;
         mWindow = windowLevel(kViewerPresets[mWindowPreset]);
         mSliceStale = {true, true, true};
+    } else if (k == "w") { // HU presets mean nothing on MR
+        mMessage = "w: CT windows do not apply to MR; the window stays " + windowLegend(mVolume->channel(), mWindow);
     } else if (k == "Up" || k == "Page_Up" || k == "Down" || k == "Page_Down") {
         ViewerEvent s;
         s.kind = ViewerEvent::Kind::Scroll;
@@ -218,6 +216,7 @@ Image Viewer::renderSlicePane(ViewKind v)
     o.needle = mNeedle;
     o.crosshair = mPoint;
     o.title = sliceTitle(v, mPoint);
+    if (mVolume->channel() != ScalarChannel::Hu) o.legend = windowLegend(mVolume->channel(), mWindow);
     const OverlayStyle style;
     drawSliceOverlays(img, f, o, style);
     // What the editor is picking: points so far, then the finished measurements.
@@ -254,12 +253,13 @@ Image Viewer::render3dPane()
         View3dStyle style;
         style.mode = mOpt.mode;
         style.caster = mOpt.caster;
-        const bool ct = mVolume->channel() == ScalarChannel::Hu;
-        const WindowPreset preset = mOpt.mode == BlendMode::Mip ? WindowPreset::Bone : WindowPreset::SoftTissue;
-        style.window = mOpt.window ? *mOpt.window : ct ? windowLevel(preset) : mWindow;
+        style.window = mOpt.window ? *mOpt.window : mVolume->defaultWindow(mOpt.mode);
         // Paths and needle are drawn over the cached picture instead (drawOver3d).
         Overlays o;
         o.title = "3d " + std::string(blendModeName(mOpt.mode));
+        if (mVolume->channel() != ScalarChannel::Hu && mOpt.mode != BlendMode::Sum) {
+            o.legend = windowLegend(mVolume->channel(), style.window); // the sum has no window
+        }
         m3d = std::make_unique<VolumeView3d>(*mVolume, f, style, mTable, o);
     }
     return m3d->render();

@@ -17,7 +17,8 @@
 /// - left click: use the tool at that point of a slice
 /// - Up / Page_Up, Down / Page_Down, wheel: next or previous slice of the pane
 ///   last clicked (one finest-voxel step along the pane's normal)
-/// - w: next window (soft tissue, bone, lung); c: clear measurements
+/// - w: next window (soft tissue, bone, lung) on CT; MR keeps the body's own
+///   range (RenderVolume::defaultWindow) and says so; c: clear measurements
 /// - s: save the plan (voxhap-plan/1); q or Escape: quit
 #pragma once
 
@@ -46,7 +47,7 @@ struct ViewerOptions {
     int width = 1024, height = 1048;   ///< window [px], status bar included
     BlendMode mode = BlendMode::Colour; ///< of the 3D pane
     RayCaster caster = RayCaster::Auto;
-    std::optional<WindowLevel> window;  ///< slices; default soft tissue on CT, the value range on T1
+    std::optional<WindowLevel> window;  ///< slices and 3D; default RenderVolume::defaultWindow (CT presets on CT only)
     bool labels = true;                 ///< tissue colours on the slices
     bool threeD = true;                 ///< false: the 3D pane says why not (threeDNote) instead
     std::string threeDNote;             ///< shown in the 3D pane when threeD is false

@@ -172,7 +172,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         mapper->SetBlendModeToComposite();
         if (d.channel == ScalarChannel::Hu) {
             colourTransfer(table, d, colour, opacity);
-        } else { // T1-weighted values do not follow the table's CT numbers: grey
+        } else { // MR values do not follow the table's CT numbers: grey over the body's own range
             greyRamp(style.window, colour);
             opacity->AddPoint(style.window.level - 0.5 * style.window.width, 0.0);
             opacity->AddPoint(style.window.level + 0.5 * style.window.width, kCriticalOpacity);
@@ -180,12 +180,15 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         property->ShadeOn();
         break;
     case BlendMode::Grey:
-        // Opacity follows the grey ramp (a soft-tissue haze), then rises to bone.
+        // Opacity follows the grey ramp (a soft-tissue haze), then on CT rises to
+        // bone; MR has no bone value, so its ramp ends at the window's top.
         mapper->SetBlendModeToComposite();
         greyRamp(style.window, colour);
         opacity->AddPoint(style.window.level - 0.5 * style.window.width, 0.0);
         opacity->AddPoint(style.window.level + 0.5 * style.window.width, kSoftOpacity);
-        opacity->AddPoint(std::max(kBoneHu, style.window.level + 0.5 * style.window.width + 1.0), kBoneOpacity);
+        if (d.channel == ScalarChannel::Hu) {
+            opacity->AddPoint(std::max(kBoneHu, style.window.level + 0.5 * style.window.width + 1.0), kBoneOpacity);
+        }
         property->ShadeOn();
         break;
     case BlendMode::Mip:

@@ -33,7 +33,7 @@ enum class RayCaster {
 struct View3dStyle {
     BlendMode mode = BlendMode::Colour;
     RayCaster caster = RayCaster::Auto;
-    WindowLevel window;             ///< grey ramp of the grey and MIP modes
+    WindowLevel window;             ///< grey ramp of the grey and MIP modes, and of MR's colour mode
     bool criticalSurfaces = true;   ///< surfaces of the table's critical tissues (needs labels)
     double sampleVoxels = 1.0;      ///< ray step in units of the finest voxel size
 };

@@ -19,6 +19,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
+#include <utility>
 
 namespace voxhap::segmentation {
 
@@ -214,8 +216,8 @@ void markSkin(const Lattice& lat, const Mask& body, double thicknessMm, std::int
     });
 }
 
-std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
-                                    const volume::TissueTable& table)
+AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
+                          const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
     const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), lung = id("lung");
@@ -227,6 +229,8 @@ std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat,
 
     const std::vector<float> smooth = gaussianSmooth(lat, hu, kSmoothingMm);
     const Mask body = ctBodyMask(lat, smooth);
+    AutomaticLabels out;
+    out.extent = torsoExtent(v, lat, body);
 
     // Step 2: lung among the gas components.
     const Mask gas = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smooth[i] < kGasHu; });
@@ -360,8 +364,28 @@ std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat,
         });
     }
 
+    // Outside the torso range the trunk's rules do not hold: keep what CT numbers
+    // say anywhere (skin, fat, bone, gas, lung), the rest is soft tissue.
+    if (!out.extent.all()) {
+        const std::size_t stride = lat.strides()[std::size_t(lat.sliceAxis)];
+        const auto slices = std::size_t(lat.dims[lat.sliceAxis]);
+        forEachVoxel(lat.size(), [&](std::size_t i) {
+            const std::int32_t l = labels[i];
+            const bool trunkClass = l == muscle || l == kidney || l == aorta || l == canal;
+            if (trunkClass && !out.extent.inTorso(int((i / stride) % slices))) labels[i] = soft;
+        });
+    }
+    if (std::string note = torsoNote(v, lat, out.extent, "CT torso rules",
+                                     "there muscle, kidney, aorta and spinal canal are not labelled (what those rules "
+                                     "would call them is soft_tissue); skin, fat, bone, gas and lung are labelled from "
+                                     "their CT numbers");
+        !note.empty()) {
+        out.notes.push_back(std::move(note));
+    }
+
     markSkin(lat, body, skinMm, skin, labels);
-    return labels;
+    out.labels = std::move(labels);
+    return out;
 }
 
 } // namespace voxhap::segmentation

@@ -19,9 +19,17 @@
 /// 5. skin: the body's outer shell of the table's skin thickness, in-plane;
 /// 6. spinal canal: holes of the bone ring closed by 7 mm, per slice, joined
 ///    across disc levels, at least 30 mm long: labelled spinal_cord.
+///
+/// Steps 2 to 6 were made for the trunk. Outside its slices (TorsoExtent.h: a
+/// head, a neck, a limb), only what CT numbers say whatever the anatomy is
+/// kept: the body, its skin shell, bone (regions with dense voxels, cortical
+/// from 700 HU), fat (−400 to −30 HU), gas (air) and aerated lung parenchyma
+/// (a texture rule, not a place). What the trunk's rules would call muscle,
+/// kidney, aorta or spinal canal is soft_tissue there, and a note says so.
 #pragma once
 
 #include "segmentation/Lattice.h"
+#include "segmentation/TorsoExtent.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 
@@ -30,10 +38,11 @@
 
 namespace voxhap::segmentation {
 
-/// @brief Tissue ids per voxel of @p lat from the dense HU values @p hu.
-/// @param v gives the world geometry (left-right for the kidney rule)
+/// @brief Tissue ids per voxel of @p lat from the dense HU values @p hu, the
+/// torso range, and a note where the torso rules did not apply everywhere.
+/// @param v gives the world geometry (left-right for the kidney rule, widths)
 /// @throw ValueError if the table lacks a tissue the rules label
-std::vector<std::int32_t> segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
+AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
                                     const volume::TissueTable& table);
 
 /// @brief The body mask of step 1 alone (HU ≥ −500, table and rails removed).

@@ -5,12 +5,15 @@
 #include "segmentation/MrSegmentation.h"
 
 #include "segmentation/CtSegmentation.h"
+#include "segmentation/DistanceTransform.h"
 #include "segmentation/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
+#include <utility>
 
 namespace voxhap::segmentation {
 
@@ -20,6 +23,12 @@ constexpr int kOtsuBins = 256;
 // Fluid: T1 above twice the muscle class's median (CSF is five times muscle at
 // 1.5 T, physics.md §5.1) [chosen].
 constexpr double kFluidFactor = 2.0;
+// Outside the torso, fat is looked for only this deep under the skin [chosen]:
+// the scalp (skin, subcutaneous fat, galea) is about 5–7 mm thick and the skull
+// under it another 5–7 mm, so no brain lies within 10 mm of the skin; deeper fat
+// (the orbits, the neck's deep compartments, a limb's thick subcutaneous layer)
+// is left to soft_tissue rather than risk calling white matter fat.
+constexpr double kSubcutaneousMm = 10.0;
 
 double medianOf(std::vector<float> v)
 {
@@ -61,23 +70,51 @@ double otsuThreshold(const std::vector<float>& values)
     return a + (b - a) * double(split + 1) / kOtsuBins; // upper edge of the last bin of the lower class
 }
 
-std::vector<std::int32_t> segmentMr(const Lattice& lat, const std::vector<float>& t1, bool t1InMs,
-                                    const volume::TissueTable& table)
+AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values, MrContrast contrast,
+                          const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
     const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), soft = id("soft_tissue");
     const double skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
 
-    const Mask body = bodyMask(lat, detail::maskWhere(lat.size(), [&](std::size_t i) { return t1[i] > 0.0f; }));
-    std::vector<float> inside;
-    for (std::size_t n = 0; n < t1.size(); ++n) {
-        if (body[n] && t1[n] > 0.0f) inside.push_back(t1[n]);
+    const Mask body = bodyMask(lat, detail::maskWhere(lat.size(), [&](std::size_t i) { return values[i] > 0.0f; }));
+    AutomaticLabels out;
+    out.extent = torsoExtent(v, lat, body);
+    std::vector<std::int32_t>& labels = out.labels;
+    labels.assign(lat.size(), volume::kAirLabel);
+    if (contrast == MrContrast::Unknown) {
+        detail::forEachVoxel(lat.size(), [&](std::size_t i) {
+            if (body[i]) labels[i] = soft;
+        });
+        const std::string& w = v.metadata().mrWeighting;
+        out.notes.push_back("MR intensity grid, not T1 (weighting: " + (w.empty() ? std::string("unknown") : w) +
+                            "): its contrast does not tell fat from muscle, so the body is labelled soft_tissue only; "
+                            "import a label map for more classes");
+        return out;
     }
-    std::vector<std::int32_t> labels(lat.size(), volume::kAirLabel);
-    if (inside.empty()) return labels;
+    const bool t1InMs = contrast == MrContrast::T1Ms;
+    // Which voxels the fat | muscle rule reads: the whole body in torso slices;
+    // elsewhere only the subcutaneous layer (a head's white matter is as bright
+    // as fat on T1-weighted images, and lies deeper than the scalp and skull).
+    const std::size_t stride = lat.strides()[std::size_t(lat.sliceAxis)];
+    const auto slices = std::size_t(lat.dims[lat.sliceAxis]);
+    const auto inTorso = [&](std::size_t i) { return out.extent.inTorso(int((i / stride) % slices)); };
+    Mask read = body;
+    if (!out.extent.all()) {
+        Mask outside(body.size());
+        detail::forEachVoxel(body.size(), [&](std::size_t i) { outside[i] = body[i] ? 0 : 1; });
+        const std::vector<float> d2 = squaredDistance(lat, outside, Span::Volume);
+        const auto r2 = float(kSubcutaneousMm * kSubcutaneousMm);
+        detail::forEachVoxel(body.size(), [&](std::size_t i) { read[i] = body[i] && (inTorso(i) || d2[i] <= r2); });
+    }
+    std::vector<float> inside;
+    for (std::size_t n = 0; n < values.size(); ++n) {
+        if (read[n] && values[n] > 0.0f) inside.push_back(values[n]);
+    }
+    double split = 0.0;
     // Fluid first (the long tail would pull Otsu's split away from fat | muscle):
     // split once, take the non-fat class's median as muscle, cut the fluid, split again.
-    double split = otsuThreshold(inside);
+    if (!inside.empty()) split = otsuThreshold(inside);
     const auto isFat = [&](float x) { return t1InMs ? x <= split : x > split; };
     std::vector<float> lean;
     for (float x : inside) {
@@ -89,15 +126,23 @@ std::vector<std::int32_t> segmentMr(const Lattice& lat, const std::vector<float>
     for (float x : inside) {
         if (!isFluid(x)) solid.push_back(x);
     }
-    split = otsuThreshold(solid);
+    if (!solid.empty()) split = otsuThreshold(solid);
     detail::forEachVoxel(lat.size(), [&](std::size_t i) {
         if (!body[i]) return;
-        const float x = t1[i];
-        if (x <= 0.0f) labels[i] = soft; // no signal inside the body: bone, air in the gut; T1 cannot tell
-        else labels[i] = isFluid(x) ? soft : isFat(x) ? fat : muscle;
+        const float x = values[i];
+        // No signal inside the body (bone, gas in the gut), fluid, and what the rule
+        // does not read are soft tissue: T1 cannot tell.
+        if (x <= 0.0f || !read[i] || isFluid(x)) labels[i] = soft;
+        else if (isFat(x)) labels[i] = fat;
+        else labels[i] = inTorso(i) ? muscle : soft;
     });
     markSkin(lat, body, skinMm, skin, labels);
-    return labels;
+    std::string note = torsoNote(v, lat, out.extent, "MR fat | muscle split",
+                                 "there fat is labelled only within " + std::to_string(int(kSubcutaneousMm)) +
+                                     " mm of the skin (the scalp's; a brain's white matter is as bright), and the rest is "
+                                     "soft_tissue, never muscle");
+    if (!note.empty()) out.notes.push_back(std::move(note));
+    return out;
 }
 
 } // namespace voxhap::segmentation

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file MrSegmentation.h
-/// @brief Fat and muscle from MR T1 inside the body mask (Otsu 1979, two classes).
+/// @brief Fat and muscle from MR T1 inside the body mask (Otsu 1979, two classes);
+/// the body alone from MR of other contrasts.
 ///
 /// T1 separates fat (290 ms at 1.5 T) from muscle (856 ms) by a factor of three
 /// (physics.md §5.1), so a two-class Otsu split of the body's values finds
@@ -8,12 +9,25 @@
 /// voxels above twice the muscle class's median are labelled soft_tissue.
 /// What T1 cannot tell apart — bone (no signal), ligaments, organs — is left
 /// to imported label maps (LabelImport.h). For T1-weighted intensities that
-/// were not normalised (metadata t1Units other than "ms") the order flips:
+/// were not normalised (an intensity grid marked T1-weighted) the order flips:
 /// fat is the bright class and fluid the dark one.
+///
+/// Outside the torso (TorsoExtent.h: a head, a neck, a limb) there is no
+/// muscle class: a head's white matter is as bright as fat on T1-weighted
+/// images (the shared MPRAGE's normalisation puts it at fat's T1), so fat is
+/// looked for only in the subcutaneous layer, within 10 mm of the skin (the
+/// scalp), by the same split of that layer's values; everything else in the
+/// body is soft_tissue, and a note says so.
+///
+/// An intensity grid of any other weighting (PD, T2, FLAIR, diffusion, field
+/// maps, unknown) says nothing about fat against muscle: the body is labelled
+/// soft_tissue, without a skin shell or any other class, and a note says why.
 #pragma once
 
 #include "segmentation/Lattice.h"
+#include "segmentation/TorsoExtent.h"
 #include "volume/TissueTable.h"
+#include "volume/Volume.h"
 
 #include <cstdint>
 #include <string>
@@ -25,9 +39,18 @@ namespace voxhap::segmentation {
 /// between-class variance of a 256-bin histogram over [min, max].
 double otsuThreshold(const std::vector<float>& values);
 
-/// @brief Tissue ids from dense T1 values (0 = no signal, outside).
-/// @param t1InMs true for T1 maps or normalised T1-weighted data (short T1 is fat)
-std::vector<std::int32_t> segmentMr(const Lattice& lat, const std::vector<float>& t1, bool t1InMs,
-                                    const volume::TissueTable& table);
+/// @brief What an MR grid's values say about fat.
+enum class MrContrast {
+    T1Ms,       ///< T1 [ms] (the t1 grid): fat has the short T1
+    T1Weighted, ///< T1-weighted intensities not normalised: fat is bright
+    Unknown,    ///< any other weighting (PD, T2, FLAIR, diffusion, unknown): nothing
+};
+
+/// @brief Tissue ids from dense MR values (0 = no signal, outside).
+/// @param v        world geometry (TorsoExtent.h) and metadata (mrWeighting, for the notes)
+/// @param values   the t1 or intensity grid's values over @p lat
+/// @param contrast what the values say about fat
+AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values, MrContrast contrast,
+                          const volume::TissueTable& table);
 
 } // namespace voxhap::segmentation

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <limits>
 #include <map>
+#include <utility>
 
 namespace voxhap::segmentation {
 
@@ -27,14 +28,30 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
     const Lattice lat = Lattice::of(v);
     SegmentReport report;
     std::vector<std::int32_t> labels;
+    const auto automatic = [&](AutomaticLabels a) {
+        labels = std::move(a.labels);
+        report.notes = std::move(a.notes);
+        report.bodyWidthMm = a.extent.widestMm();
+        report.torsoFraction = a.extent.bodySlices ? double(a.extent.torsoSlices) / double(a.extent.bodySlices) : 0.0;
+    };
     if (o.automatic && v.has(volume::Channel::Hu)) {
         step("CT labels");
         report.method = "ct";
-        labels = segmentCt(v, lat, toDense(lat, *volume::huGrid(v)), table);
+        automatic(segmentCt(v, lat, toDense(lat, *volume::huGrid(v)), table));
     } else if (o.automatic && v.has(volume::Channel::T1)) {
         step("MR labels");
         report.method = "mr";
-        labels = segmentMr(lat, toDense(lat, *volume::t1Grid(v)), v.metadata().t1Units == "ms", table);
+        // The t1 grid holds T1 in ms; files written before the intensity grid
+        // existed may hold normalised T1-weighted values ("normalised" units).
+        const MrContrast c = v.metadata().t1Units == "ms" ? MrContrast::T1Ms : MrContrast::T1Weighted;
+        automatic(segmentMr(v, lat, toDense(lat, *volume::t1Grid(v)), c, table));
+    } else if (o.automatic && v.has(volume::Channel::Intensity)) {
+        step("MR labels");
+        report.method = "mr";
+        // A T1-weighted series that could not be normalised still has bright fat;
+        // any other weighting says nothing about fat against muscle.
+        const MrContrast c = v.metadata().mrWeighting == "T1-weighted" ? MrContrast::T1Weighted : MrContrast::Unknown;
+        automatic(segmentMr(v, lat, toDense(lat, *volume::intensityGrid(v)), c, table));
     } else if (v.has(volume::Channel::Label)) {
         report.method = "existing";
         labels = toDense(lat, *volume::labelGrid(v));
@@ -42,7 +59,8 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
         report.method = "imported";
         labels.assign(lat.size(), volume::kAirLabel);
     } else {
-        throw ValueError(v.metadata().source + ": nothing to segment: no hu, t1 or label grid and no imported label map");
+        throw ValueError(v.metadata().source +
+                         ": nothing to segment: no hu, t1, intensity or label grid and no imported label map");
     }
     if (o.imported) {
         step("imported labels");

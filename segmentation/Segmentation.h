@@ -26,8 +26,8 @@ struct ImportedLabels {
 
 /// @brief What to compute.
 struct SegmentOptions {
-    /// Labels from hu (CT) or t1 (MR). Off: keep the volume's label grid (or
-    /// none) and apply only the imported map.
+    /// Labels from hu (CT), else t1 or intensity (MR). Off: keep the volume's
+    /// label grid (or none) and apply only the imported map.
     bool automatic = true;
     std::optional<ImportedLabels> imported; ///< takes precedence over automatic labels
     /// Tissues that get a distance field; empty: those the table marks critical.
@@ -53,12 +53,23 @@ struct SegmentReport {
     std::vector<LabelSummary> labels;        ///< by id, air excluded
     std::vector<std::string> distanceFields; ///< derived-grid names written
     std::int64_t importedVoxels = 0;         ///< voxels whose label the imported map set
+    /// What the user must know about how the labels were made, one line each:
+    /// rules that did not apply (a head, a limb: TorsoExtent.h), an MR contrast
+    /// that cannot tell tissues apart. Empty when the rules applied as made.
+    std::vector<std::string> notes;
+    /// Automatic labels only (else 0): the width of the body's widest axial
+    /// cross-section along LPS x [mm], and the share of the body's slices the
+    /// torso rules labelled (1: all, 0: none; TorsoExtent.h). A body cut by the
+    /// field of view in every slice is labelled by them throughout (1), and a
+    /// note says the anatomy could not be checked.
+    double bodyWidthMm = 0;
+    double torsoFraction = 0;
     double seconds = 0;
 };
 
-/// @brief Label @p v from its hu (preferred) or t1 grid, apply the imported
-/// map, store the label grid, and add "sdf.<tissue>" derived grids for the
-/// critical tissues present.
+/// @brief Label @p v from its hu (preferred), t1 or intensity grid, apply the
+/// imported map, store the label grid, and add "sdf.<tissue>" derived grids for
+/// the critical tissues present.
 /// @throw ValueError if there is nothing to segment from, or a critical name is unknown
 SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const SegmentOptions& options = {});
 

@@ -81,6 +81,11 @@ int run(const RenderOptions& o)
     const auto start = std::chrono::steady_clock::now();
     const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
     const double loadS = secondsSince(start);
+    // The presets are Hounsfield windows: on MR they would show nothing true.
+    if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
+        throw UsageError("--window " + o.window + ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
+                         "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
+    }
     if (req.point) {
         const auto b = v.worldBounds();
         if ((req.point->array() < b[0].array()).any() || (req.point->array() > b[1].array()).any()) {
@@ -154,7 +159,8 @@ Action registerRender(CLI::App& app)
     cmd->add_option("--mode", o->mode, "3D blend mode: colour (tissue colours), grey, mip or sum (default colour)");
     cmd->add_option("--caster", o->caster, "3D ray caster: auto (the faster for the mode), gpu or cpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}));
-    cmd->add_option("--window", o->window, "Window: bone, soft, lung or WIDTH,LEVEL in HU (default soft; MIP: bone)");
+    cmd->add_option("--window", o->window, "Window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft; MIP: bone); on MR WIDTH,LEVEL in its "
+                   "units, default the 1st to 99th percentile of the body's voxels");
     cmd->add_option("--path", o->path, "Planned paths: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
         ->check(CLI::ExistingFile);
     cmd->add_option("--point", o->point, "Slice position and crosshair x,y,z [mm, LPS] (default: the path's target, else the centre)");

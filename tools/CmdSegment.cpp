@@ -98,6 +98,9 @@ int run(const SegmentCliOptions& o)
         j["imported_voxels"] = r.importedVoxels;
         j["distance_fields"] = r.distanceFields;
         j["distance_band_mm"] = o.bandMm;
+        j["notes"] = r.notes;
+        j["body_width_mm"] = r.bodyWidthMm;
+        j["torso_fraction"] = r.torsoFraction;
         j["labels"] = nlohmann::json::array();
         for (const auto& l : r.labels) {
             j["labels"].push_back({{"id", l.id},
@@ -112,7 +115,10 @@ int run(const SegmentCliOptions& o)
     }
     std::cout << "segmented " << o.in << " (" << r.method << ") in " << std::fixed << std::setprecision(1) << r.seconds << " s";
     if (r.importedVoxels) std::cout << "; " << r.importedVoxels << " voxels from the imported map";
-    std::cout << "\n\n";
+    std::cout << "\n";
+    // What the rules could not do here (a head, a limb, an MR contrast): said, not hidden.
+    for (const auto& note : r.notes) std::cout << "note: " << note << '\n';
+    std::cout << '\n';
     std::cout << std::left << std::setw(4) << "id" << std::setw(22) << "label" << std::right << std::setw(11) << "voxels"
               << std::setw(10) << "ml" << "   bounding box [mm, LPS]\n";
     for (const auto& l : r.labels) {

@@ -196,6 +196,11 @@ int run(const ViewOptions& o)
     NeedleFeed feed(receiver.get(), o.needleLengthMm);
 
     const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
+    // The presets are Hounsfield windows: on MR they would show nothing true.
+    if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
+        throw UsageError("--window " + o.window + ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
+                         "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
+    }
     if (vo.point) {
         const auto b = v.worldBounds();
         if ((vo.point->array() < b[0].array()).any() || (vo.point->array() > b[1].array()).any()) {
@@ -306,7 +311,7 @@ Action registerView(CLI::App& app)
         ->check(CLI::PositiveNumber);
     cmd->add_option("--size", o->size, "Window WIDTHxHEIGHT [px] (default 1024x1048)");
     cmd->add_option("--mode", o->mode, "3D blend mode: colour, grey, mip or sum (default colour)");
-    cmd->add_option("--window", o->window, "Slice window: bone, soft, lung or WIDTH,LEVEL in HU (default soft)");
+    cmd->add_option("--window", o->window, "Slice window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft); on MR WIDTH,LEVEL in its units, default the 1st to 99th percentile of the body's voxels");
     cmd->add_option("--point", o->point, "First crosshair x,y,z [mm, LPS] (default: the plan's target, else the centre)");
     cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
     cmd->add_flag("--no-3d", o->no3d, "No 3D pane (no GL needed)");

@@ -10,6 +10,8 @@
 #include <vtkMatrix4x4.h>
 #include <vtkSmartPointer.h>
 
+#include <array>
+
 namespace voxhap::render {
 
 struct RenderVolume::Impl {
@@ -24,6 +26,7 @@ struct RenderVolume::Impl {
     Vec3d spacing{1, 1, 1};               ///< [mm]
     WorldBounds bounds;
     double background = 0.0, lo = 0.0, hi = 0.0, tissueMean = 0.0;
+    std::array<double, 2> bodyRange{0.0, 0.0}; ///< RenderVolume::bodyRange()
 
     /// @brief World ← data coordinates: the matrix a vtkProp3D showing these arrays needs.
     vtkSmartPointer<vtkMatrix4x4> dataToWorld() const;

@@ -9,6 +9,7 @@
 #include "common/SharedData.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
+#include "segmentation/TorsoExtent.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 
@@ -77,6 +78,18 @@ TEST_F(RealCtSegmentation, BodyHoldsThePatientAndExcludesTheTable)
     // ellipse of 30 × 22 cm over 40 cm is 21 L; the arms, when in view, add more).
     EXPECT_GT(totalMl, 20000.0);
     EXPECT_LT(totalMl, 50000.0);
+}
+
+TEST_F(RealCtSegmentation, TheTorsoRulesApplyToEverySlice)
+{
+    // Issue 27 item 11: the anatomy test (TorsoExtent.h) must not misfire on a trunk.
+    // Every slice of this abdomen is wider than the 240 mm threshold; the widest
+    // (arms beside the trunk) is at most the 550 mm field of view (512 × 1.07 mm).
+    const auto& s = realCt();
+    EXPECT_GT(s.report.bodyWidthMm, kMinTorsoWidthMm);
+    EXPECT_LT(s.report.bodyWidthMm, 550.0);
+    EXPECT_EQ(s.report.torsoFraction, 1.0);
+    EXPECT_TRUE(s.report.notes.empty()) << ::testing::PrintToString(s.report.notes);
 }
 
 TEST_F(RealCtSegmentation, LungLiesInTheLungBasesOnly)

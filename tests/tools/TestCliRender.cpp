@@ -5,6 +5,7 @@
 /// without any display or Xvfb, and one-line refusals.
 
 #include "common/CliRunner.h"
+#include "common/SharedData.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -85,6 +86,11 @@ TEST_F(CliRender, RefusesWithOneLine)
     voxhap::test::expectUsageError(run("render s.vdb --views axial,oblique"), "unknown view 'oblique'");
     voxhap::test::expectUsageError(run("render s.vdb --mode xray"), "unknown mode 'xray'");
     voxhap::test::expectUsageError(run("render s.vdb --window 0,40"), "window");
+    // A CT preset on MR is refused: HU windows show nothing true there.
+    if (std::filesystem::is_directory(voxhap::test::flash2dDir()) || voxhap::test::sharedDataRequired()) {
+        voxhap::test::expectUsageError(
+            run("render '" + voxhap::test::flash2dDir().string() + "' --views axial --window bone"), "this is MR");
+    }
     voxhap::test::expectUsageError(run("render s.vdb --views axial --point 999,0,0"), "--point");
     std::ofstream(mDir / "bad.json") << R"({"schema": "voxhap-plan/1", "paths": [{"entry": [0, 0, 0]}]})";
     voxhap::test::expectFailure(run("render s.vdb --path bad.json --out bad"), "bad.json: paths[0].target");

@@ -5,6 +5,7 @@
 /// in one line with nothing left behind.
 
 #include "common/CliRunner.h"
+#include "common/SharedData.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -70,6 +71,26 @@ TEST_F(CliSegment, BadInputIsOneLineAndLeavesNoOutput)
     voxhap::test::expectError(run("segment missing.vdb --out seg.vdb"), 1, "missing.vdb");
     voxhap::test::expectError(run("segment slab.vdb --out seg.vdb --critical spleen"), 1, "spleen");
     EXPECT_FALSE(fs::exists(mDir / "seg.vdb"));
+}
+
+TEST_F(CliSegment, HeadMrIsLabelledWithinItsAnatomyAndSaysSo)
+{
+    // The shared MPRAGE (a head): the torso rules do not apply, and the
+    // command says so; no vessel or organ class is invented.
+    VOXHAP_REQUIRE_DIR(voxhap::test::mprageDir());
+    const Result r = run("segment '" + voxhap::test::mprageDir().string() + "' --out head.vdb --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_FALSE(j["notes"].empty()) << r.out;
+    EXPECT_LT(j["body_width_mm"].get<double>(), 240.0);
+    EXPECT_EQ(j["torso_fraction"], 0.0);
+    for (const auto& l : j["labels"]) {
+        const std::string name = l["name"];
+        EXPECT_TRUE(name == "skin" || name == "fat" || name == "soft_tissue") << name;
+    }
+    const Result text = run("segment '" + voxhap::test::mprageDir().string() + "' --out head2.vdb");
+    ASSERT_EQ(text.exitCode, 0) << text.err;
+    EXPECT_NE(text.out.find("note: "), std::string::npos) << text.out;
 }
 
 TEST_F(CliSegment, HelpExplainsTheOptions)
