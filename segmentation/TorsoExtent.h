@@ -42,6 +42,7 @@
 #pragma once
 
 #include "segmentation/Lattice.h"
+#include "volume/BodyWidth.h"
 #include "volume/Volume.h"
 
 #include <cstdint>
@@ -50,8 +51,9 @@
 
 namespace voxhap::segmentation {
 
-/// Narrowest axial cross-section of an adult torso [mm, LPS x] (see the file comment).
-inline constexpr double kMinTorsoWidthMm = 240.0;
+/// Narrowest axial cross-section of an adult torso [mm, LPS x]: the volume
+/// library's, which the T1 normalisation's anatomy test uses too (BodyWidth.h).
+using volume::kMinTorsoWidthMm;
 
 /// @brief The body's cross-section widths per slice and the slices where the torso rules apply.
 struct TorsoExtent {

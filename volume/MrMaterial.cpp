@@ -4,6 +4,7 @@
 
 #include "volume/MrMaterial.h"
 
+#include "volume/BodyWidth.h"
 #include "volume/Errors.h"
 #include "volume/Grids.h"
 #include "volume/T1Normalisation.h"
@@ -66,6 +67,25 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
         report.note = "T1-weighted, normalisation switched off: an intensity grid, not T1";
         md.extra["t1_norm_refused"] = "switched off";
         return report;
+    }
+    // The rule pins a trunk's fat and muscle (physics.md §5.1). In a head the
+    // brightest class is white matter and there is no muscle to pin: a body
+    // narrower than a trunk everywhere it was measured whole is not normalised.
+    // A body the field of view cuts left and right (a sagittal spine slab) may
+    // be a trunk: the rule applies, as it always did.
+    const BodyWidth width = measureBodyWidth(v, *v.grid(Channel::Intensity));
+    md.extra["body_width_mm"] = std::to_string(int(std::lround(std::max(width.widestMm, width.widestCutMm))));
+    if (width.measured() && !width.trunk()) {
+        const std::string why = "the body is at most " + std::to_string(int(std::lround(width.widestMm))) +
+                                " mm across (a trunk is at least " + std::to_string(int(kMinTorsoWidthMm)) +
+                                " mm): a head or a limb, where the per-scan rule's fat and muscle (physics.md 5.1) "
+                                "are not the scan's brightest and middle classes";
+        md.extra["t1_norm_refused"] = why;
+        report.note = "T1-weighted but not normalised (" + why + "): an intensity grid, not T1";
+        return report;
+    }
+    if (!width.measured()) {
+        md.extra["t1_norm_anatomy"] = "the field of view cuts the body left and right in every section: taken as a trunk";
     }
     const FieldStrength field = fieldStrengthT ? nearestFieldStrength(*fieldStrengthT) : options.assumedField;
     toT1();

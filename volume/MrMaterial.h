@@ -9,9 +9,11 @@
 /// 1. the air background of magnitude images is made inactive
 ///    (MrBackground.h); phase images have no such background and keep every voxel;
 /// 2. a T1 map moves to `t1` as it is [ms];
-/// 3. a T1-weighted image is normalised per scan (T1Normalisation.h,
-///    physics.md §5.1) and moves to `t1` [ms]; if the scan shows no fat and
-///    muscle classes it stays `intensity`, and the metadata say why;
+/// 3. a T1-weighted image of a trunk is normalised per scan
+///    (T1Normalisation.h, physics.md §5.1) and moves to `t1` [ms]; a body
+///    narrower than a trunk (BodyWidth.h: a head or a limb, whose brightest
+///    class is not fat) or a scan without fat and muscle classes stays
+///    `intensity`, and the metadata say why;
 /// 4. anything else (PD, T2, FLAIR, diffusion, field maps, unknown) stays
 ///    `intensity`, which no force law reads as T1.
 /// The metadata record the weighting, the fields that decided it and every step.

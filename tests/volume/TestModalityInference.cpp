@@ -25,7 +25,8 @@ using namespace voxhap::volume;
 constexpr int kN = 32;
 
 /// A head-sized ball in a 32³ grid: @p f(r, i, j, k) gives each voxel's value, r the distance from the centre [voxels].
-fs::path writeNifti(const fs::path& file, int datatype, const std::function<double(double, int, int, int)>& f)
+fs::path writeNifti(const fs::path& file, int datatype, const std::function<double(double, int, int, int)>& f,
+                    double voxelMm = 1.0)
 {
     nifti_set_debug_level(0);
     const int64_t dims[8] = {3, kN, kN, kN, 1, 1, 1, 1};
@@ -41,8 +42,8 @@ fs::path writeNifti(const fs::path& file, int datatype, const std::function<doub
             }
         }
     }
-    nim->pixdim[1] = nim->pixdim[2] = nim->pixdim[3] = 1.0;
-    nim->dx = nim->dy = nim->dz = 1.0;
+    nim->pixdim[1] = nim->pixdim[2] = nim->pixdim[3] = float(voxelMm);
+    nim->dx = nim->dy = nim->dz = float(voxelMm);
     nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
     nim->quatern_b = nim->quatern_c = nim->quatern_d = 0;
     nim->qfac = 1;
@@ -109,11 +110,18 @@ TEST_F(ModalityInference, T1WeightedNiftiIsMrOfUnknownWeightingUntilDeclared)
     EXPECT_NE(v.metadata().extra.at("mr_weighting_reason").find("--t1-weighted"), std::string::npos);
     EXPECT_EQ(intensityGrid(v)->getConstAccessor().getValue({16, 16, 20}), 110.0f);
 
-    // Declared T1-weighted: normalised per scan, fat and muscle pinned to the
-    // table at the assumed field (stated).
+    // Declared T1-weighted, but 27 mm across: a head or a limb, whose
+    // brightest class is not a trunk's fat; not normalised, and says why.
     LoadOptions declared;
     declared.dicom.t1Weighted = true;
-    const Volume t1 = loadVolume(p, declared);
+    const Volume head = loadVolume(p, declared);
+    EXPECT_FALSE(head.has(Channel::T1));
+    EXPECT_NE(head.metadata().extra.at("t1_norm_refused").find("mm across"), std::string::npos);
+
+    // The same values in 10 mm voxels: a 270 mm trunk. Normalised per scan,
+    // fat and muscle pinned to the table at the assumed field (stated).
+    const fs::path trunk = writeNifti(mDir / "trunk.nii", DT_UINT8, t1wHead, 10.0);
+    const Volume t1 = loadVolume(trunk, declared);
     ASSERT_TRUE(t1.has(Channel::T1));
     EXPECT_EQ(t1.metadata().t1Units, "ms");
     EXPECT_NE(t1.metadata().extra.at("mr_weighting_reason").find("declared"), std::string::npos);
@@ -123,7 +131,7 @@ TEST_F(ModalityInference, T1WeightedNiftiIsMrOfUnknownWeightingUntilDeclared)
 
 TEST_F(ModalityInference, BidsSidecarGivesTheWeightingAndFieldStrength)
 {
-    const fs::path p = writeNifti(mDir / "flash.nii.gz", DT_UINT8, t1wHead);
+    const fs::path p = writeNifti(mDir / "flash.nii.gz", DT_UINT8, t1wHead, 10.0); // a 270 mm trunk
     writeSidecar(p, R"({"Modality": "MR", "MagneticFieldStrength": 3, "ScanningSequence": "GR",
                         "SequenceVariant": ["SP", "OSP"], "SequenceName": "*fl2d1", "RepetitionTime": 0.3,
                         "EchoTime": 0.00246, "FlipAngle": 80, "ImageType": ["ORIGINAL", "PRIMARY", "M"]})");

@@ -37,18 +37,25 @@ std::vector<fs::path> dicomFiles(const fs::path& dir)
     return out;
 }
 
-TEST(RealMr, MprageIsT1WeightedNormalisedWithItsAirInactive)
+TEST(RealMr, MprageIsT1WeightedWithItsAirInactiveAndNotPinnedAsATrunk)
 {
     VOXHAP_REQUIRE_DIR(voxhap::test::mprageDir());
     DicomLoadReport report;
     const Volume v = loadDicom({voxhap::test::mprageDir()}, {}, &report);
     EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
-    ASSERT_TRUE(v.has(Channel::T1));
-    EXPECT_FALSE(v.has(Channel::Intensity));
-    EXPECT_EQ(v.metadata().t1Units, "ms");
+    // A head: the per-scan rule would pin white matter as fat (physics.md
+    // §5.1 pins a trunk's fat and muscle), so it stays an intensity grid and
+    // says why (BodyWidth.h).
+    EXPECT_FALSE(v.has(Channel::T1));
+    ASSERT_TRUE(v.has(Channel::Intensity));
+    const std::string why = v.metadata().extra.at("t1_norm_refused");
+    EXPECT_NE(why.find("mm across"), std::string::npos) << why;
+    const int width = std::stoi(v.metadata().extra.at("body_width_mm"));
+    EXPECT_GT(width, 131); // ANSUR II head breadth 131-180 mm; a fiducial and the ears add a little
+    EXPECT_LT(width, 240);
     // Issue 27 item 7's targets: at most half the voxels active, sparse at
     // most 0.6 of a dense float array.
-    const auto grid = t1Grid(v);
+    const auto grid = intensityGrid(v);
     const double dense = double(v.indexBox().voxelCount());
     EXPECT_LE(double(grid->activeVoxelCount()), 0.5 * dense);
     EXPECT_LE(double(grid->memUsage()), 0.6 * dense * sizeof(float));
@@ -167,12 +174,13 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     EXPECT_NE(last.metadata().extra.at("volume").find("13 of 13 (b=1000)"), std::string::npos) << last.metadata().extra.at("volume");
 }
 
-TEST(RealMr, Flash2dIsT1Weighted)
+TEST(RealMr, Flash2dIsT1WeightedAndAHead)
 {
     VOXHAP_REQUIRE_DIR(voxhap::test::flash2dDir());
     const Volume v = loadDicom({voxhap::test::flash2dDir()});
     EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
-    EXPECT_TRUE(v.has(Channel::T1));
+    EXPECT_FALSE(v.has(Channel::T1)); // a head, as above
+    EXPECT_TRUE(v.has(Channel::Intensity));
     EXPECT_EQ(v.indexBox().dims(), voxhap::Vec3i(256, 256, 35));
     EXPECT_NEAR(v.geometry().spacing.z(), 4.8, 1e-6);
 }
