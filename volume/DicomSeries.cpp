@@ -198,13 +198,6 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         info.weighting = mw.name;
         info.weightingReason = mw.reason;
     }
-    try {
-        for (const DicomHeader& h : done) checkSameGrid(first, h);
-    } catch (const IoError& e) {
-        if (info.problem.empty()) info.problem = e.what();
-        w.headers = std::move(done);
-        return;
-    }
     // The finest digit stored in any file sets the tolerances (StoredPrecision.h).
     double positionUnit = 0, orientationUnit = 0;
     for (const DicomHeader& h : done) {
@@ -213,7 +206,7 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
     }
     const double positionTolerance = positionToleranceMm(positionUnit);
     const double directionTol = directionTolerance(orientationUnit);
-    w.volumes = splitVolumes(seriesSlices(done), done, normal, positionTolerance);
+    w.volumes = splitVolumes(seriesSlices(done), done, positionTolerance);
     const DicomVolumeSet& set = *w.volumes;
     info.volumes = set.count();
     info.volumeShape = set.problem.empty() ? set.shape() : "";
@@ -252,9 +245,12 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         std::vector<SlicePlacement> placements;
         const std::vector<Slice> firstVolume = volumeSlices(w.headers, set, 1);
         for (std::size_t i = 0; i < firstVolume.size(); ++i) placements.push_back({firstVolume[i].position, i});
+        const DicomHeader& h1 = w.headers[firstVolume.front().file];
         try {
             if (placements.size() > 1) {
-                info.spacing[2] = orderSlices(placements, normal, positionTolerance, std::min(directionTol, kMaxDriftPerMm)).step;
+                info.spacing[2] = orderSlices(placements, h1.rowDirection.cross(h1.columnDirection).normalized(),
+                                              positionTolerance, std::min(directionTol, kMaxDriftPerMm))
+                                      .step;
             }
         } catch (const ValueError&) {
         }
@@ -264,22 +260,34 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
     Plan plan;
     plan.volume = volume;
     plan.slices = volumeSlices(w.headers, set, volume);
-    plan.row = first.rowDirection;
-    plan.col = first.columnDirection;
-    plan.normal = normal;
+    // Every slice of the volume must share its first one's grid: orientation,
+    // size, pixel spacing (other volumes of the series, a localizer say, may not).
+    const DicomHeader& lead = w.headers[plan.slices.front().file];
+    try {
+        std::set<std::size_t> files;
+        for (const Slice& s : plan.slices) files.insert(s.file);
+        for (std::size_t f : files) checkSameGrid(lead, w.headers[f]);
+    } catch (const IoError& e) {
+        if (info.problem.empty()) info.problem = e.what();
+        return;
+    }
+    plan.row = lead.rowDirection;
+    plan.col = lead.columnDirection;
+    plan.normal = lead.rowDirection.cross(lead.columnDirection).normalized();
+    if (volume > 0) info.orientation = orientationName(plan.normal);
     std::vector<SlicePlacement> placements;
     for (std::size_t i = 0; i < plan.slices.size(); ++i) placements.push_back({plan.slices[i].position, i});
     try {
-        plan.stack = orderSlices(placements, normal, positionTolerance, std::min(directionTol, kMaxDriftPerMm));
+        plan.stack = orderSlices(placements, plan.normal, positionTolerance, std::min(directionTol, kMaxDriftPerMm));
     } catch (const ValueError& e) {
         if (info.problem.empty()) info.problem = folder.string() + ": (0020,0032) ImagePositionPatient: " + e.what();
         return;
     }
     if (plan.slices.size() > 1) info.spacing[2] = plan.stack.step;
-    else if (first.sliceThickness > 0) info.spacing[2] = first.sliceThickness;
+    else if (lead.sliceThickness > 0) info.spacing[2] = lead.sliceThickness;
     if (!plan.stack.problem.empty()) {
-        if (first.gantryTilt != 0.0 && plan.stack.tilted) {
-            plan.stack.problem += " ((0018,1120) GantryDetectorTilt " + std::to_string(first.gantryTilt) + " deg)";
+        if (lead.gantryTilt != 0.0 && plan.stack.tilted) {
+            plan.stack.problem += " ((0018,1120) GantryDetectorTilt " + std::to_string(lead.gantryTilt) + " deg)";
         }
         if (o.irregular == IrregularSlices::Refuse && info.problem.empty()) {
             info.problem = folder.string() + ": (0020,0032) ImagePositionPatient: " + plan.stack.problem +

@@ -87,7 +87,7 @@ std::string DicomVolumeSet::summary() const
 }
 
 DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers,
-                            const Vec3d& normal, double toleranceMm)
+                            double toleranceMm)
 {
     DicomVolumeSet out;
     // 1. Separating keys.
@@ -119,7 +119,12 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
     };
     std::vector<Volume> volumes;
     for (auto& [key, members] : groups) {
-        // 2. Repeated positions within a group: cluster along the normal.
+        // 2. Repeated positions within a group: cluster along the group's own
+        // normal (a localizer in a CT series lies in another plane than the
+        // axial slices, and its image type keeps it in a group of its own).
+        const DicomHeader& h0 = headers[slices[members.front()].file];
+        const Vec3d groupNormal = h0.rowDirection.cross(h0.columnDirection).normalized();
+        const Vec3d& normal = groupNormal;
         std::vector<std::size_t> byPosition = members;
         std::sort(byPosition.begin(), byPosition.end(), [&](std::size_t a, std::size_t b) {
             return slices[a].position.dot(normal) < slices[b].position.dot(normal);

@@ -53,10 +53,10 @@ struct DicomVolumeSet {
 /// @brief The slices of every frame of @p headers, in file order.
 std::vector<DicomSlice> seriesSlices(const std::vector<DicomHeader>& headers);
 
-/// @brief Split @p slices into volumes (the rule above).
-/// @param normal        the slice normal (unit)
+/// @brief Split @p slices into volumes (the rule above). Positions are
+/// compared along each group's own slice normal.
 /// @param toleranceMm   positions closer than this along the normal are the same position
 DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers,
-                            const Vec3d& normal, double toleranceMm);
+                            double toleranceMm);
 
 } // namespace voxhap::volume

@@ -464,3 +464,36 @@ TEST_F(DicomExports, EnhancedMultiFrameTimeSeriesLoadsOneTimePoint)
 }
 
 } // namespace
+
+namespace {
+
+TEST_F(DicomExports, ALocalizerInsideACtSeriesIsAVolumeOfItsOwn)
+{
+    // Some CT exports keep the scout in the series of the axial slices: another
+    // image type, another plane. It must neither break the series nor be stacked with it.
+    for (int k = 0; k < 5; ++k) {
+        SyntheticSlice s = ctSlice(k);
+        s.imageType = "ORIGINAL\\PRIMARY\\AXIAL";
+        s.instanceNumber = k + 2;
+        voxhap::test::writeSyntheticSlice(s, mDir / ("ax" + std::to_string(k) + ".dcm"));
+    }
+    SyntheticSlice scout = ctSlice(0);
+    scout.imageType = "ORIGINAL\\PRIMARY\\LOCALIZER";
+    scout.rowDirection = Vec3d(1, 0, 0);
+    scout.columnDirection = Vec3d(0, 0, -1); // coronal
+    scout.instanceNumber = 1;
+    voxhap::test::writeSyntheticSlice(scout, mDir / "a-scout.dcm"); // first in file order
+    const DicomCatalog c = catalogDicom({mDir});
+    ASSERT_EQ(c.series.size(), 1u);
+    EXPECT_EQ(c.series.front().volumes, 2u);
+    EXPECT_EQ(c.series.front().separatedBy, "image type");
+    EXPECT_NE(c.series.front().problem.find("--volume"), std::string::npos) << c.series.front().problem;
+    DicomOptions o;
+    o.volume = 2; // the scout was acquired first
+    const Volume axial = loadDicom({mDir}, o);
+    expectStored(axial, 5);
+    o.volume = 1;
+    EXPECT_EQ(loadDicom({mDir}, o).indexBox().dims().z(), 1);
+}
+
+} // namespace
