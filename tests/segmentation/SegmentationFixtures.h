@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file SegmentationFixtures.h
-/// @brief Phantoms with scanner-like noise, and Dice overlap between label grids.
+/// @brief Phantoms with scanner-like noise, Dice overlap between label grids,
+/// and the label at a world point.
 #pragma once
 
 #include "volume/Grids.h"
@@ -9,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <functional>
@@ -70,6 +72,14 @@ inline double dice(const volume::LabelGrid& truth, const volume::LabelGrid& resu
         }
     }
     return a + b ? 2.0 * double(both) / double(a + b) : 1.0;
+}
+
+/// @brief The label of the voxel nearest world point @p w [mm, LPS].
+inline int labelAtWorld(const volume::Volume& v, const Vec3d& w)
+{
+    const Vec3d ijk = v.worldToIndex(w);
+    return volume::labelGrid(v)->getConstAccessor().getValue(
+        openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
 }
 
 } // namespace voxhap::test

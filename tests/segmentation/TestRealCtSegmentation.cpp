@@ -7,6 +7,7 @@
 
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
+#include "SegmentationFixtures.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
 #include "segmentation/TorsoExtent.h"
@@ -42,13 +43,6 @@ const Segmented& realCt()
     return s;
 }
 
-int labelAt(const volume::Volume& v, const Vec3d& w)
-{
-    const Vec3d ijk = v.worldToIndex(w);
-    return volume::labelGrid(v)->getConstAccessor().getValue(
-        openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
-}
-
 float sdfAt(const volume::Volume& v, const std::string& tissue, const Vec3d& w)
 {
     const auto g = openvdb::gridConstPtrCast<volume::FloatGrid>(v.derived(distanceFieldName(tissue)));
@@ -66,8 +60,8 @@ TEST_F(RealCtSegmentation, BodyHoldsThePatientAndExcludesTheTable)
     const auto& s = realCt();
     // On the midline at z = 250 mm the posterior skin is at y ≈ 222 mm and the
     // table top, under an air gap, at y ≈ 290 mm (found by inspecting the data).
-    EXPECT_NE(labelAt(*s.v, Vec3d(0, 215, 250)), 0);
-    EXPECT_EQ(labelAt(*s.v, Vec3d(0, 290, 250)), 0);
+    EXPECT_NE(test::labelAtWorld(*s.v, Vec3d(0, 215, 250)), 0);
+    EXPECT_EQ(test::labelAtWorld(*s.v, Vec3d(0, 290, 250)), 0);
     double maxY = -1e9, totalMl = 0;
     for (const auto& l : s.report.labels) {
         maxY = std::max(maxY, l.bounds[1].y());
@@ -108,7 +102,7 @@ TEST_F(RealCtSegmentation, LungLiesInTheLungBasesOnly)
 TEST_F(RealCtSegmentation, VertebralBodyPointIsBone)
 {
     const auto& s = realCt();
-    const int l = labelAt(*s.v, Vec3d(4.3, 120.5, 295.91)); // as in TestRealCt.cpp
+    const int l = test::labelAtWorld(*s.v, Vec3d(4.3, 120.5, 295.91)); // as in TestRealCt.cpp
     EXPECT_TRUE(l == table().at("cancellous_bone").id || l == table().at("cortical_bone").id) << l;
 }
 

@@ -12,6 +12,7 @@
 
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
+#include "SegmentationFixtures.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
@@ -49,13 +50,6 @@ const SegmentedMprage& mprage()
         return out;
     }();
     return s;
-}
-
-int labelOfPoint(const volume::Volume& v, const Vec3d& w)
-{
-    const Vec3d ijk = v.worldToIndex(w);
-    return volume::labelGrid(v)->getConstAccessor().getValue(
-        openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
 }
 
 class RealMrSegmentation : public testing::Test {
@@ -105,8 +99,8 @@ TEST_F(RealMrSegmentation, TheBodyIsAHeadAndTheReportSaysTheTorsoRulesWereNotApp
     EXPECT_NE(s.report.notes[0].find("not applied"), std::string::npos) << s.report.notes[0];
     // Inside the brain (the basal ganglia's level, near the midline; found by
     // inspecting the data) and in the air above the vertex.
-    EXPECT_EQ(labelOfPoint(*s.v, Vec3d(-1.5, -39.0, 37.0)), table().at("soft_tissue").id);
-    EXPECT_EQ(labelOfPoint(*s.v, Vec3d(-1.5, -39.0, 115.0)), 0);
+    EXPECT_EQ(test::labelAtWorld(*s.v, Vec3d(-1.5, -39.0, 37.0)), table().at("soft_tissue").id);
+    EXPECT_EQ(test::labelAtWorld(*s.v, Vec3d(-1.5, -39.0, 115.0)), 0);
 }
 
 TEST_F(RealMrSegmentation, FatIsTheScalpsNotTheWhiteMatters)
