@@ -93,6 +93,31 @@ TEST_F(Nrrd, RoundTripIsExactWithObliqueDirections)
     }
 }
 
+TEST_F(Nrrd, GzipStreamIsCheckedToItsEnd)
+{
+    // A reader that stops once it has its voxels would accept a cut or
+    // flipped trailer and bytes after the stream (ByteSource::finish).
+    const Volume v = makeVolume();
+    const fs::path p = mDir / "gz.nrrd";
+    saveNrrd(v, Channel::Hu, p, NrrdEncoding::Gzip);
+    std::string bytes;
+    {
+        std::ifstream in(p, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    const auto write = [&](const std::string& b) { std::ofstream(p, std::ios::binary | std::ios::trunc) << b; };
+    write(bytes.substr(0, bytes.size() - 3)); // the length field cut
+    expectRefused(p, "trailer");
+    std::string flipped = bytes;
+    flipped[flipped.size() - 6] = char(flipped[flipped.size() - 6] ^ 0x01); // one CRC-32 bit
+    write(flipped);
+    expectRefused(p, "data");
+    write(bytes + "garbage");
+    expectRefused(p, "not another gzip member");
+    write(bytes);
+    EXPECT_EQ(loadNrrd(p).indexBox(), v.indexBox());
+}
+
 TEST_F(Nrrd, HeaderGivesSlicerTheLpsGeometry)
 {
     const Volume v = makeVolume();
