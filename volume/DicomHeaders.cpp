@@ -411,10 +411,10 @@ std::optional<double> lenientNumber(const DicomHeader& h, const gdcm::Tag& t)
 /// its creator @p creator reserved (PS3.5 §7.8.1), if the file has that creator.
 std::optional<gdcm::Tag> privateElement(const DicomHeader& h, std::uint16_t group, const char* creator, std::uint16_t low)
 {
-    for (std::uint16_t slot = 0x10; slot <= 0xFF; ++slot) {
-        const std::string c = h.value(group, slot);
-        if (c.empty()) continue;
-        if (trim(c.c_str()) == creator) return gdcm::Tag(group, std::uint16_t(slot << 8 | low));
+    // The creators are elements 0x0010..0x00FF of the group: one range of the map.
+    const std::uint32_t first = std::uint32_t(group) << 16 | 0x0010u, last = std::uint32_t(group) << 16 | 0x00FFu;
+    for (auto it = h.tags.lower_bound(first); it != h.tags.end() && it->first <= last; ++it) {
+        if (trim(it->second.c_str()) == creator) return gdcm::Tag(group, std::uint16_t((it->first & 0xFFu) << 8 | low));
     }
     return std::nullopt;
 }
@@ -611,7 +611,7 @@ void completeDicomHeader(DicomHeader& h)
     if (auto v = lenientNumber(h, kEchoNumbers)) h.key.echoNumber = int(*v);
     h.key.echoTime = lenientNumber(h, kEchoTime);
     if (auto v = lenientNumber(h, kTemporalPosition)) h.key.temporalPosition = int(*v);
-    h.key.bValue = classicBValue(h);
+    if (h.modality == "MR") h.key.bValue = classicBValue(h); // diffusion is MR's alone
     if (auto v = lenientNumber(h, kAcquisitionNumber)) h.key.acquisitionNumber = int(*v);
     if (auto v = lenientNumber(h, kInstanceNumber)) h.key.instanceNumber = int(*v);
     h.key.triggerTime = lenientNumber(h, kTriggerTime);

@@ -123,14 +123,14 @@ public:
             mAt = pos;
             // Zero bytes to the end of the file after a complete top-level
             // element: padding to a block size, which other readers accept.
-            if (depth == 0 && !untilDelimiter && pos > mDataSetStart && zerosToEnd(pos)) {
-                mNotes.trailingPadding = mSize - pos;
-                mNotes.paddingOffset = pos;
-                return mSize;
-            }
+            // Looked for only where an element header is zero (or cut short),
+            // so that a normal file is not read twice.
+            const bool top = depth == 0 && !untilDelimiter && pos > mDataSetStart;
+            if (top && pos + 8 > end && zerosToEnd(pos)) return padding(pos);
             if (!untilDelimiter && pos + 8 > end) fail(Tag{}, "element header runs past its sequence item");
             unsigned char h[12];
             read(pos, h, 8, Tag{});
+            if (top && std::all_of(h, h + 8, [](unsigned char c) { return c == 0; }) && zerosToEnd(pos)) return padding(pos);
             const Tag t{u16(h, big), u16(h + 2, big)};
             if (t.is(0xFFFE, 0xE00D) && untilDelimiter) return pos + 8; // end of an undefined-length item
             if (depth == 0 && (t.is(0x5200, 0x9229) || t.is(0x5200, 0x9230) || t.is(0x0018, 0x6011))) mFunctionalGroups = true;
@@ -267,6 +267,14 @@ private:
         }
         header = 8;
         return u16(h + 6, big);
+    }
+
+    /// Zero padding from @p pos to the end: noted, and the walk ends there.
+    std::uint64_t padding(std::uint64_t pos)
+    {
+        mNotes.trailingPadding = mSize - pos;
+        mNotes.paddingOffset = pos;
+        return mSize;
     }
 
     /// True if every byte from @p pos to the end of the file is zero.
