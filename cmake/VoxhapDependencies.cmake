@@ -31,12 +31,14 @@ unset(CMAKE_MESSAGE_LOG_LEVEL)
 
 # OpenIGTLink 1.11 ships an old-style config without a target, and its USE_FILE adds
 # global flags that break other code (toolchain.md): wrap it in an imported target.
-find_package(OpenIGTLink REQUIRED CONFIG)
-find_library(VOXHAP_IGTL_LIBRARY NAMES OpenIGTLink HINTS ${OpenIGTLink_LIBRARY_DIRS} REQUIRED)
-add_library(voxhap_openigtlink INTERFACE IMPORTED)
-set_target_properties(voxhap_openigtlink PROPERTIES
-  INTERFACE_INCLUDE_DIRECTORIES "${OpenIGTLink_INCLUDE_DIRS}"
-  INTERFACE_LINK_LIBRARIES "${VOXHAP_IGTL_LIBRARY};Threads::Threads")
+if(VOXHAP_WITH_IGTL)
+  find_package(OpenIGTLink REQUIRED CONFIG)
+  find_library(VOXHAP_IGTL_LIBRARY NAMES OpenIGTLink HINTS ${OpenIGTLink_LIBRARY_DIRS} REQUIRED)
+  add_library(voxhap_openigtlink INTERFACE IMPORTED)
+  set_target_properties(voxhap_openigtlink PROPERTIES
+    INTERFACE_INCLUDE_DIRECTORIES "${OpenIGTLink_INCLUDE_DIRS}"
+    INTERFACE_LINK_LIBRARIES "${VOXHAP_IGTL_LIBRARY};Threads::Threads")
+endif()
 
 if(VOXHAP_BUILD_TESTS)
   find_package(GTest REQUIRED)                 # GTest::gtest_main
