@@ -1,0 +1,45 @@
+# SPDX-License-Identifier: Apache-2.0
+# Every #include between the project's libraries must point down the documented
+# order (README "Layout"; issue 24 item 5):
+#   volume <- segmentation <- haptic <- planning <- render <- bench <- tools
+# A source of one folder may include headers of its own folder and of the
+# folders before it, never of one after it. Fails listing every offending
+# file:line. Run by CTest: cmake -DSOURCE=<root> -P Layering.cmake
+cmake_minimum_required(VERSION 3.25)
+if(NOT SOURCE)
+  message(FATAL_ERROR "Layering.cmake: give -DSOURCE=")
+endif()
+set(order volume segmentation haptic planning render bench tools)
+set(bad "")
+set(checked 0)
+foreach(folder IN LISTS order)
+  list(FIND order ${folder} rank)
+  file(GLOB_RECURSE sources RELATIVE ${SOURCE} ${SOURCE}/${folder}/*.h ${SOURCE}/${folder}/*.cpp ${SOURCE}/${folder}/*.in)
+  foreach(source IN LISTS sources)
+    file(STRINGS ${SOURCE}/${source} lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"")
+    file(READ ${SOURCE}/${source} text)
+    foreach(line IN LISTS lines)
+      math(EXPR checked "${checked} + 1")
+      string(REGEX MATCH "\"([a-z_]+)/" m "${line}")
+      if(NOT m)
+        continue()
+      endif()
+      set(target ${CMAKE_MATCH_1})
+      list(FIND order ${target} targetRank)
+      if(targetRank GREATER rank)
+        # The line number, for the message: newlines before the include.
+        string(FIND "${text}" "${line}" at)
+        string(SUBSTRING "${text}" 0 ${at} before)
+        string(REGEX MATCHALL "\n" newlines "${before}")
+        list(LENGTH newlines count)
+        math(EXPR number "${count} + 1")
+        list(APPEND bad "${source}:${number}: ${folder} includes ${target} (${line})")
+      endif()
+    endforeach()
+  endforeach()
+endforeach()
+if(bad)
+  list(JOIN bad "\n  " text)
+  message(FATAL_ERROR "includes against the layering:\n  ${text}")
+endif()
+message(STATUS "${checked} includes checked; every one points down the order ${order}")
