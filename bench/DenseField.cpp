@@ -5,7 +5,7 @@
 #include "bench/DenseField.h"
 
 #include "haptic/detail/FieldGrids.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 
 #include <cmath>

@@ -6,7 +6,7 @@
 #include "bench/Stats.h"
 #include "render/Display.h"
 #include "render/Viewer.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Phantoms.h"
 #include "volume/Volume.h"
 #include "volume/VolumeFile.h"
@@ -32,7 +32,7 @@ Seconds renderStat(const std::vector<double>& x)
 }
 
 RenderCase benchVolume(const std::string& name, const volume::Volume& v, double loadS, const RenderBenchOptions& o,
-                       const std::function<void(const std::string&)>& progress)
+                       const Progress& progress)
 {
     const auto& table = volume::TissueTable::builtin();
     RenderCase c;
@@ -46,7 +46,7 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
     std::vector<double> setup, first, steady, slices;
     render::Image firstImage;
     for (int i = 0; i < o.firstFrames; ++i) {
-        if (progress) progress(name + ": first frame " + std::to_string(i + 1) + " of " + std::to_string(o.firstFrames));
+        if (progress) progress(-1.0, name + ": first frame " + std::to_string(i + 1) + " of " + std::to_string(o.firstFrames));
         auto t = RenderClock::now();
         render::Viewer viewer(v, vo, table);
         setup.push_back(renderSecondsSince(t));
@@ -58,7 +58,7 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
         // alone, interleaved so that both see the same machine load.
         firstImage = std::move(img);
         for (int k = 0; k < o.steadyFrames; ++k) {
-            if (progress) progress(name + ": steady frame " + std::to_string(k + 1) + " of " + std::to_string(o.steadyFrames));
+            if (progress) progress(-1.0, name + ": steady frame " + std::to_string(k + 1) + " of " + std::to_string(o.steadyFrames));
             viewer.invalidate();
             t = RenderClock::now();
             render::Image again = viewer.render();
@@ -91,7 +91,7 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
 
 } // namespace
 
-RenderReport runRenderBench(const RenderBenchOptions& o, const std::function<void(const std::string&)>& progress)
+RenderReport runRenderBench(const RenderBenchOptions& o, const Progress& progress)
 {
     RenderReport r;
     r.machine = machineDescription();
@@ -99,13 +99,13 @@ RenderReport runRenderBench(const RenderBenchOptions& o, const std::function<voi
     if (!display.available()) throw IoError("bench render: no display for the 3D pane: " + display.why());
     r.display = display.description();
     if (!o.ct.empty()) {
-        if (progress) progress("loading " + o.ct);
+        if (progress) progress(-1.0, "loading " + o.ct);
         const auto t = RenderClock::now();
         const volume::Volume ct = volume::loadVolume(o.ct);
         r.cases.push_back(benchVolume("real CT", ct, renderSecondsSince(t), o, progress));
     }
     {
-        if (progress) progress("torso phantom " + std::to_string(o.phantomSide) + "^3");
+        if (progress) progress(-1.0, "torso phantom " + std::to_string(o.phantomSide) + "^3");
         const auto& table = volume::TissueTable::builtin();
         volume::TorsoParams tp;
         const volume::PhantomModel model = volume::torsoModel(tp, table);
@@ -115,7 +115,7 @@ RenderReport runRenderBench(const RenderBenchOptions& o, const std::function<voi
         const volume::Volume ph = volume::makePhantom(model, tp.grid, table);
         r.cases.push_back(benchVolume("torso phantom", ph, renderSecondsSince(t), o, progress));
     }
-    if (progress) progress("");
+    if (progress) progress(-1.0, "");
     return r;
 }
 

@@ -7,6 +7,8 @@
 /// caster, VolumeView3d's Auto), on the real CT and on a 256³ phantom.
 #pragma once
 
+#include "core/Progress.h"
+
 #include <nlohmann/json.hpp>
 
 #include <functional>
@@ -47,7 +49,7 @@ struct RenderReport {
 };
 
 /// @throw IoError, ValueError if the CT cannot be read; IoError if no display can be had
-RenderReport runRenderBench(const RenderBenchOptions& o, const std::function<void(const std::string&)>& progress = {});
+RenderReport runRenderBench(const RenderBenchOptions& o, const Progress& progress = {});
 void printRenderReport(std::ostream& os, const RenderReport& r);
 nlohmann::json renderReportJson(const RenderReport& r);
 

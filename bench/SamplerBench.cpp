@@ -179,14 +179,14 @@ std::string machineDescription()
     return model + " (" + std::to_string(std::thread::hardware_concurrency()) + " cores)";
 }
 
-SamplerReport runSamplerBench(const SamplerBenchOptions& o, const std::function<void(const std::string&)>& progress)
+SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& progress)
 {
     SamplerReport report;
     report.machine = machineDescription();
     report.options = o;
     std::mt19937 rng(20261122);
     for (const std::string& name : o.workloads) {
-        progress("building the " + name + " workload");
+        progress(-1.0, "building the " + name + " workload");
         Workload w = name == "slab" ? slabWorkload(o, rng) : torsoWorkload(o, rng);
         const double h = w.voxelMm, v0 = o.speedMmPerS;
         const haptic::MaterialField& field = *w.field;
@@ -258,7 +258,7 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const std::function<
                                },
                                {}, true});
         }
-        progress("copying the " + name + " workload to a dense array");
+        progress(-1.0, "copying the " + name + " workload to a dense array");
         auto dense = std::make_shared<DenseField>(field);
         for (double f : fractions) {
             for (bool trilinear : {false, true}) {
@@ -285,7 +285,7 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const std::function<
         std::vector<std::vector<double>> values(configs.size());
         std::vector<double> out(std::size_t(o.depths));
         for (int rep = 0; rep < o.repetitions; ++rep) {
-            progress(name + ": round " + std::to_string(rep + 1) + " of " + std::to_string(o.repetitions));
+            progress(-1.0, name + ": round " + std::to_string(rep + 1) + " of " + std::to_string(o.repetitions));
             for (std::size_t c = 0; c < configs.size(); ++c) {
                 for (std::size_t p = 0; p < w.paths.size(); ++p) {
                     if (configs[c].prepare) configs[c].prepare(w.paths[p]);

@@ -5,6 +5,8 @@
 /// baselines measured in the same run, interleaved.
 #pragma once
 
+#include "core/Progress.h"
+
 #include <nlohmann/json.hpp>
 
 #include <functional>
@@ -43,7 +45,7 @@ struct SamplerReport {
 };
 
 /// @brief Run the benchmark; @p progress receives one line per stage.
-SamplerReport runSamplerBench(const SamplerBenchOptions& options, const std::function<void(const std::string&)>& progress);
+SamplerReport runSamplerBench(const SamplerBenchOptions& options, const Progress& progress);
 
 /// @brief The table as plain text.
 void printSamplerReport(std::ostream& os, const SamplerReport& r);

@@ -149,19 +149,19 @@ IgtlRoundTrip igtlRoundTrip(const haptic::SceneInstance& inst, double seconds)
 
 } // namespace
 
-ServoReport runServoBench(const ServoBenchOptions& o, const std::function<void(const std::string&)>& progress)
+ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
 {
     ServoReport report;
     report.machine = machineDescription();
     const auto& table = volume::TissueTable::builtin();
     for (const std::string& name : o.scenes) {
-        if (progress) progress("building " + name);
+        if (progress) progress(-1.0, "building " + name);
         const haptic::SceneInstance inst(haptic::loadScene(name), nullptr, table);
-        if (progress) progress(name + ": 1 kHz for " + std::to_string(int(o.seconds)) + " s");
+        if (progress) progress(-1.0, name + ": 1 kHz for " + std::to_string(int(o.seconds)) + " s");
         report.runs.push_back(runOnce(inst, 1000.0, o.seconds));
         double best = 0.0;
         for (const double rate : o.rates) {
-            if (progress) progress(name + ": " + std::to_string(int(rate)) + " Hz");
+            if (progress) progress(-1.0, name + ": " + std::to_string(int(rate)) + " Hz");
             const ServoRun r = runOnce(inst, rate, o.ladderSeconds);
             report.ladder.push_back(r);
             // Sustained: the rate achieved within 1 % and fewer than 0.1 % of ticks overrun.
@@ -169,7 +169,7 @@ ServoReport runServoBench(const ServoBenchOptions& o, const std::function<void(c
         }
         report.sustainableHz.emplace_back(name, best);
         if (name == o.scenes.front() && o.igtlSeconds > 0.0) {
-            if (progress) progress(name + ": OpenIGTLink round trip");
+            if (progress) progress(-1.0, name + ": OpenIGTLink round trip");
             report.igtl = igtlRoundTrip(inst, o.igtlSeconds);
         }
     }

@@ -5,6 +5,8 @@
 /// overruns), and the highest rate the loop sustains.
 #pragma once
 
+#include "core/Progress.h"
+
 #include <nlohmann/json.hpp>
 
 #include <functional>
@@ -44,7 +46,7 @@ struct ServoReport {
     IgtlRoundTrip igtl;             ///< at 1 kHz on the first scene
 };
 
-ServoReport runServoBench(const ServoBenchOptions& o, const std::function<void(const std::string&)>& progress = {});
+ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress = {});
 void printServoReport(std::ostream& os, const ServoReport& r);
 nlohmann::json servoReportJson(const ServoReport& r);
 

@@ -36,7 +36,7 @@ int main(int argc, char** argv)
         }
     }
     try {
-        const auto report = voxhap::bench::runRenderBench(o, [](const std::string& s) {
+        const auto report = voxhap::bench::runRenderBench(o, [](double, std::string_view s) {
             if (!s.empty()) std::cerr << s << '\n';
         });
         voxhap::bench::printRenderReport(std::cout, report);

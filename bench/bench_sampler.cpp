@@ -32,7 +32,7 @@ int main(int argc, char** argv)
             return 2;
         }
     }
-    const auto report = voxhap::bench::runSamplerBench(o, [](const std::string& s) { std::cerr << s << '\n'; });
+    const auto report = voxhap::bench::runSamplerBench(o, [](double, std::string_view s) { std::cerr << s << '\n'; });
     voxhap::bench::printSamplerReport(std::cout, report);
     if (!json.empty()) std::ofstream(json) << voxhap::bench::samplerReportJson(report).dump(2) << '\n';
     if (!png.empty()) {

@@ -6,17 +6,19 @@ function(voxhap_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor)
 endfunction()
 
-# voxhap_add_library(<folder> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# voxhap_add_library(<folder> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...] [NO_PCH])
 # Defines voxhap_<folder> with alias voxhap::<folder>; headers are included
 # as "<folder>/File.h" from the project root.
 function(voxhap_add_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "NO_PCH" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(voxhap_${name} STATIC ${ARG_SOURCES})
   add_library(voxhap::${name} ALIAS voxhap_${name})
   target_include_directories(voxhap_${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(voxhap_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   voxhap_warnings(voxhap_${name})
-  voxhap_precompile(voxhap_${name} library)
+  if(NOT ARG_NO_PCH)
+    voxhap_precompile(voxhap_${name} library)
+  endif()
 endfunction()
 
 # Tests and the command-line glue compile at -O1: their speed is not what the

@@ -4,7 +4,7 @@
 /// refused with voxhap's one-line message that names the file first.
 #pragma once
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cstdint>
 #include <cstdio>

@@ -4,7 +4,7 @@
 
 #include "haptic/ConciModel.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

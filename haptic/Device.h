@@ -7,7 +7,7 @@
 
 #include "haptic/DeviceLimits.h"
 #include "haptic/Events.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <limits>
 #include <string>

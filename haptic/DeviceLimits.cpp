@@ -4,7 +4,7 @@
 
 #include "haptic/DeviceLimits.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 namespace voxhap::haptic {
 

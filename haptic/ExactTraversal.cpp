@@ -6,7 +6,7 @@
 #include "haptic/ExactTraversal.h"
 
 #include "haptic/detail/FieldReaders.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <optional>
 

@@ -5,7 +5,7 @@
 
 #include "haptic/detail/IgtlWire.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <igtlTransformMessage.h>
 

@@ -2,8 +2,8 @@
 /// @file Insertion.cpp
 #include "haptic/Insertion.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>
@@ -129,7 +129,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
 
 void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layers, const std::filesystem::path& file)
 {
-    volume::writeStreamAtomically(file, [&](std::ostream& o) {
+    writeStreamAtomically(file, [&](std::ostream& o) {
         o << "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n";
         o << std::setprecision(9);
         for (const InsertionRow& row : r.rows) {

@@ -4,7 +4,7 @@
 
 #include "haptic/detail/FieldReaders.h"
 #include "haptic/detail/Traversal.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

@@ -9,7 +9,7 @@
 
 #include "haptic/LumbarPunctureModel.h"
 #include "haptic/SenacModel.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

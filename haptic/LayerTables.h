@@ -12,7 +12,7 @@
 #include "haptic/ConciModel.h"
 #include "haptic/Layer.h"
 #include "haptic/MaterialField.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 #include "volume/Phantoms.h"
 #include "volume/TissueTable.h"
 

@@ -6,7 +6,7 @@
 #include "haptic/MaterialField.h"
 
 #include "haptic/detail/FieldGrids.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <openvdb/tools/Count.h>      // for minMax
 #include <openvdb/tree/LeafManager.h>

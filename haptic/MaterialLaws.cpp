@@ -4,7 +4,7 @@
 
 #include "haptic/MaterialLaws.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

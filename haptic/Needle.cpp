@@ -2,8 +2,8 @@
 /// @file Needle.cpp
 #include "haptic/Needle.h"
 
-#include "volume/Errors.h"
-#include "volume/Math.h"
+#include "core/Errors.h"
+#include "core/Math.h"
 
 #include <string>
 

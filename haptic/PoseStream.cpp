@@ -6,7 +6,7 @@
 
 #include "haptic/detail/IgtlWire.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <igtlTransformMessage.h>
 

@@ -15,7 +15,7 @@
 /// Neither pulls in VTK: the viewer (render/) uses the receiver.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <atomic>
 #include <cstdint>

@@ -5,7 +5,7 @@
 #include "haptic/RayMarch.h"
 
 #include "haptic/detail/FieldReaders.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <optional>
 #include <sstream>

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "haptic/DeviceLimits.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 
 namespace voxhap::haptic {
 

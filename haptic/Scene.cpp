@@ -5,8 +5,8 @@
 
 #include "haptic/Scene.h"
 
-#include "volume/Errors.h"
-#include "volume/JsonFields.h"
+#include "core/Errors.h"
+#include "core/JsonFields.h"
 #include "volume/Phantoms.h"
 #include "volume/VolumeFile.h"
 
@@ -25,7 +25,7 @@ extern const std::vector<std::pair<std::string, std::string>>& builtinSceneFiles
 namespace {
 
 using Json = nlohmann::json;
-using Fields = volume::JsonFields;
+using Fields = JsonFields;
 
 DeviceLimits parseDevice(Fields& top)
 {

@@ -4,7 +4,7 @@
 
 #include "haptic/SenacModel.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 

@@ -2,8 +2,8 @@
 /// @file Session.cpp
 #include "haptic/Session.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +21,7 @@ namespace {
 /// A CSV written whole or not at all, 10 significant digits.
 void writeCsv(const fs::path& file, const std::function<void(std::ostream&)>& fill)
 {
-    volume::writeStreamAtomically(file, [&](std::ostream& o) {
+    writeStreamAtomically(file, [&](std::ostream& o) {
         o << std::setprecision(10);
         fill(o);
     });

@@ -14,7 +14,7 @@
 #pragma once
 
 #include "haptic/MaterialField.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <array>
 #include <limits>

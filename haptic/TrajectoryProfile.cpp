@@ -6,7 +6,7 @@
 #include "haptic/TrajectoryProfile.h"
 
 #include "haptic/detail/FieldReaders.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <optional>
 #include <sstream>

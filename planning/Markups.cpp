@@ -2,8 +2,8 @@
 /// @file Markups.cpp
 #include "planning/Markups.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 
@@ -62,7 +62,7 @@ std::string markupsJson(const std::vector<MarkupLine>& lines)
 void writeMarkups(const std::vector<MarkupLine>& lines, const std::filesystem::path& file)
 {
     const std::string text = markupsJson(lines);
-    volume::writeStreamAtomically(file, [&](std::ostream& os) { os << text; });
+    writeStreamAtomically(file, [&](std::ostream& os) { os << text; });
 }
 
 std::vector<MarkupLine> parseMarkups(std::string_view json, const std::string& origin)

@@ -8,7 +8,7 @@
 /// the project (render/Plan.cpp uses it too) and accepts LPS or RAS.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <filesystem>
 #include <string>

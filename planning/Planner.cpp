@@ -12,7 +12,7 @@
 
 #include "haptic/MaterialField.h"
 #include "segmentation/DistanceField.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <algorithm>

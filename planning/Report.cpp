@@ -2,7 +2,7 @@
 /// @file Report.cpp
 #include "planning/Report.h"
 
-#include "volume/AtomicFile.h"
+#include "core/AtomicFile.h"
 
 namespace voxhap::planning {
 
@@ -86,7 +86,7 @@ nlohmann::json searchJson(const Planner& planner, const SearchResult& found, con
 
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file)
 {
-    volume::writeStreamAtomically(file, [&](std::ostream& os) { os << report.dump(2) << '\n'; });
+    writeStreamAtomically(file, [&](std::ostream& os) { os << report.dump(2) << '\n'; });
 }
 
 } // namespace voxhap::planning

@@ -44,7 +44,7 @@ nlohmann::json reportHeader(const Planner& planner, const std::string& volumeNam
 /// @brief The "search" block of a report: counts, rejections by reason, time and the constraints used.
 nlohmann::json searchJson(const Planner& planner, const SearchResult& found, const SearchConstraints& k,
                           const SearchOptions& options);
-/// @brief Write @p report atomically (volume/AtomicFile.h). @throw IoError
+/// @brief Write @p report atomically (core/AtomicFile.h). @throw IoError
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file);
 
 } // namespace voxhap::planning

@@ -2,7 +2,7 @@
 /// @file Search.cpp
 #include "planning/Search.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <tbb/parallel_for.h>
 

@@ -6,7 +6,7 @@
 /// risk score (RiskScore.h). World space is LPS in mm.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <limits>
 #include <string>

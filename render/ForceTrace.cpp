@@ -2,7 +2,7 @@
 /// @file ForceTrace.cpp
 #include "render/ForceTrace.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <charconv>

@@ -2,7 +2,7 @@
 /// @file Image.cpp
 #include "render/Image.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,8 +2,8 @@
 /// @file ImageFile.cpp
 #include "render/ImageFile.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 void writePng(const Image& img, const fs::path& file)
 {
     if (img.empty()) throw IoError(file.string() + ": cannot write an empty image");
-    volume::writeAtomically(file, [&](const fs::path& tmp) {
+    writeAtomically(file, [&](const fs::path& tmp) {
         // The temporary name does not end in .png: name the format explicitly.
         auto out = OIIO::ImageOutput::create("png");
         if (!out) throw IoError("no PNG writer in OpenImageIO (" + OIIO::geterror() + ")");

@@ -6,7 +6,7 @@
 /// picked on.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <optional>
 

@@ -3,9 +3,9 @@
 #include "render/Plan.h"
 
 #include "planning/Markups.h"
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
-#include "volume/JsonFields.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
+#include "core/JsonFields.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,7 +17,7 @@ namespace voxhap::render {
 namespace {
 
 using Json = nlohmann::json;
-using Fields = volume::JsonFields;
+using Fields = JsonFields;
 
 Vec3d requiredPoint(Fields& f, const std::string& key)
 {
@@ -113,7 +113,7 @@ std::string planJson(const Plan& plan)
 void savePlan(const Plan& plan, const std::filesystem::path& file)
 {
     const std::string text = planJson(plan);
-    volume::writeStreamAtomically(file, [&](std::ostream& out) { out << text; });
+    writeStreamAtomically(file, [&](std::ostream& out) { out << text; });
 }
 
 } // namespace voxhap::render

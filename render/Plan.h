@@ -15,7 +15,7 @@
 /// converted to LPS (planning/Markups.h reads them).
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <filesystem>
 #include <optional>

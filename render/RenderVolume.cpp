@@ -4,7 +4,7 @@
 /// from it with vtkImageReslice (no GL: this is the display-free path).
 #include "render/detail/VtkVolume.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/tools/Count.h> // for minMax

@@ -5,7 +5,7 @@
 #include "render/RenderVolume.h"
 #include "render/SliceView.h"
 #include "render/VolumeView3d.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Volume.h"
 
 #include <algorithm>

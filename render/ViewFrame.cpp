@@ -2,7 +2,7 @@
 /// @file ViewFrame.cpp
 #include "render/ViewFrame.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

@@ -19,7 +19,7 @@
 
 #include "render/Image.h"
 #include "render/ViewTypes.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 
 namespace voxhap::render {
 

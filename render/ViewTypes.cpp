@@ -2,7 +2,7 @@
 /// @file ViewTypes.cpp
 #include "render/ViewTypes.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <charconv>

@@ -3,7 +3,7 @@
 /// @brief The views, blend modes and CT window presets a render request names.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <string>
 #include <string_view>

@@ -6,7 +6,7 @@
 #include "render/Overlays.h"
 #include "render/RenderVolume.h"
 #include "render/SliceView.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

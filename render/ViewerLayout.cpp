@@ -2,7 +2,7 @@
 /// @file ViewerLayout.cpp
 #include "render/ViewerLayout.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <string>
 

@@ -2,7 +2,7 @@
 /// @file ViewerScript.cpp
 #include "render/ViewerScript.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 #include <fstream>

@@ -2,7 +2,7 @@
 /// @file ViewerWindow.cpp
 #include "render/ViewerWindow.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <X11/Xlib.h>
 #include <X11/Xutil.h>

@@ -6,7 +6,7 @@
 
 #include "render/Display.h"
 #include "render/detail/VtkVolume.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/TissueTable.h"
 
 #include <vtkActor.h>

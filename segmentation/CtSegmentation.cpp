@@ -11,7 +11,7 @@
 #include "segmentation/DistanceTransform.h"
 #include "segmentation/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -4,9 +4,9 @@
 
 #include "segmentation/LabelImport.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/JsonFields.h"
+#include "core/JsonFields.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
@@ -29,7 +29,7 @@ LabelMapping parseLabelMapping(const std::string& text, const std::string& origi
     }
     LabelMapping m;
     m.origin = origin;
-    volume::JsonFields f(j, origin, "");
+    JsonFields f(j, origin, "");
     if (!f.has("schema") || f.raw("schema") != "voxhap.label-mapping/1") {
         f.fail("schema", "must be \"voxhap.label-mapping/1\"");
     }

@@ -12,7 +12,7 @@
 /// (segmentation/DenseGrids.h).
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 #include "volume/Volume.h"
 
 #include <array>

@@ -8,7 +8,7 @@
 #include "segmentation/DenseGrids.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/MrSegmentation.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <algorithm>
@@ -23,7 +23,7 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
 {
     const auto start = std::chrono::steady_clock::now();
     const auto step = [&](const std::string& s) {
-        if (o.progress) o.progress(s);
+        if (o.progress) o.progress(-1.0, s); // the steps' count is not known ahead
     };
     const Lattice lat = Lattice::of(v);
     SegmentReport report;

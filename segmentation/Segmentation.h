@@ -4,6 +4,7 @@
 /// and critical-structure distance fields, with a per-label summary.
 #pragma once
 
+#include "core/Progress.h"
 #include "segmentation/LabelImport.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
@@ -35,7 +36,7 @@ struct SegmentOptions {
     /// Distance fields are stored within this distance of the structure [mm]:
     /// clearance beyond it reads as the band [chosen: past the 5–20 mm margins a planner asks for].
     double distanceBandMm = 30.0;
-    std::function<void(const std::string& step)> progress; ///< called as each step starts; may be empty
+    Progress progress; ///< called as each step starts (fraction -1: not known), with its name; may be empty
 };
 
 /// @brief One label's figures.

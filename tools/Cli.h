@@ -7,7 +7,7 @@
 /// command-line arguments. Every failure prints exactly one line on stderr.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 #include "volume/TissueTable.h"
 
 #include <CLI/CLI.hpp>

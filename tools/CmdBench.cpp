@@ -7,7 +7,7 @@
 #include "bench/RenderBench.h"
 #include "bench/SamplerBench.h"
 #include "bench/ServoBench.h"
-#include "volume/AtomicFile.h"
+#include "core/AtomicFile.h"
 
 #include <filesystem>
 #include <functional>
@@ -29,10 +29,10 @@ struct BenchOptions {
 };
 
 /// A progress line on a terminal, overwritten in place; nothing otherwise.
-std::function<void(const std::string&)> progressLine()
+Progress progressLine()
 {
     const bool tty = stderrIsTerminal();
-    return [tty](const std::string& stage) {
+    return [tty](double, std::string_view stage) {
         if (tty) std::cerr << "\r\033[K" << stage << std::flush;
     };
 }
@@ -40,7 +40,7 @@ std::function<void(const std::string&)> progressLine()
 void writeJson(const std::string& file, const nlohmann::json& j)
 {
     if (file.empty()) return;
-    volume::writeStreamAtomically(file, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    writeStreamAtomically(file, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
     std::cout << "json: " << file << '\n';
 }
 
@@ -54,7 +54,7 @@ int runSampler(BenchOptions o)
     o.sampler.vtk = !o.noVtk;
     const auto progress = progressLine();
     const auto report = bench::runSamplerBench(o.sampler, progress);
-    progress("");
+    progress(-1.0, "");
     bench::printSamplerReport(std::cout, report);
     writeJson(o.json, bench::samplerReportJson(report));
     if (!o.png.empty()) {
@@ -74,7 +74,7 @@ int runServo(BenchOptions o)
     }
     const auto progress = progressLine();
     const auto report = bench::runServoBench(o.servo, progress);
-    progress("");
+    progress(-1.0, "");
     bench::printServoReport(std::cout, report);
     writeJson(o.json, bench::servoReportJson(report));
     return 0;
@@ -85,7 +85,7 @@ int runRender(BenchOptions o)
     if (o.quick) o.render.firstFrames = 1, o.render.steadyFrames = 2;
     const auto progress = progressLine();
     const auto report = bench::runRenderBench(o.render, progress);
-    progress("");
+    progress(-1.0, "");
     bench::printRenderReport(std::cout, report);
     writeJson(o.json, bench::renderReportJson(report));
     return 0;

@@ -13,7 +13,7 @@
 #include "planning/Report.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/Phantoms.h"
 #include "volume/VdbFile.h"
@@ -86,7 +86,7 @@ int run(const DemoOptions& o)
 
     // 2. Segmentation: labels and the critical structures' distance fields.
     segmentation::SegmentOptions so;
-    so.progress = say;
+    so.progress = [&say](double, std::string_view step) { say(std::string(step)); };
     segmentation::ImportedLabels imported;
     imported.labels = &canal;
     imported.mapping.tissueOf = {{cord, cord}};

@@ -9,7 +9,7 @@
 #include "tools/InfoReport.h"
 #include "tools/LoadOptions.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/VolumeFile.h"
 
 #include <iomanip>

@@ -5,6 +5,7 @@
 /// 3D Slicer markups, slice views with the paths and the predicted force–depth plot.
 /// Also the plan outputs `voxhap demo` writes (writePlanOutputs).
 
+#include "core/Format.h"
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
@@ -16,7 +17,7 @@
 #include "render/Snapshot.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 
@@ -40,13 +41,6 @@ struct PlanCliOptions {
     double speed = 0, maxAngle = 45, maxLength = 0, minClearance = 5, step = 2, margin = 20;
     bool allowBone = false, noViews = false;
 };
-
-std::string fixed(double x, int digits = 1)
-{
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(digits) << x;
-    return s.str();
-}
 
 planning::Box parseBox(const std::string& text)
 {
@@ -75,7 +69,7 @@ void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool p
     if (v.has(volume::Channel::Label) && anyField) return;
     segmentation::SegmentOptions so;
     so.automatic = !v.has(volume::Channel::Label); // keep given labels; only add their distance fields
-    if (progress) so.progress = [](const std::string& step) { std::cerr << "plan: " << step << "...\n"; };
+    if (progress) so.progress = [](double, std::string_view step) { std::cerr << "plan: " << step << "...\n"; };
     segmentation::segment(v, table, so);
 }
 

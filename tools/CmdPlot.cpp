@@ -7,7 +7,7 @@
 #include "tools/Cli.h"
 
 #include "render/ForcePlot.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

@@ -13,7 +13,7 @@
 #include "render/Plan.h"
 #include "render/RenderVolume.h"
 #include "render/Snapshot.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

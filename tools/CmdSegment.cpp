@@ -9,7 +9,7 @@
 
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 
@@ -67,7 +67,7 @@ int run(const SegmentCliOptions& o)
     so.critical = splitList(o.critical);
     for (const auto& name : so.critical) table.at(name); // unknown names fail before the long work
     so.distanceBandMm = o.bandMm;
-    if (terminal) so.progress = [](const std::string& step) { std::cerr << "segment: " << step << "...\n"; };
+    if (terminal) so.progress = [](double, std::string_view step) { std::cerr << "segment: " << step << "...\n"; };
 
     std::unique_ptr<volume::Volume> imported;
     if (!o.labels.empty()) {

@@ -11,8 +11,8 @@
 #include "haptic/ServoLoop.h"
 #include "haptic/Session.h"
 #include "haptic/SimulatedDevices.h"
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 
@@ -166,7 +166,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
                         {"overruns", loop.overruns()},
                         {"dropped_records", loop.droppedRecords()},
                         {"interrupted", InterruptGuard::interrupted()}};
-    volume::writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
     if (o.common.json) {
         std::cout << j.dump(2) << '\n';
         return 0;

@@ -8,7 +8,7 @@
 
 #include "haptic/Insertion.h"
 #include "haptic/Scene.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 #include <filesystem>

@@ -14,7 +14,7 @@
 #include "render/Viewer.h"
 #include "render/ViewerScript.h"
 #include "render/ViewerWindow.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Volume.h"
 
 #include <nlohmann/json.hpp>

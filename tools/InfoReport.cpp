@@ -2,6 +2,7 @@
 /// @file InfoReport.cpp
 /// @brief Formatting of `voxhap info`.
 
+#include "core/Format.h"
 #include "tools/InfoReport.h"
 
 #include "volume/Phantoms.h"
@@ -24,13 +25,6 @@ std::string mib(std::uint64_t bytes)
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
     return buf;
-}
-
-std::string fixed(double v, int digits)
-{
-    std::ostringstream os;
-    os << std::fixed << std::setprecision(digits) << v;
-    return os.str();
 }
 
 std::string triple(const Vec3d& v, int digits, const char* sep)

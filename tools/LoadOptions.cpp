@@ -61,7 +61,7 @@ volume::LoadOptions loadOptions(const ReaderOptions& o, bool showProgress)
                  : o.channel == "mr" || o.channel == "t1" ? volume::DeclaredModality::Mr
                                                           : volume::DeclaredModality::Infer;
     if (showProgress) {
-        l.dicom.progress = [](double f) {
+        l.dicom.progress = [](double f, std::string_view) {
             constexpr int kWidth = 40;
             const int filled = int(std::lround(f * kWidth));
             std::cerr << "\rloading [" << std::string(std::size_t(filled), '#') << std::string(std::size_t(kWidth - filled), ' ')

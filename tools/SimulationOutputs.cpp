@@ -3,7 +3,7 @@
 #include "tools/SimulationOutputs.h"
 
 #include "render/ForcePlot.h"
-#include "volume/AtomicFile.h"
+#include "core/AtomicFile.h"
 
 #include <cmath>
 #include <filesystem>
@@ -58,7 +58,7 @@ SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::
                                                 png, f.plotWhy);
     if (f.plotted) f.png = png;
     f.summary = summaryJson(r, scene, f.csv, f.png);
-    volume::writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });
+    writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });
     return f;
 }
 

@@ -2,6 +2,7 @@
 /// @file main.cpp
 /// @brief The `voxhap` command: subcommand dispatch and the one-line error convention.
 
+#include "core/Version.h"
 #include "tools/Cli.h"
 
 #include <iostream>
@@ -13,7 +14,7 @@ int main(int argc, char** argv)
     CLI::App app{"voxhap: needle-insertion force rendering from patient volumes.\n"
                  "World space is patient LPS in millimetres. Run `voxhap <command> --help` for details."};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "voxhap 0.1.0");
+    app.set_version_flag("--version", "voxhap " + std::string(voxhap::kVersion));
     std::map<std::string, Action> actions{
         {"demo", registerDemo(app)},
         {"phantom", registerPhantom(app)},

@@ -4,7 +4,7 @@
 
 #include "volume/ByteSource.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <zlib.h>
 

@@ -6,7 +6,7 @@
 
 #include "volume/DicomDecodeProcess.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <fcntl.h>
 #include <spawn.h>

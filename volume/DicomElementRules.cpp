@@ -6,7 +6,7 @@
 
 #include "volume/DicomElementRules.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <gdcmAttribute.h>
 #include <gdcmDataSet.h>

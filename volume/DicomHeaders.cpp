@@ -8,7 +8,7 @@
 #include "volume/DicomPixels.h"
 #include "volume/DicomMosaic.h"
 #include "volume/DicomPreflight.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/GzipFile.h"
 #include "volume/StoredPrecision.h"
 

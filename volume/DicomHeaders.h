@@ -4,7 +4,7 @@
 /// gdcm::Scanner, which stops before the pixel data), parsed and checked.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -5,7 +5,7 @@
 
 #include "volume/DicomMosaic.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <Eigen/Geometry>
 #include <gdcmCSAHeader.h>

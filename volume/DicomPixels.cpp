@@ -4,7 +4,7 @@
 
 #include "volume/DicomPixels.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <gdcmImageReader.h>
 #include <gdcmTrace.h>

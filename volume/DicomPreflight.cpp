@@ -6,7 +6,7 @@
 #include "volume/DicomPreflight.h"
 
 #include "volume/DicomElementRules.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <gdcmReader.h>
 #include <gdcmTransferSyntax.h>

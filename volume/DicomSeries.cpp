@@ -10,7 +10,7 @@
 #include "volume/DicomMosaic.h"
 #include "volume/DicomPixels.h"
 #include "volume/DicomVolumes.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/GzipFile.h"
 #include "volume/Grids.h"
 #include "volume/SliceResample.h"
@@ -687,7 +687,7 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                             },
                             nx, ny, k0, n, finite);
                         sparseSeconds += since(t);
-                        if (options.progress) options.progress(double(k0 + n) / rg.nz);
+                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
                     }
                 } else {
                     std::vector<float> slab(outPlane * SparseSlabs::kSlabSlices);
@@ -703,7 +703,7 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                                              slab.data() + outPlane * std::size_t(k));
                         });
                         sparse.addSlab(slab.data(), rg.nx, rg.ny, k0, n);
-                        if (options.progress) options.progress(double(k0 + n) / rg.nz);
+                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
                     }
                 }
             } catch (const IoError& e) {

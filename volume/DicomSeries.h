@@ -18,6 +18,7 @@
 ///   naming the file, the tag and, where it helps, the option that resolves it.
 #pragma once
 
+#include "core/Progress.h"
 #include "volume/DicomHeaders.h"
 #include "volume/MrMaterial.h"
 #include "volume/TissueTable.h"
@@ -97,7 +98,7 @@ struct DicomOptions {
     /// MR only: the field strength when (0018,0087) is absent.
     FieldStrength assumedField = FieldStrength::T1_5;
     /// Called with the fraction done (0..1) as slices load; may be empty.
-    std::function<void(double)> progress;
+    Progress progress;
 };
 
 /// @brief Every series among the inputs and every file set aside.

@@ -24,7 +24,7 @@ Order orderOf(const DicomSlice& s, const std::vector<DicomHeader>& headers)
     return {k.acquisitionNumber.value_or(0), k.triggerTime.value_or(0.0), k.instanceNumber.value_or(0), s.file, s.frame};
 }
 
-std::string number(double v)
+std::string shortNumber(double v)
 {
     std::ostringstream os;
     os << v;
@@ -142,10 +142,10 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
         const DicomFrameKey& k = headers[slices[members.front()].file].frameKey(slices[members.front()].frame);
         std::ostringstream label;
         const auto sep = [&label] { return label.tellp() == 0 ? "" : ", "; };
-        if (byB) label << sep() << "b=" << (k.bValue ? number(std::round(*k.bValue)) : std::string("?"));
+        if (byB) label << sep() << "b=" << (k.bValue ? shortNumber(std::round(*k.bValue)) : std::string("?"));
         if (byEcho) {
             label << sep() << "echo " << (k.echoNumber ? std::to_string(*k.echoNumber) : std::string("?"));
-            if (k.echoTime) label << " (TE " << number(*k.echoTime) << " ms)";
+            if (k.echoTime) label << " (TE " << shortNumber(*k.echoTime) << " ms)";
         }
         if (byTime) label << sep() << "time point " << (k.temporalPosition ? std::to_string(*k.temporalPosition) : std::string("?"));
         if (byStack) label << sep() << "stack " << (k.stack ? std::to_string(*k.stack) : std::string("?"));

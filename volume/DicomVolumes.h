@@ -20,7 +20,7 @@
 #pragma once
 
 #include "volume/DicomHeaders.h"
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <cstddef>
 #include <string>

@@ -5,7 +5,7 @@
 #include "volume/GzipFile.h"
 
 #include "volume/ByteSource.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cstdlib>
 #include <cstring>

@@ -6,7 +6,7 @@
 
 #include "volume/Phantoms.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 
 #include "volume/MetaImageFile.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 #include <fstream>

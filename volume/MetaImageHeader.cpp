@@ -5,7 +5,7 @@
 
 #include "volume/MetaImageHeader.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 #include <map>

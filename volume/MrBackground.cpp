@@ -5,7 +5,7 @@
 
 #include "volume/MrBackground.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/tools/Prune.h>

@@ -5,7 +5,7 @@
 #include "volume/MrMaterial.h"
 
 #include "volume/BodyWidth.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/T1Normalisation.h"
 

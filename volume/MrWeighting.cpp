@@ -3,7 +3,7 @@
 /// @brief The MR weighting rule (MrWeighting.h) and the BIDS sidecar reader.
 #include "volume/MrWeighting.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

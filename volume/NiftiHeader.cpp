@@ -7,7 +7,7 @@
 #include "volume/NiftiHeader.h"
 
 #include "volume/ByteSource.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nifti2_io.h>
 

@@ -6,8 +6,8 @@
 
 #include "volume/NrrdFile.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/tools/Dense.h>

@@ -6,7 +6,7 @@
 
 #include "volume/NrrdHeader.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cctype>
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include "volume/Phantoms.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

@@ -4,7 +4,7 @@
 
 #include "volume/RasterLayout.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <sstream>
 

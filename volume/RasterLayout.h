@@ -7,7 +7,7 @@
 /// fields, build without the grid code (the fuzz targets compile them alone).
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <cstddef>
 #include <cstdint>

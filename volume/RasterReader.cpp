@@ -4,7 +4,7 @@
 
 #include "volume/RasterReader.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/SparseSlabs.h"
 
 #include <cmath>
@@ -73,7 +73,7 @@ Volume::GridPtr readRaster(ByteSource& src, const RasterLayout& l, Channel chann
         } catch (const ValueError& e) {
             throw IoError(file + ": data: " + e.what());
         }
-        if (o.progress) o.progress(double(k0 + n) / l.dims.z());
+        if (o.progress) o.progress(double(k0 + n) / l.dims.z(), {});
     }
     return sparse.finish();
 }

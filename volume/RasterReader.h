@@ -5,6 +5,7 @@
 /// anything is allocated, and slab-wise conversion into a sparse grid.
 #pragma once
 
+#include "core/Progress.h"
 #include "volume/ByteSource.h"
 #include "volume/RasterLayout.h"
 #include "volume/Volume.h"
@@ -24,7 +25,7 @@ struct RasterOptions {
     float airHu = -950.0f;          ///< hu below this becomes inactive air [HU]
     float airT1 = 0.0f;             ///< t1 below this becomes inactive [t1 units]
     std::uint64_t memoryCapBytes = std::uint64_t(4) << 30; ///< refuse larger grids before allocating
-    std::function<void(double)> progress;                   ///< fraction done, may be empty
+    Progress progress;                                      ///< fraction done, may be empty
 };
 
 /// @brief Read the voxel block into a sparse float grid slab by slab.

@@ -4,7 +4,7 @@
 
 #include "volume/Rasterize.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <tbb/blocked_range.h>

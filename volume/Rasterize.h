@@ -5,7 +5,7 @@
 /// straight path crosses in the analytic model.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 

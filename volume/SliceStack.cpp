@@ -4,7 +4,7 @@
 
 #include "volume/SliceStack.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <Eigen/Geometry>
 

@@ -7,7 +7,7 @@
 /// Pure geometry, no file access: DicomSeries fills it from the headers.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <string>
 #include <vector>

@@ -4,7 +4,7 @@
 
 #include "volume/T1Normalisation.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/tree/LeafManager.h>

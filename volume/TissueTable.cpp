@@ -4,7 +4,7 @@
 
 #include "volume/TissueTable.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

@@ -4,8 +4,8 @@
 
 #include "volume/VdbFile.h"
 
-#include "volume/AtomicFile.h"
-#include "volume/Errors.h"
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/io/File.h>

@@ -4,7 +4,7 @@
 
 #include "volume/Volume.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <cmath>

@@ -9,7 +9,7 @@
 /// this header stays light so that command-line glue compiles quickly.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <openvdb/math/Transform.h>
 

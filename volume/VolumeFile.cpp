@@ -4,7 +4,7 @@
 
 #include "volume/VolumeFile.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/MetaImageFile.h"
 #include "volume/ModalityInference.h"

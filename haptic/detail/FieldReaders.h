@@ -7,7 +7,7 @@
 #include "haptic/detail/FieldGrids.h"
 #include "haptic/detail/LeafReader.h"
 #include "haptic/detail/Traversal.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <optional>
 #include <string>

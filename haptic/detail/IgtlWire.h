@@ -5,7 +5,7 @@
 /// threads only: these allocate and block (never the servo thread).
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -6,7 +6,7 @@
 /// can check every voxel the reader returns against the formula.
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <gdcmAttribute.h>
 #include <gdcmImageWriter.h>

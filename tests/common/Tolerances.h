@@ -3,7 +3,7 @@
 /// @brief Named test tolerances, each with the reason for its size (style.md §6).
 #pragma once
 
-#include "volume/Math.h"
+#include "core/Math.h"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 
 #include "haptic/detail/FieldGrids.h"
 #include "haptic/MaterialField.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Phantoms.h"
 
 #include <cmath>

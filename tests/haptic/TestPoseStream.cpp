@@ -7,7 +7,7 @@
 
 #include "haptic/PoseStream.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>

@@ -7,7 +7,7 @@
 #include "common/BuiltinTable.h"
 #include "haptic/Insertion.h"
 #include "haptic/Scene.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Phantoms.h"
 #include "volume/Rasterize.h"
 

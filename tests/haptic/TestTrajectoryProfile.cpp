@@ -9,7 +9,7 @@
 #include "haptic/ShaftIntegration.h"
 #include "haptic/TrajectoryProfile.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <Eigen/Geometry>
 

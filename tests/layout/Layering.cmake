@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # Every #include between the project's libraries must point down the documented
 # order (README "Layout"; issue 24 item 5):
-#   volume <- segmentation <- haptic <- planning <- render <- bench <- tools
+#   core <- volume <- segmentation <- haptic <- planning <- render <- bench <- tools
 # A source of one folder may include headers of its own folder and of the
 # folders before it, never of one after it. Fails listing every offending
 # file:line. Run by CTest: cmake -DSOURCE=<root> -P Layering.cmake
@@ -9,7 +9,7 @@ cmake_minimum_required(VERSION 3.25)
 if(NOT SOURCE)
   message(FATAL_ERROR "Layering.cmake: give -DSOURCE=")
 endif()
-set(order volume segmentation haptic planning render bench tools)
+set(order core volume segmentation haptic planning render bench tools)
 set(bad "")
 set(checked 0)
 foreach(folder IN LISTS order)

@@ -5,7 +5,7 @@
 
 #include "common/TempDirTest.h"
 #include "planning/Markups.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -3,7 +3,7 @@
 /// @brief planning::search on the torso phantom; the direction grid and the Pareto set.
 
 #include "PlanningFixtures.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include "planning/Search.h"
 

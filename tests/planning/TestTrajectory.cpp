@@ -4,7 +4,7 @@
 /// geometry and brute-force distances.
 
 #include "PlanningFixtures.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include "haptic/Insertion.h"
 #include "planning/RiskScore.h"

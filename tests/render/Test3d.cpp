@@ -9,7 +9,7 @@
 #include "render/Display.h"
 #include "render/RenderVolume.h"
 #include "render/VolumeView3d.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cstdlib>
 

@@ -7,7 +7,7 @@
 #include "common/TempDirTest.h"
 
 #include "render/ForceTrace.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <fstream>
 

@@ -7,7 +7,7 @@
 #include "common/Tolerances.h"
 
 #include "render/Plan.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <fstream>
 

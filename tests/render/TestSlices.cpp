@@ -17,7 +17,7 @@
 #include "render/RenderVolume.h"
 #include "render/SliceView.h"
 #include "render/Snapshot.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <Eigen/Geometry>
 

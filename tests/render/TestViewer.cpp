@@ -17,7 +17,7 @@
 #include "render/Viewer.h"
 #include "render/ViewerLayout.h"
 #include "render/ViewerScript.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <cmath>
 #include <filesystem>

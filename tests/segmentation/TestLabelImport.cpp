@@ -7,7 +7,7 @@
 #include "common/TempDirTest.h"
 #include "segmentation/LabelImport.h"
 #include "segmentation/Segmentation.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/Phantoms.h"
 #include "volume/VolumeFile.h"

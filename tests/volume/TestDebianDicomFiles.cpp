@@ -10,7 +10,7 @@
 #include "common/TempDirTest.h"
 
 #include "volume/DicomSeries.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <map>

@@ -9,7 +9,7 @@
 #include "common/TempDirTest.h"
 
 #include "volume/DicomSeries.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <gdcmDICOMDIRGenerator.h>
@@ -97,7 +97,7 @@ TEST_F(DicomExports, CdExportOfTheRealCtLoadsAsTheFolderDoes)
     std::sort(sources.begin(), sources.end());
     gdcm::Directory::FilenamesType names;
     for (std::size_t n = 0; n < sources.size(); ++n) {
-        char name[16];
+        char name[32];
         std::snprintf(name, sizeof name, "IM%06zu", n);
         gdcm::Reader r;
         r.SetFileName(sources[n].string().c_str());

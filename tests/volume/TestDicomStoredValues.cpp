@@ -8,7 +8,7 @@
 #include "common/TempDirTest.h"
 
 #include "volume/DicomSeries.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/StoredPrecision.h"
 

@@ -6,7 +6,7 @@
 
 #include "common/TempDirTest.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/ModalityInference.h"
 #include "volume/VolumeFile.h"

@@ -5,7 +5,7 @@
 /// real MR series.
 
 #include "volume/DicomSeries.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/MrBackground.h"
 

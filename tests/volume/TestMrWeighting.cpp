@@ -5,7 +5,7 @@
 /// sidecars, and on hand-made field sets of other vendors and weightings; the
 /// BIDS sidecar reader and its refusals.
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/MrWeighting.h"
 
 #include "common/SharedData.h"

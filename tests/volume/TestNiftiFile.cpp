@@ -7,7 +7,7 @@
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/NiftiFile.h"
 

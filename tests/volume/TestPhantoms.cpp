@@ -6,7 +6,7 @@
 #include "common/BuiltinTable.h"
 #include "common/Tolerances.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/Phantoms.h"
 

@@ -7,7 +7,7 @@
 #include "common/SharedData.h"
 
 #include "volume/DicomSeries.h"
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <gdcmImageReader.h>

@@ -3,7 +3,7 @@
 /// @brief Slice ordering along the normal and the uniform-grid checks, on
 /// hand-made positions whose answers are known by construction.
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/SliceStack.h"
 
 #include <gtest/gtest.h>

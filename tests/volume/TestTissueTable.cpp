@@ -4,7 +4,7 @@
 
 #include "common/Tolerances.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/TissueTable.h"
 
 #include <string>

@@ -4,7 +4,7 @@
 
 #include "common/Tolerances.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Volume.h"
 
 #include <Eigen/Geometry>

@@ -4,7 +4,7 @@
 
 #include "common/Tolerances.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/Phantoms.h"
 #include "volume/VdbFile.h"

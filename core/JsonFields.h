@@ -5,8 +5,8 @@
 /// "origin: field.path: why" (architecture.md "Errors").
 #pragma once
 
-#include "volume/Errors.h"
-#include "volume/Math.h"
+#include "core/Errors.h"
+#include "core/Math.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,7 +17,7 @@
 #include <string>
 #include <utility>
 
-namespace voxhap::volume {
+namespace voxhap {
 
 /// @brief Reads one JSON object, refusing unknown keys (checked when it goes out
 /// of scope) and wrong types with "origin: field: why".
@@ -106,4 +106,4 @@ private:
     std::set<std::string> mSeen;
 };
 
-} // namespace voxhap::volume
+} // namespace voxhap

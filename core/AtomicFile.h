@@ -9,7 +9,7 @@
 #include <functional>
 #include <ostream>
 
-namespace voxhap::volume {
+namespace voxhap {
 
 /// @brief Call @p write with a temporary path beside @p file, then rename it to @p file.
 /// @throw IoError "<file>: cannot write (<why>)" when @p write throws or the rename fails
@@ -19,4 +19,4 @@ void writeAtomically(const std::filesystem::path& file, const std::function<void
 /// @throw IoError as above, also when the stream fails (disk full)
 void writeStreamAtomically(const std::filesystem::path& file, const std::function<void(std::ostream&)>& fill);
 
-} // namespace voxhap::volume
+} // namespace voxhap

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file AtomicFile.cpp
-#include "volume/AtomicFile.h"
+#include "core/AtomicFile.h"
 
-#include "volume/Errors.h"
+#include "core/Errors.h"
 
 #include <fstream>
 #include <stdexcept>
 #include <unistd.h> // for getpid: a per-process temporary name
 
-namespace voxhap::volume {
+namespace voxhap {
 
 void writeAtomically(const std::filesystem::path& file, const std::function<void(const std::filesystem::path&)>& write)
 {
@@ -35,4 +35,4 @@ void writeStreamAtomically(const std::filesystem::path& file, const std::functio
     });
 }
 
-} // namespace voxhap::volume
+} // namespace voxhap

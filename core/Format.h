@@ -1,0 +1,13 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Format.h
+/// @brief Numbers as people read them in reports and messages, one way.
+#pragma once
+
+#include <string>
+
+namespace voxhap {
+
+/// @brief @p value with exactly @p digits decimals ("12.35"), as std::fixed prints it.
+std::string fixed(double value, int digits = 1);
+
+} // namespace voxhap
