@@ -7,7 +7,6 @@
 #include "haptic/detail/FieldGrids.h"
 #include "core/Errors.h"
 
-
 #include <cmath>
 
 namespace voxhap::bench {
@@ -33,7 +32,7 @@ DenseField::DenseField(const haptic::MaterialField& field)
             for (int j = box.min().y(); j <= box.max().y(); ++j)
                 for (int i = box.min().x(); i <= box.max().x(); ++i) {
                     mValues[(std::size_t(k - mOrigin.z()) * ny + std::size_t(j - mOrigin.y())) * nx +
-                            std::size_t(i - mOrigin.x())] = v;
+                        std::size_t(i - mOrigin.x())] = v;
                 }
     }
     const volume::Geometry g = volume::geometryOf(beta->transform());

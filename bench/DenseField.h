@@ -20,7 +20,7 @@ public:
 
     const std::vector<float>& values() const { return mValues; }
     const Vec3i& dims() const { return mDims; }
-    const Vec3i& origin() const { return mOrigin; }  ///< index of values()[0]
+    const Vec3i& origin() const { return mOrigin; } ///< index of values()[0]
     const Vec3d& spacing() const { return mSpacing; }
     const Vec3d& worldOrigin() const { return mWorldOrigin; } ///< world position of values()[0] [mm]
 
@@ -29,7 +29,8 @@ private:
     {
         i -= mOrigin.x(), j -= mOrigin.y(), k -= mOrigin.z();
         if (i < 0 || j < 0 || k < 0 || i >= mDims.x() || j >= mDims.y() || k >= mDims.z()) return 0.0f;
-        return mValues[(std::size_t(k) * std::size_t(mDims.y()) + std::size_t(j)) * std::size_t(mDims.x()) + std::size_t(i)];
+        return mValues[(std::size_t(k) * std::size_t(mDims.y()) + std::size_t(j)) * std::size_t(mDims.x()) +
+            std::size_t(i)];
     }
 
     std::vector<float> mValues; // x fastest (VTK's layout, so that the probe baseline shares it)

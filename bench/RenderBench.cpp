@@ -23,7 +23,10 @@ namespace {
 
 using RenderClock = std::chrono::steady_clock;
 
-double renderSecondsSince(RenderClock::time_point t) { return std::chrono::duration<double>(RenderClock::now() - t).count(); }
+double renderSecondsSince(RenderClock::time_point t)
+{
+    return std::chrono::duration<double>(RenderClock::now() - t).count();
+}
 
 Seconds renderStat(const std::vector<double>& x)
 {
@@ -32,7 +35,7 @@ Seconds renderStat(const std::vector<double>& x)
 }
 
 RenderCase benchVolume(const std::string& name, const volume::Volume& v, double loadS, const RenderBenchOptions& o,
-                       const Progress& progress)
+    const Progress& progress)
 {
     const auto& table = volume::TissueTable::builtin();
     RenderCase c;
@@ -46,7 +49,8 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
     std::vector<double> setup, first, steady, slices;
     render::Image firstImage;
     for (int i = 0; i < o.firstFrames; ++i) {
-        if (progress) progress(-1.0, name + ": first frame " + std::to_string(i + 1) + " of " + std::to_string(o.firstFrames));
+        if (progress)
+            progress(-1.0, name + ": first frame " + std::to_string(i + 1) + " of " + std::to_string(o.firstFrames));
         auto t = RenderClock::now();
         render::Viewer viewer(v, vo, table);
         setup.push_back(renderSecondsSince(t));
@@ -58,14 +62,17 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
         // alone, interleaved so that both see the same machine load.
         firstImage = std::move(img);
         for (int k = 0; k < o.steadyFrames; ++k) {
-            if (progress) progress(-1.0, name + ": steady frame " + std::to_string(k + 1) + " of " + std::to_string(o.steadyFrames));
+            if (progress)
+                progress(
+                    -1.0, name + ": steady frame " + std::to_string(k + 1) + " of " + std::to_string(o.steadyFrames));
             viewer.invalidate();
             t = RenderClock::now();
             render::Image again = viewer.render();
             steady.push_back(renderSecondsSince(t));
             if (k == 0) {
                 for (int y = 0; y < again.height(); ++y) {
-                    for (int x = 0; x < again.width(); ++x) c.differingPixels += !(again.at(x, y) == firstImage.at(x, y));
+                    for (int x = 0; x < again.width(); ++x)
+                        c.differingPixels += !(again.at(x, y) == firstImage.at(x, y));
                 }
             }
             // A streamed needle pose: the slices' overlays and the 3D pane's lines
@@ -132,16 +139,17 @@ void printRenderReport(std::ostream& os, const RenderReport& r)
         return t.str();
     };
     for (const RenderCase& c : r.cases) {
-        os << std::left << std::setw(16) << c.name << std::setw(20) << c.dims << std::setw(18) << s(c.setup) << std::setw(18)
-           << s(c.first) << std::setw(18) << s(c.steady) << std::setw(18) << s(c.slices) << std::fixed
+        os << std::left << std::setw(16) << c.name << std::setw(20) << c.dims << std::setw(18) << s(c.setup)
+           << std::setw(18) << s(c.first) << std::setw(18) << s(c.steady) << std::setw(18) << s(c.slices) << std::fixed
            << std::setprecision(1) << c.steadyOverSlices << "x\n";
     }
-    os << "\nfirst frames n = " << (r.cases.empty() ? 0 : r.cases[0].first.n) << " (fresh viewers), steady n = "
-       << (r.cases.empty() ? 0 : r.cases[0].steady.n) << "; steady/needle is the mean of per-round ratios in this run;\n"
+    os << "\nfirst frames n = " << (r.cases.empty() ? 0 : r.cases[0].first.n)
+       << " (fresh viewers), steady n = " << (r.cases.empty() ? 0 : r.cases[0].steady.n)
+       << "; steady/needle is the mean of per-round ratios in this run;\n"
           "a needle-moved frame redraws the slices and the overlays over the cached 3D picture.\n";
     for (const RenderCase& c : r.cases) {
-        os << c.name << ": loaded in " << std::setprecision(2) << c.loadS << " s; steady frame differs from the first in "
-           << c.differingPixels << " pixels\n";
+        os << c.name << ": loaded in " << std::setprecision(2) << c.loadS
+           << " s; steady frame differs from the first in " << c.differingPixels << " pixels\n";
     }
 }
 
@@ -151,8 +159,8 @@ nlohmann::json renderReportJson(const RenderReport& r)
     nlohmann::json cases = nlohmann::json::array();
     for (const RenderCase& c : r.cases) {
         cases.push_back({{"volume", c.name}, {"voxels", c.dims}, {"load_s", c.loadS}, {"setup", s(c.setup)},
-                         {"first_frame", s(c.first)}, {"steady_frame", s(c.steady)}, {"needle_frame", s(c.slices)},
-                         {"steady_over_needle", c.steadyOverSlices}, {"differing_pixels", c.differingPixels}});
+            {"first_frame", s(c.first)}, {"steady_frame", s(c.steady)}, {"needle_frame", s(c.slices)},
+            {"steady_over_needle", c.steadyOverSlices}, {"differing_pixels", c.differingPixels}});
     }
     return {{"machine", r.machine}, {"display", r.display}, {"cases", cases}};
 }

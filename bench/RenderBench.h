@@ -19,10 +19,10 @@
 namespace voxhap::bench {
 
 struct RenderBenchOptions {
-    std::string ct;               ///< a DICOM folder (or any volume); empty: phantom only
-    int phantomSide = 256;        ///< voxels per side of the torso phantom
-    int firstFrames = 2;          ///< fresh viewers, each timed on its first frame
-    int steadyFrames = 5;         ///< redraws of one viewer, after its first frame
+    std::string ct;                  ///< a DICOM folder (or any volume); empty: phantom only
+    int phantomSide = 256;           ///< voxels per side of the torso phantom
+    int firstFrames = 2;             ///< fresh viewers, each timed on its first frame
+    int steadyFrames = 5;            ///< redraws of one viewer, after its first frame
     int width = 1024, height = 1048; ///< window [px] (the viewer's default)
 };
 
@@ -33,14 +33,14 @@ struct Seconds {
 };
 
 struct RenderCase {
-    std::string name, dims;       ///< e.g. "real CT", "512 x 512 x 134"
-    double loadS = 0;             ///< reading the volume (not part of a frame)
-    Seconds setup;                ///< the viewer: volume copied for VTK, frames laid out
-    Seconds first;                ///< the first four-view frame of a fresh viewer
-    Seconds steady;               ///< a later four-view frame, all panes redrawn
-    Seconds slices;               ///< after a new needle pose: slices and overlays redrawn, the 3D picture cached
-    double steadyOverSlices = 0;  ///< steady over needle frame, per round in this run: what the volume rendering costs
-    long differingPixels = 0;     ///< steady frame against first frame: 0 if rendering is deterministic
+    std::string name, dims;      ///< e.g. "real CT", "512 x 512 x 134"
+    double loadS = 0;            ///< reading the volume (not part of a frame)
+    Seconds setup;               ///< the viewer: volume copied for VTK, frames laid out
+    Seconds first;               ///< the first four-view frame of a fresh viewer
+    Seconds steady;              ///< a later four-view frame, all panes redrawn
+    Seconds slices;              ///< after a new needle pose: slices and overlays redrawn, the 3D picture cached
+    double steadyOverSlices = 0; ///< steady over needle frame, per round in this run: what the volume rendering costs
+    long differingPixels = 0;    ///< steady frame against first frame: 0 if rendering is deterministic
 };
 
 struct RenderReport {

@@ -43,8 +43,8 @@ const std::vector<volume::SlabLayer> kSlabLayers{
 double workloadBeta(const std::string& tissue)
 {
     static const std::map<std::string, double> kBeta{{"skin", 8152e-6}, {"fat", 3696e-6}, {"muscle", 8152e-6},
-                                                     {"interspinous_ligament", 16304e-6}, {"ligamentum_flavum", 16304e-6},
-                                                     {"cancellous_bone", 0.0}, {"cortical_bone", 0.0}};
+        {"interspinous_ligament", 16304e-6}, {"ligamentum_flavum", 16304e-6}, {"cancellous_bone", 0.0},
+        {"cortical_bone", 0.0}};
     const auto it = kBeta.find(tissue);
     return it == kBeta.end() ? 8152e-6 : it->second; // other soft tissue as muscle
 }
@@ -53,7 +53,7 @@ struct Workload {
     std::string name;
     std::unique_ptr<volume::Volume> volume;
     std::unique_ptr<haptic::MaterialField> field;
-    std::vector<std::vector<Segment>> paths; ///< per path, the shafts at increasing depth
+    std::vector<std::vector<Segment>> paths;           ///< per path, the shafts at increasing depth
     std::function<double(const Segment&)> pcReference; ///< exact ∫β of the voxel reading (closed form if any)
     std::string pcReferenceName;
     double voxelMm = 0.5;
@@ -74,8 +74,8 @@ std::unique_ptr<haptic::MaterialField> fieldWithWorkloadBeta(const volume::Volum
 }
 
 /// Shafts from @p entry along directions tilted 0..60° from @p inward, depths up to 100 mm.
-std::vector<std::vector<Segment>> makePaths(const Vec3d& entry, const Vec3d& inward, const SamplerBenchOptions& o,
-                                            std::mt19937& rng, double jitterMm)
+std::vector<std::vector<Segment>> makePaths(
+    const Vec3d& entry, const Vec3d& inward, const SamplerBenchOptions& o, std::mt19937& rng, double jitterMm)
 {
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::vector<std::vector<Segment>> paths;
@@ -133,7 +133,8 @@ Workload torsoWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
     Workload w = phantomWorkload("torso", volume::torsoModel(volume::TorsoParams{}, volume::TissueTable::builtin()), o);
     // From the posterior skin 40 mm left of the midline, inward and tilted.
     w.paths = makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), o, rng, 10.0);
-    auto exact = std::shared_ptr<haptic::ShaftIntegrator>(haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));
+    auto exact = std::shared_ptr<haptic::ShaftIntegrator>(
+        haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));
     w.pcReference = [exact](const Segment& s) {
         ShaftIntegral r;
         exact->integrate(s, r);
@@ -214,13 +215,13 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
             std::shared_ptr<haptic::ShaftIntegrator> integ = haptic::makeIntegrator(field, io);
             keep.push_back(integ);
             configs.push_back({std::move(label), std::move(reading),
-                               [integ](const std::vector<Segment>& path, std::vector<double>& out) {
-                                   ShaftIntegral r;
-                                   for (std::size_t i = 0; i < path.size(); ++i) {
-                                       integ->integrate(path[i], r);
-                                       out[i] = r.dampingIntegral;
-                                   }
-                               }});
+                [integ](const std::vector<Segment>& path, std::vector<double>& out) {
+                    ShaftIntegral r;
+                    for (std::size_t i = 0; i < path.size(); ++i) {
+                        integ->integrate(path[i], r);
+                        out[i] = r.dampingIntegral;
+                    }
+                }});
         };
         add("exact-voxel", "voxel", {haptic::Strategy::ExactVoxel});
         add("exact-trilinear", "trilinear", {haptic::Strategy::ExactTrilinear});
@@ -237,36 +238,36 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
             std::ostringstream label;
             label << "profile tol " << tol << " mm";
             configs.push_back({label.str(), "voxel",
-                               [profile](const std::vector<Segment>& path, std::vector<double>& out) {
-                                   ShaftIntegral r;
-                                   for (std::size_t i = 0; i < path.size(); ++i) {
-                                       profile->integrate(path[i], r);
-                                       out[i] = r.dampingIntegral;
-                                   }
-                               },
-                               [profile](const std::vector<Segment>& path) {
-                                   profile->lock(path.front().entry, path.front().tip - path.front().entry);
-                               }});
+                [profile](const std::vector<Segment>& path, std::vector<double>& out) {
+                    ShaftIntegral r;
+                    for (std::size_t i = 0; i < path.size(); ++i) {
+                        profile->integrate(path[i], r);
+                        out[i] = r.dampingIntegral;
+                    }
+                },
+                [profile](const std::vector<Segment>& path) {
+                    profile->lock(path.front().entry, path.front().tip - path.front().entry);
+                }});
         }
         {
             auto profile = std::make_shared<haptic::TrajectoryProfile>(field, 0.05, 110.0, false);
             keep.push_back(profile);
             configs.push_back({"profile lock (per path)", "build",
-                               [profile](const std::vector<Segment>& path, std::vector<double>& out) {
-                                   profile->lock(path.front().entry, path.front().tip - path.front().entry);
-                                   std::fill(out.begin(), out.end(), std::nan(""));
-                               },
-                               {}, true});
+                [profile](const std::vector<Segment>& path, std::vector<double>& out) {
+                    profile->lock(path.front().entry, path.front().tip - path.front().entry);
+                    std::fill(out.begin(), out.end(), std::nan(""));
+                },
+                {}, true});
         }
         progress(-1.0, "copying the " + name + " workload to a dense array");
         auto dense = std::make_shared<DenseField>(field);
         for (double f : fractions) {
             for (bool trilinear : {false, true}) {
                 configs.push_back({std::string("dense march-") + (trilinear ? "trilinear " : "nearest ") + fraction(f),
-                                   trilinear ? "trilinear" : "voxel",
-                                   [dense, f, h, trilinear](const std::vector<Segment>& path, std::vector<double>& out) {
-                                       for (std::size_t i = 0; i < path.size(); ++i) out[i] = dense->march(path[i], f * h, trilinear);
-                                   }});
+                    trilinear ? "trilinear" : "voxel",
+                    [dense, f, h, trilinear](const std::vector<Segment>& path, std::vector<double>& out) {
+                        for (std::size_t i = 0; i < path.size(); ++i) out[i] = dense->march(path[i], f * h, trilinear);
+                    }});
             }
         }
         std::shared_ptr<VtkProbe> probe;
@@ -274,9 +275,9 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
             probe = std::make_shared<VtkProbe>(*dense);
             for (double f : {1.0, 0.25}) {
                 configs.push_back({"vtkProbeFilter " + fraction(f), "trilinear",
-                                   [probe, f, h](const std::vector<Segment>& path, std::vector<double>& out) {
-                                       for (std::size_t i = 0; i < path.size(); ++i) out[i] = probe->integrate(path[i], f * h);
-                                   }});
+                    [probe, f, h](const std::vector<Segment>& path, std::vector<double>& out) {
+                        for (std::size_t i = 0; i < path.size(); ++i) out[i] = probe->integrate(path[i], f * h);
+                    }});
             }
         }
 
@@ -339,7 +340,8 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
         const auto ratio = [&](const std::string& config) { return base.nsMedian / find(config).nsMedian; };
         std::ostringstream n;
         n << std::fixed << std::setprecision(1);
-        n << name << ": exact-voxel is " << ratio("exact-voxel") << "x faster than the dense trilinear march at 1/4 voxel"
+        n << name << ": exact-voxel is " << ratio("exact-voxel")
+          << "x faster than the dense trilinear march at 1/4 voxel"
           << " (target >= 5x), max error " << std::setprecision(3) << std::scientific << find("exact-voxel").errMaxN
           << " N vs " << base.errMaxN << " N (" << w.pcReferenceName << ")";
         report.notes.push_back(n.str());
@@ -399,14 +401,14 @@ nlohmann::json samplerReportJson(const SamplerReport& r)
     nlohmann::json j;
     j["machine"] = r.machine;
     j["options"] = {{"workloads", r.options.workloads}, {"paths", r.options.paths}, {"depths", r.options.depths},
-                    {"repetitions", r.options.repetitions}, {"speed_mm_per_s", r.options.speedMmPerS},
-                    {"spacing_mm", r.options.spacingMm}};
+        {"repetitions", r.options.repetitions}, {"speed_mm_per_s", r.options.speedMmPerS},
+        {"spacing_mm", r.options.spacingMm}};
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& row : r.rows) {
         rows.push_back({{"workload", row.workload}, {"config", row.config}, {"reading", row.reading},
-                        {"ns_median", row.nsMedian}, {"ns_p99", row.nsP99}, {"err_max_n", row.errMaxN},
-                        {"err_rms_n", row.errRmsN}, {"err_trilinear_max_n", row.errTriMaxN},
-                        {"err_trilinear_rms_n", row.errTriRmsN}, {"evaluations", row.evaluations}});
+            {"ns_median", row.nsMedian}, {"ns_p99", row.nsP99}, {"err_max_n", row.errMaxN}, {"err_rms_n", row.errRmsN},
+            {"err_trilinear_max_n", row.errTriMaxN}, {"err_trilinear_rms_n", row.errTriRmsN},
+            {"evaluations", row.evaluations}});
     }
     j["rows"] = rows;
     j["notes"] = r.notes;
@@ -426,7 +428,8 @@ bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::
     std::map<std::string, int> index;
     for (const auto& row : r.rows) {
         if (row.reading == "build") continue; // a build cost, not an evaluation
-        std::ofstream data(dir.path() / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
+        std::ofstream data(
+            dir.path() / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
         // Each configuration against the reference of the reading it approximates.
         const double err = row.reading == "trilinear" ? row.errTriMaxN : row.errMaxN;
         data << std::max(err, 1e-12) << ' ' << row.nsMedian << " \"" << row.config << "\"\n";
@@ -435,7 +438,7 @@ bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::
     for (const auto& [workload, unused] : index) {
         const std::string file = (dir.path() / (workload + ".dat")).string();
         plot += "'" + file + "' using 1:2 with points pt 7 ps 1.5 title '" + workload + "', '" + file +
-                "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
+            "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
     }
     script << plot.substr(0, plot.size() - 2) << '\n';
     return render::runGnuplot(dir, script.str(), pngFile, 1200, 800, why);

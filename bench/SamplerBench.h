@@ -18,27 +18,27 @@ namespace voxhap::bench {
 
 struct SamplerBenchOptions {
     std::vector<std::string> workloads{"slab", "torso"}; ///< "slab" (R1 closed form), "torso" (phantom)
-    int paths = 48;             ///< shaft directions per workload (tilt 0..60°)
-    int depths = 40;            ///< insertion depths per path, up to 100 mm
-    int repetitions = 5;        ///< interleaved rounds over all configurations
-    double speedMmPerS = 10.0;  ///< insertion speed for force errors [mm/s]
-    double spacingMm = 0.5;     ///< phantom voxel size [mm]
-    bool vtk = true;            ///< include the vtkProbeFilter baseline (slow)
+    int paths = 48;                                      ///< shaft directions per workload (tilt 0..60°)
+    int depths = 40;                                     ///< insertion depths per path, up to 100 mm
+    int repetitions = 5;                                 ///< interleaved rounds over all configurations
+    double speedMmPerS = 10.0;                           ///< insertion speed for force errors [mm/s]
+    double spacingMm = 0.5;                              ///< phantom voxel size [mm]
+    bool vtk = true;                                     ///< include the vtkProbeFilter baseline (slow)
 };
 
 /// @brief One configuration's figures.
 struct SamplerRow {
     std::string workload;
-    std::string config;         ///< e.g. "exact-voxel", "vdb march-trilinear 1/4", "dense march-trilinear 1/4"
-    std::string reading;        ///< "voxel" or "trilinear": the interpretation it approximates
-    double nsMedian = 0, nsP99 = 0; ///< per evaluation, over per-path batches
-    double errMaxN = 0, errRmsN = 0;       ///< against the piecewise-constant reference [N]
+    std::string config;              ///< e.g. "exact-voxel", "vdb march-trilinear 1/4", "dense march-trilinear 1/4"
+    std::string reading;             ///< "voxel" or "trilinear": the interpretation it approximates
+    double nsMedian = 0, nsP99 = 0;  ///< per evaluation, over per-path batches
+    double errMaxN = 0, errRmsN = 0; ///< against the piecewise-constant reference [N]
     double errTriMaxN = 0, errTriRmsN = 0; ///< against the trilinear reference [N]
     long evaluations = 0;
 };
 
 struct SamplerReport {
-    std::string machine;        ///< CPU model and core count
+    std::string machine; ///< CPU model and core count
     SamplerBenchOptions options;
     std::vector<SamplerRow> rows;
     std::vector<std::string> notes; ///< ratios and targets, measured in this run

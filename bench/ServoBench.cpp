@@ -47,10 +47,8 @@ ServoRun runOnce(const haptic::SceneInstance& inst, double rateHz, double second
     haptic::Event ev;
     while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < seconds) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
-        while (loop.popRecord(rec)) {
-        }
-        while (loop.popEvent(ev)) {
-        }
+        while (loop.popRecord(rec)) { }
+        while (loop.popEvent(ev)) { }
     }
     loop.stop();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -132,8 +130,10 @@ IgtlRoundTrip igtlRoundTrip(const haptic::SceneInstance& inst, double seconds)
                 break;
             }
         }
-        if (got) rtt.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent).count());
-        else ++out.lost;
+        if (got)
+            rtt.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent).count());
+        else
+            ++out.lost;
     }
     ::close(fd);
     loop.stop();
@@ -187,9 +187,10 @@ void printServoReport(std::ostream& os, const ServoReport& r)
            << x.periodErrP99Ns * 1e-3 << '\n';
     };
     const auto header = [&] {
-        os << std::left << std::setw(16) << "scene" << std::right << std::setw(9) << "rate" << std::setw(10) << "achieved"
-           << std::setw(9) << "ticks" << std::setw(9) << "overrun" << std::setw(10) << "p50 us" << std::setw(10)
-           << "p99 us" << std::setw(10) << "max us" << std::setw(10) << "jit50 us" << std::setw(10) << "jit99 us\n";
+        os << std::left << std::setw(16) << "scene" << std::right << std::setw(9) << "rate" << std::setw(10)
+           << "achieved" << std::setw(9) << "ticks" << std::setw(9) << "overrun" << std::setw(10) << "p50 us"
+           << std::setw(10) << "p99 us" << std::setw(10) << "max us" << std::setw(10) << "jit50 us" << std::setw(10)
+           << "jit99 us\n";
     };
     os << "1 kHz servo loop, simulated hand (tick compute; period error)\n";
     header();
@@ -198,7 +199,8 @@ void printServoReport(std::ostream& os, const ServoReport& r)
     header();
     for (const ServoRun& x : r.ladder) row(x);
     os << "\nhighest sustained rate (achieved within 1 %, overruns < 0.1 %):\n";
-    for (const auto& [scene, hz] : r.sustainableHz) os << "  " << scene << ": " << std::setprecision(0) << hz << " Hz\n";
+    for (const auto& [scene, hz] : r.sustainableHz)
+        os << "  " << scene << ": " << std::setprecision(0) << hz << " Hz\n";
     os << "\nOpenIGTLink pose -> force round trip on loopback at 1 kHz, servo running: " << r.igtl.samples
        << " samples, " << r.igtl.lost << " lost; p50 " << std::setprecision(1) << r.igtl.p50Us << " us, p99 "
        << r.igtl.p99Us << " us, max " << r.igtl.maxUs << " us\n";
@@ -207,19 +209,17 @@ void printServoReport(std::ostream& os, const ServoReport& r)
 nlohmann::json servoReportJson(const ServoReport& r)
 {
     const auto run = [](const ServoRun& x) {
-        return nlohmann::json{{"scene", x.scene},           {"rate_hz", x.rateHz},
-                              {"achieved_hz", x.achievedHz}, {"seconds", x.seconds},
-                              {"ticks", x.ticks},            {"overruns", x.overruns},
-                              {"compute_p50_ns", x.computeP50Ns}, {"compute_p99_ns", x.computeP99Ns},
-                              {"compute_max_ns", x.computeMaxNs}, {"period_error_p50_ns", x.periodErrP50Ns},
-                              {"period_error_p99_ns", x.periodErrP99Ns}};
+        return nlohmann::json{{"scene", x.scene}, {"rate_hz", x.rateHz}, {"achieved_hz", x.achievedHz},
+            {"seconds", x.seconds}, {"ticks", x.ticks}, {"overruns", x.overruns}, {"compute_p50_ns", x.computeP50Ns},
+            {"compute_p99_ns", x.computeP99Ns}, {"compute_max_ns", x.computeMaxNs},
+            {"period_error_p50_ns", x.periodErrP50Ns}, {"period_error_p99_ns", x.periodErrP99Ns}};
     };
     nlohmann::json j{{"machine", r.machine}};
     for (const auto& x : r.runs) j["runs"].push_back(run(x));
     for (const auto& x : r.ladder) j["ladder"].push_back(run(x));
     for (const auto& [scene, hz] : r.sustainableHz) j["sustainable_hz"][scene] = hz;
     j["igtl_round_trip"] = {{"samples", r.igtl.samples}, {"lost", r.igtl.lost}, {"p50_us", r.igtl.p50Us},
-                            {"p99_us", r.igtl.p99Us}, {"max_us", r.igtl.maxUs}};
+        {"p99_us", r.igtl.p99Us}, {"max_us", r.igtl.maxUs}};
     return j;
 }
 

@@ -18,10 +18,10 @@ namespace voxhap::bench {
 
 struct ServoBenchOptions {
     std::vector<std::string> scenes{"senac-average", "kyung"};
-    double seconds = 30.0;                     ///< the 1 kHz run
+    double seconds = 30.0;                                             ///< the 1 kHz run
     std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
     double ladderSeconds = 2.0;
-    double igtlSeconds = 10.0;      ///< the OpenIGTLink round-trip run
+    double igtlSeconds = 10.0; ///< the OpenIGTLink round-trip run
 };
 
 struct ServoRun {
@@ -40,10 +40,10 @@ struct IgtlRoundTrip {
 
 struct ServoReport {
     std::string machine;
-    std::vector<ServoRun> runs;     ///< the long run at 1 kHz, per scene
-    std::vector<ServoRun> ladder;   ///< per scene and rate
+    std::vector<ServoRun> runs;                                ///< the long run at 1 kHz, per scene
+    std::vector<ServoRun> ladder;                              ///< per scene and rate
     std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene
-    IgtlRoundTrip igtl;             ///< at 1 kHz on the first scene
+    IgtlRoundTrip igtl;                                        ///< at 1 kHz on the first scene
 };
 
 ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress = {});

@@ -50,8 +50,10 @@ std::size_t bareDecode(const std::vector<fs::path>& files, bool parallel)
         r.GetImage().GetBuffer(buf.data());
         bytes[n] = buf.size();
     };
-    if (parallel) tbb::parallel_for(std::size_t(0), files.size(), one);
-    else for (std::size_t n = 0; n < files.size(); ++n) one(n);
+    if (parallel)
+        tbb::parallel_for(std::size_t(0), files.size(), one);
+    else
+        for (std::size_t n = 0; n < files.size(); ++n) one(n);
     std::size_t total = 0;
     for (auto b : bytes) total += b;
     return total;
@@ -74,8 +76,8 @@ long statusKb(const char* key)
 /// VmRSS before it.
 double loadPeakBytes(const fs::path& dir, bool warm)
 {
-    const std::string cmd = "'/proc/" + std::to_string(::getpid()) + "/exe' " + (warm ? "--peak-warm '" : "--peak-only '") +
-                            dir.string() + "'";
+    const std::string cmd = "'/proc/" + std::to_string(::getpid()) + "/exe' " +
+        (warm ? "--peak-warm '" : "--peak-only '") + dir.string() + "'";
     FILE* p = ::popen(cmd.c_str(), "r");
     if (!p) return -1;
     double peak = -1;
@@ -90,7 +92,9 @@ int peakOnly(const fs::path& dir, bool warm)
 {
     if (warm) (void)voxhap::volume::listDicomSeries({dir});
     const long before = statusKb("VmRSS:");
-    { const auto v = voxhap::volume::loadDicom({dir}); }
+    {
+        const auto v = voxhap::volume::loadDicom({dir});
+    }
     std::printf("%.0f\n", double(statusKb("VmHWM:") - before) * 1024.0);
     return 0;
 }
@@ -116,12 +120,15 @@ int main(int argc, char** argv)
         const std::string arg = argv[a];
         if (arg == "--peak-only" && a + 1 < argc) return peakOnly(argv[a + 1], false);
         if (arg == "--peak-warm" && a + 1 < argc) return peakOnly(argv[a + 1], true);
-        if (arg == "--repeat" && a + 1 < argc) repeat = std::max(1, std::atoi(argv[++a]));
-        else if (arg == "--json" && a + 1 < argc) json = argv[++a];
+        if (arg == "--repeat" && a + 1 < argc)
+            repeat = std::max(1, std::atoi(argv[++a]));
+        else if (arg == "--json" && a + 1 < argc)
+            json = argv[++a];
         else if (arg == "--help") {
             std::cout << "bench_dicom_load [DIR] [--repeat N] [--json FILE]\n";
             return 0;
-        } else dir = arg;
+        } else
+            dir = arg;
     }
     try {
         gdcm::Trace::SetWarning(false);
@@ -132,7 +139,7 @@ int main(int argc, char** argv)
 
         std::vector<double> tSerial, tParallel, tLoad, tScan, tDecode, tSparse;
         voxhap::volume::DicomLoadReport report;
-        (void)bareDecode(files, false); // warm the page cache for every contender
+        (void)bareDecode(files, false);    // warm the page cache for every contender
         for (int r = 0; r < repeat; ++r) { // interleaved: each round runs all three
             auto t0 = Clock::now();
             const std::size_t pixelBytes = bareDecode(files, false);
@@ -156,31 +163,32 @@ int main(int argc, char** argv)
 
         std::printf("machine: %u hardware threads, %s\n", std::thread::hardware_concurrency(), cpuModel().c_str());
         std::printf("series:  %zu files, %.1f MB, %lld voxels, %d repetitions (medians)\n", files.size(),
-                    double(fileBytes) / 1e6, static_cast<long long>(report.denseVoxels), repeat);
+            double(fileBytes) / 1e6, static_cast<long long>(report.denseVoxels), repeat);
         std::printf("%-34s %8s %8s %8s\n", "", "seconds", "MB/s", "ratio");
-        std::printf("%-34s %8.3f %8.1f %8s\n", "bare GDCM decode, one thread", serial, double(fileBytes) / 1e6 / serial, "1.00");
-        std::printf("%-34s %8.3f %8.1f %8.2f\n", "bare GDCM decode, TBB threads", parallel, double(fileBytes) / 1e6 / parallel, parallel / serial);
-        std::printf("%-34s %8.3f %8.1f %8.2f\n", "voxhap loadDicom (sparse Volume)", load, double(fileBytes) / 1e6 / load, load / serial);
+        std::printf("%-34s %8.3f %8.1f %8s\n", "bare GDCM decode, one thread", serial, double(fileBytes) / 1e6 / serial,
+            "1.00");
+        std::printf("%-34s %8.3f %8.1f %8.2f\n", "bare GDCM decode, TBB threads", parallel,
+            double(fileBytes) / 1e6 / parallel, parallel / serial);
+        std::printf("%-34s %8.3f %8.1f %8.2f\n", "voxhap loadDicom (sparse Volume)", load,
+            double(fileBytes) / 1e6 / load, load / serial);
         std::printf("  of which: header scan %.3f s, decode %.3f s, sparse conversion %.3f s\n", median(tScan),
-                    median(tDecode), median(tSparse));
+            median(tDecode), median(tSparse));
         std::printf("load / bare decode with the same threads: %.2f (target <= 1.5)\n", load / parallel);
         std::printf("active: %.1f %% of voxels; grid %.1f MiB; load peak %.1f MiB; dense float %.1f MiB\n",
-                    100.0 * double(report.activeVoxels) / double(report.denseVoxels), double(report.memoryBytes) / 1048576.0,
-                    peak / 1048576.0, dense / 1048576.0);
+            100.0 * double(report.activeVoxels) / double(report.denseVoxels), double(report.memoryBytes) / 1048576.0,
+            peak / 1048576.0, dense / 1048576.0);
         std::printf("grid / dense float: %.2f; load peak / dense float: %.2f (target <= 0.6)\n",
-                    double(report.memoryBytes) / dense, peak / dense);
+            double(report.memoryBytes) / dense, peak / dense);
         std::printf("load peak with GDCM already initialised: %.1f MiB, %.2f of dense float\n", peakWarm / 1048576.0,
-                    peakWarm / dense);
+            peakWarm / dense);
         if (!json.empty()) {
-            nlohmann::json j{{"files", files.size()},          {"file_bytes", fileBytes},
-                             {"dense_voxels", report.denseVoxels}, {"active_voxels", report.activeVoxels},
-                             {"bare_decode_serial_s", serial},  {"bare_decode_parallel_s", parallel},
-                             {"load_s", load},                  {"load_scan_s", median(tScan)},
-                             {"load_decode_s", median(tDecode)}, {"load_sparse_s", median(tSparse)},                  {"load_vs_parallel_decode", load / parallel},
-                             {"grid_bytes", report.memoryBytes}, {"load_peak_bytes", peak},
-                             {"load_peak_warm_bytes", peakWarm},
-                             {"dense_float_bytes", dense},      {"hardware_threads", std::thread::hardware_concurrency()},
-                             {"cpu", cpuModel()}};
+            nlohmann::json j{{"files", files.size()}, {"file_bytes", fileBytes}, {"dense_voxels", report.denseVoxels},
+                {"active_voxels", report.activeVoxels}, {"bare_decode_serial_s", serial},
+                {"bare_decode_parallel_s", parallel}, {"load_s", load}, {"load_scan_s", median(tScan)},
+                {"load_decode_s", median(tDecode)}, {"load_sparse_s", median(tSparse)},
+                {"load_vs_parallel_decode", load / parallel}, {"grid_bytes", report.memoryBytes},
+                {"load_peak_bytes", peak}, {"load_peak_warm_bytes", peakWarm}, {"dense_float_bytes", dense},
+                {"hardware_threads", std::thread::hardware_concurrency()}, {"cpu", cpuModel()}};
             std::ofstream(json) << j.dump(2) << '\n';
         }
     } catch (const std::exception& e) {

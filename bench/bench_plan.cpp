@@ -66,12 +66,17 @@ int main(int argc, char** argv)
             }
             return std::atof(argv[++i]);
         };
-        if (!std::strcmp(argv[i], "--repeats")) repeats = std::max(1, int(value("--repeats")));
-        else if (!std::strcmp(argv[i], "--step")) step = value("--step");
-        else if (!std::strcmp(argv[i], "--spacing")) spacing = value("--spacing");
-        else if (!std::strcmp(argv[i], "--json")) json = true;
+        if (!std::strcmp(argv[i], "--repeats"))
+            repeats = std::max(1, int(value("--repeats")));
+        else if (!std::strcmp(argv[i], "--step"))
+            step = value("--step");
+        else if (!std::strcmp(argv[i], "--spacing"))
+            spacing = value("--spacing");
+        else if (!std::strcmp(argv[i], "--json"))
+            json = true;
         else {
-            std::cerr << "bench_plan: error: unknown option " << argv[i] << " (--repeats N, --step DEG, --spacing MM, --json)\n";
+            std::cerr << "bench_plan: error: unknown option " << argv[i]
+                      << " (--repeats N, --step DEG, --spacing MM, --json)\n";
             return 2;
         }
     }
@@ -109,7 +114,8 @@ int main(int argc, char** argv)
         }
         ratio.push_back(perThreads[1] / perThreads[0]);
     }
-    const bench::SampleStats one = bench::sampleStats(rate[0]), two = bench::sampleStats(rate[1]), speedup = bench::sampleStats(ratio);
+    const bench::SampleStats one = bench::sampleStats(rate[0]), two = bench::sampleStats(rate[1]),
+                             speedup = bench::sampleStats(ratio);
 
     // Error of the same configuration: the best path's clearances against brute force
     // to voxel centres, less the half voxel between centre and surface (DistanceField.h).
@@ -128,24 +134,24 @@ int main(int argc, char** argv)
     const std::string cpu = bench::machineDescription();
     if (json) {
         nlohmann::json j{{"benchmark", "plan-search"},
-                         {"machine", {{"cpu", cpu}, {"hardware_threads", std::thread::hardware_concurrency()}}},
-                         {"workload", {{"phantom", "torso"}, {"spacing_mm", spacing}, {"scene", "kyung"}, {"step_deg", step},
-                                       {"max_angle_deg", k.maxAngleDeg}, {"directions", last.counts.directions},
-                                       {"analysed", last.counts.analysed}, {"feasible", last.counts.feasible}}},
-                         {"repeats", repeats},
-                         {"candidates_per_s_1_thread", {{"median", one.median}, {"mean", one.mean}, {"sd", one.sd}}},
-                         {"candidates_per_s_2_threads", {{"median", two.median}, {"mean", two.mean}, {"sd", two.sd}}},
-                         {"speedup_2_over_1", {{"median", speedup.median}, {"sd", speedup.sd}}},
-                         {"clearance_error_mm", errors},
-                         {"clearance_max_abs_error_mm", maxErr}};
+            {"machine", {{"cpu", cpu}, {"hardware_threads", std::thread::hardware_concurrency()}}},
+            {"workload",
+                {{"phantom", "torso"}, {"spacing_mm", spacing}, {"scene", "kyung"}, {"step_deg", step},
+                    {"max_angle_deg", k.maxAngleDeg}, {"directions", last.counts.directions},
+                    {"analysed", last.counts.analysed}, {"feasible", last.counts.feasible}}},
+            {"repeats", repeats},
+            {"candidates_per_s_1_thread", {{"median", one.median}, {"mean", one.mean}, {"sd", one.sd}}},
+            {"candidates_per_s_2_threads", {{"median", two.median}, {"mean", two.mean}, {"sd", two.sd}}},
+            {"speedup_2_over_1", {{"median", speedup.median}, {"sd", speedup.sd}}}, {"clearance_error_mm", errors},
+            {"clearance_max_abs_error_mm", maxErr}};
         std::cout << j.dump(2) << '\n';
         return 0;
     }
     std::cout << "bench_plan: candidate search on the torso phantom (" << spacing << " mm voxels), kyung scene\n"
               << "machine: " << cpu << ", " << std::thread::hardware_concurrency() << " hardware threads\n"
               << "grid: " << step << " deg within " << k.maxAngleDeg << " deg of posterior: " << last.counts.directions
-              << " directions, " << last.counts.analysed << " analysed, " << last.counts.feasible << " feasible; " << repeats
-              << " repeats\n\n";
+              << " directions, " << last.counts.analysed << " analysed, " << last.counts.feasible << " feasible; "
+              << repeats << " repeats\n\n";
     std::printf("%-10s %14s %14s %10s\n", "threads", "median cand/s", "mean cand/s", "sd");
     std::printf("%-10d %14.0f %14.0f %10.0f\n", 1, one.median, one.mean, one.sd);
     std::printf("%-10d %14.0f %14.0f %10.0f\n", 2, two.median, two.mean, two.sd);

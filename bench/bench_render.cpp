@@ -26,10 +26,14 @@ int main(int argc, char** argv)
     std::string json;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--ct" && i + 1 < argc) o.ct = argv[++i];
-        else if (a == "--first" && i + 1 < argc) o.firstFrames = std::max(1, std::atoi(argv[++i]));
-        else if (a == "--steady" && i + 1 < argc) o.steadyFrames = std::max(1, std::atoi(argv[++i]));
-        else if (a == "--json" && i + 1 < argc) json = argv[++i];
+        if (a == "--ct" && i + 1 < argc)
+            o.ct = argv[++i];
+        else if (a == "--first" && i + 1 < argc)
+            o.firstFrames = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--steady" && i + 1 < argc)
+            o.steadyFrames = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--json" && i + 1 < argc)
+            json = argv[++i];
         else {
             std::cerr << "usage: bench_render [--ct DIR] [--first N] [--steady N] [--json FILE]\n";
             return 2;

@@ -47,19 +47,23 @@ int main(int argc, char** argv)
     int repeats = 3;
     bool json = false;
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
-        else if (!std::strcmp(argv[i], "--json")) json = true;
+        if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc)
+            repeats = std::max(1, std::atoi(argv[++i]));
+        else if (!std::strcmp(argv[i], "--json"))
+            json = true;
         else {
             std::cerr << "usage: bench_segment [--repeats N] [--json]\n";
             return 2;
         }
     }
     const auto& table = volume::TissueTable::builtin();
-    const std::filesystem::path ct = std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
+    const std::filesystem::path ct =
+        std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
     const bool real = std::filesystem::is_directory(ct);
     volume::TorsoParams tp;
     tp.grid.spacing = Vec3d(1, 1, 1);
-    const volume::Volume input = real ? volume::loadVolume(ct) : volume::makePhantom(volume::torsoModel(tp, table), tp.grid, table);
+    const volume::Volume input =
+        real ? volume::loadVolume(ct) : volume::makePhantom(volume::torsoModel(tp, table), tp.grid, table);
     const double rssBefore = peakRssMb();
     const double denseFloatMb = double(input.indexBox().voxelCount()) * 4.0 / (1 << 20);
 
@@ -91,11 +95,12 @@ int main(int argc, char** argv)
     std::cout << "segmentation of the " << out["input"].get<std::string>() << ", " << out["voxels"] << " voxels\n";
     for (int threads : {1, 2}) {
         const auto& j = out["threads_" + std::to_string(threads)];
-        std::cout << "  " << threads << " thread" << (threads > 1 ? "s" : " ") << ": " << j["mean_s"].get<double>() << " s ± "
-                  << j["sd_s"].get<double>() << " s (n = " << repeats << ")\n";
+        std::cout << "  " << threads << " thread" << (threads > 1 ? "s" : " ") << ": " << j["mean_s"].get<double>()
+                  << " s ± " << j["sd_s"].get<double>() << " s (n = " << repeats << ")\n";
     }
     std::cout << "  2 vs 1 thread: " << out["speedup_2_vs_1"].get<double>() << "x\n";
-    std::cout << "  peak memory: " << out["peak_rss_mb"].get<double>() << " MiB (" << out["peak_rss_over_load_mb"].get<double>()
+    std::cout << "  peak memory: " << out["peak_rss_mb"].get<double>() << " MiB ("
+              << out["peak_rss_over_load_mb"].get<double>()
               << " MiB above the loaded volume; a dense float copy of it is " << denseFloatMb << " MiB)\n";
     return 0;
 }

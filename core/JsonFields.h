@@ -25,7 +25,8 @@ class JsonFields {
 public:
     using Json = nlohmann::json;
 
-    JsonFields(const Json& j, std::string origin, std::string path) : mJ(j), mOrigin(std::move(origin)), mPath(std::move(path))
+    JsonFields(const Json& j, std::string origin, std::string path)
+        : mJ(j), mOrigin(std::move(origin)), mPath(std::move(path))
     {
         if (!j.is_object()) fail("", "must be an object");
     }

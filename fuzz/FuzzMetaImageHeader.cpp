@@ -8,7 +8,6 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    return voxhap::fuzz::parseText(data, size, "fuzz.mha", [](std::string_view text, const std::string& file) {
-        voxhap::volume::parseMetaImageHeader(text, file);
-    });
+    return voxhap::fuzz::parseText(data, size, "fuzz.mha",
+        [](std::string_view text, const std::string& file) { voxhap::volume::parseMetaImageHeader(text, file); });
 }

@@ -8,7 +8,6 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    return voxhap::fuzz::parseText(data, size, "fuzz.nrrd", [](std::string_view text, const std::string& file) {
-        voxhap::volume::parseNrrdHeader(text, file);
-    });
+    return voxhap::fuzz::parseText(data, size, "fuzz.nrrd",
+        [](std::string_view text, const std::string& file) { voxhap::volume::parseNrrdHeader(text, file); });
 }

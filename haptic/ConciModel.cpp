@@ -28,9 +28,12 @@ const std::vector<ConciSeed>& conciSeeds()
 double tipSlopeMultiplier(TipType tip)
 {
     switch (tip) { // physics.md §3.3 [chosen, calibrate]: coned 1.00, bevel 0.85, triangular 0.70
-    case TipType::Coned: return 1.0;
-    case TipType::Bevel: return 0.85;
-    case TipType::Triangular: return 0.70;
+    case TipType::Coned:
+        return 1.0;
+    case TipType::Bevel:
+        return 0.85;
+    case TipType::Triangular:
+        return 0.70;
     }
     return 1.0;
 }
@@ -70,7 +73,7 @@ std::vector<ConciLayer> fitConci(const std::vector<ConciSeed>& seeds, double sca
     return out;
 }
 
-ConciModel::ConciModel(std::vector<ConciLayer> layers) : mLayers(std::move(layers)), mPunctured(mLayers.size(), 0) {}
+ConciModel::ConciModel(std::vector<ConciLayer> layers) : mLayers(std::move(layers)), mPunctured(mLayers.size(), 0) { }
 
 void ConciModel::reset() noexcept { std::fill(mPunctured.begin(), mPunctured.end(), 0); }
 

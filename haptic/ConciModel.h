@@ -15,8 +15,8 @@ namespace voxhap::haptic {
 /// @brief [C-ui] seed row: total force at puncture and thickness.
 struct ConciSeed {
     std::string name;
-    double punctureForceN = 0; ///< P_i [N]
-    double thicknessMm = 0;    ///< Z_t [mm]
+    double punctureForceN = 0;   ///< P_i [N]
+    double thicknessMm = 0;      ///< Z_t [mm]
     bool depthTriggered = false; ///< punctured at the layer's end (flavum, epidural/dura), §3.2 step 2
     bool scalesWithBmi = true;   ///< §3.3: the epidural space and dura are not scaled [chosen]
 };
@@ -27,23 +27,27 @@ const std::vector<ConciSeed>& conciSeeds();
 inline constexpr double kConciBonePunctureN = 8.0265;
 
 /// @brief Needle tip shapes and their slope multipliers (physics.md §3.3 [chosen, calibrate]).
-enum class TipType { Coned, Bevel, Triangular };
+enum class TipType {
+    Coned,
+    Bevel,
+    Triangular
+};
 double tipSlopeMultiplier(TipType tip);
 
 /// @brief A fitted layer (physics.md §3.2 "Fitted table").
 struct ConciLayer {
     std::string name;
     double zStartMm = 0, thicknessMm = 0, punctureDepthMm = 0; ///< z_start, Z_t, u_p [mm]
-    double ce0 = 0, ce1 = 0, ce2 = 0, ce3 = 0;  ///< [N], [N/mm], [N/mm²], [N/mm³]
-    double sfMaxN = 0;                          ///< S_f,max: elastic force at puncture [N]
-    double tfN = 0;                             ///< T_f: drop at puncture [N]
-    double cp0 = 0, cp1 = 0, cp2 = 0;           ///< plastic stage [N], [N/mm], [N/mm²]
+    double ce0 = 0, ce1 = 0, ce2 = 0, ce3 = 0;                 ///< [N], [N/mm], [N/mm²], [N/mm³]
+    double sfMaxN = 0;                                         ///< S_f,max: elastic force at puncture [N]
+    double tfN = 0;                                            ///< T_f: drop at puncture [N]
+    double cp0 = 0, cp1 = 0, cp2 = 0;                          ///< plastic stage [N], [N/mm], [N/mm²]
 };
 
 /// @brief Fit the layers (§3.2 steps 1–4), thicknesses scaled by @p scale where the
 /// seed allows (§3.3), elastic slopes multiplied by the tip's factor.
 std::vector<ConciLayer> fitConci(const std::vector<ConciSeed>& seeds, double scale = 1.0, TipType tip = TipType::Coned,
-                                 double nextPunctureN = kConciBonePunctureN);
+    double nextPunctureN = kConciBonePunctureN);
 
 /// @brief §3.3: scale s = SED/40.9 mm with SED = 2.52 + 0.11·BMI cm.
 double conciBmiScale(double bmi);

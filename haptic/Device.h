@@ -17,11 +17,11 @@ namespace voxhap::haptic {
 /// @brief One reading. @c valid is false when the device has nothing new (a quiet
 /// network stream): the servo loop's watchdog counts those.
 struct DeviceReading {
-    Vec3d tip{0, 0, 0};        ///< [mm, LPS]
-    Vec3d direction{0, 0, 1};  ///< hub to tip, unit
-    Vec3d velocity{0, 0, 0};   ///< [mm/s]
+    Vec3d tip{0, 0, 0};       ///< [mm, LPS]
+    Vec3d direction{0, 0, 1}; ///< hub to tip, unit
+    Vec3d velocity{0, 0, 0};  ///< [mm/s]
     bool valid = false;
-    bool lost = false;         ///< the link is gone: the force must be zero at once
+    bool lost = false; ///< the link is gone: the force must be zero at once
     /// Fraction of the loss-of-resistance syringe emptied, 0..1, for devices with a
     /// plunger channel ([S19]'s pneumatic syringe); NaN otherwise.
     double plungerFraction = std::numeric_limits<double>::quiet_NaN();
@@ -37,7 +37,7 @@ public:
     /// force [N] for devices that have one. Same rules as read().
     virtual void write(const Vec3d& forceN, double plungerN, double timeS) noexcept = 0;
     /// @brief An insertion event, for devices that show or forward them. Same rules as read().
-    virtual void event(const Event&) noexcept {}
+    virtual void event(const Event&) noexcept { }
     virtual const DeviceLimits& limits() const noexcept = 0;
     virtual std::string name() const = 0;
     /// @brief A scripted or replayed device that has reached its end.

@@ -12,10 +12,10 @@ namespace voxhap::haptic {
 /// @brief Rendering limits of a haptic device (physics.md §6.3).
 struct DeviceLimits {
     std::string name = "touch";
-    double maxForceN = 3.3;             ///< peak force [N]
-    double maxContinuousForceN = 0.88;  ///< sustained force [N]
-    double maxStiffnessNPerMm = 0.5;    ///< highest stable virtual stiffness [N/mm]
-    double maxDampingNsPerMm = 0.002;   ///< highest stable virtual damping [N·s/mm] [chosen]
+    double maxForceN = 3.3;            ///< peak force [N]
+    double maxContinuousForceN = 0.88; ///< sustained force [N]
+    double maxStiffnessNPerMm = 0.5;   ///< highest stable virtual stiffness [N/mm]
+    double maxDampingNsPerMm = 0.002;  ///< highest stable virtual damping [N·s/mm] [chosen]
 };
 
 /// @brief Named presets: "touch" (Touch/Omni class: 3.3 N peak, 0.88 N continuous,

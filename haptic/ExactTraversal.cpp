@@ -51,7 +51,7 @@ void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral
 
 class ExactVoxel final : public ShaftIntegrator {
 public:
-    ExactVoxel(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, false) {}
+    ExactVoxel(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, false) { }
 
     void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
     {
@@ -67,7 +67,7 @@ private:
 
 class ExactTrilinear final : public ShaftIntegrator {
 public:
-    ExactTrilinear(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, true) {}
+    ExactTrilinear(const MaterialField& field, bool trackLabels) : mSrc(field, trackLabels, true) { }
 
     void integrate(const Segment& seg, ShaftIntegral& out) noexcept override
     {
@@ -89,7 +89,8 @@ public:
             const openvdb::Vec3d origin = c.asVec3d();
             const openvdb::Vec3d p = cells.a + cells.d * (mid - half) - origin;
             const openvdb::Vec3d q = cells.a + cells.d * (mid + half) - origin;
-            sum += 0.5 * (tb - ta) * (detail::trilinear(corner, p[0], p[1], p[2]) + detail::trilinear(corner, q[0], q[1], q[2]));
+            sum += 0.5 * (tb - ta) *
+                (detail::trilinear(corner, p[0], p[1], p[2]) + detail::trilinear(corner, q[0], q[1], q[2]));
         };
         // A cell is uniform when its 8 corners share one uniform block: not on the block's last plane.
         const auto uniform = [&](const openvdb::Coord& c) {

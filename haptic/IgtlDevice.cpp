@@ -100,8 +100,8 @@ void IgtlDevice::sendEvents(int fd) noexcept
     while (mEvents.pop(e)) {
         try {
             std::ostringstream text;
-            text << eventName(e.type) << " t=" << std::fixed << std::setprecision(3) << e.timeS << "s depth="
-                 << std::setprecision(2) << e.depthMm << "mm layer=" << e.layer;
+            text << eventName(e.type) << " t=" << std::fixed << std::setprecision(3) << e.timeS
+                 << "s depth=" << std::setprecision(2) << e.depthMm << "mm layer=" << e.layer;
             auto msg = igtl::StringMessage::New();
             msg->SetDeviceName("voxhap-event");
             msg->SetString(text.str().c_str());
@@ -116,11 +116,18 @@ bool IgtlDevice::handleMessage(int fd) noexcept
 {
     Vec3d tip, dir;
     switch (detail::readTransform(fd, mOpt.receiveTimeoutS, mOpt.maxBodyBytes, tip, dir)) {
-    case detail::WireRead::Broken: return false;
-    case detail::WireRead::BadHeader: mCounters.rejected.fetch_add(1); return false;
-    case detail::WireRead::BadPose: mCounters.rejected.fetch_add(1); return true; // a bad pose, not a broken stream
-    case detail::WireRead::Skipped: return true;
-    case detail::WireRead::Pose: break;
+    case detail::WireRead::Broken:
+        return false;
+    case detail::WireRead::BadHeader:
+        mCounters.rejected.fetch_add(1);
+        return false;
+    case detail::WireRead::BadPose:
+        mCounters.rejected.fetch_add(1);
+        return true; // a bad pose, not a broken stream
+    case detail::WireRead::Skipped:
+        return true;
+    case detail::WireRead::Pose:
+        break;
     }
     dir.normalize();
     const double now = detail::steadySeconds();

@@ -30,7 +30,7 @@
 namespace voxhap::haptic {
 
 struct IgtlOptions {
-    int port = 18944;                  ///< 0: any free port (tests)
+    int port = 18944; ///< 0: any free port (tests)
     std::string bindAddress = "127.0.0.1";
     std::uint64_t maxBodyBytes = 65536; ///< larger bodies drop the connection
     double receiveTimeoutS = 0.5;       ///< a message must arrive whole within this

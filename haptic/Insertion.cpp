@@ -27,7 +27,9 @@ InsertionScript InsertionScript::load(const std::filesystem::path& file)
     InsertionScript s;
     std::string line;
     for (int n = 1; std::getline(in, line); ++n) {
-        if (line.empty() || line[0] == '#' || (n == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) && line[0] != '-')) continue;
+        if (line.empty() || line[0] == '#' ||
+            (n == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) && line[0] != '-'))
+            continue;
         std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream ls(line);
         double t = 0, d = 0;
@@ -107,14 +109,29 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
         for (const Event& e : out.events) {
             r.events.push_back(e);
             switch (e.type) {
-            case EventType::SkinEntry: s.skinEntryMm = std::min(s.skinEntryMm, e.depthMm); break;
-            case EventType::Pop: ++s.pops; break;
-            case EventType::LossOfResistance: s.lorMm = std::min(s.lorMm, e.depthMm); break;
-            case EventType::DuraPuncture: s.duraMm = std::min(s.duraMm, e.depthMm); break;
-            case EventType::BoneContact: ++s.boneContacts, s.boneMm = std::min(s.boneMm, e.depthMm); break;
-            case EventType::CriticalBreach: ++s.breaches, s.breachMm = std::min(s.breachMm, e.depthMm); break;
-            case EventType::Fault: ++s.faults; break;
-            default: break;
+            case EventType::SkinEntry:
+                s.skinEntryMm = std::min(s.skinEntryMm, e.depthMm);
+                break;
+            case EventType::Pop:
+                ++s.pops;
+                break;
+            case EventType::LossOfResistance:
+                s.lorMm = std::min(s.lorMm, e.depthMm);
+                break;
+            case EventType::DuraPuncture:
+                s.duraMm = std::min(s.duraMm, e.depthMm);
+                break;
+            case EventType::BoneContact:
+                ++s.boneContacts, s.boneMm = std::min(s.boneMm, e.depthMm);
+                break;
+            case EventType::CriticalBreach:
+                ++s.breaches, s.breachMm = std::min(s.breachMm, e.depthMm);
+                break;
+            case EventType::Fault:
+                ++s.faults;
+                break;
+            default:
+                break;
             }
         }
         s.peakModelN = std::max(s.peakModelN, out.modelForce.norm());
@@ -137,7 +154,8 @@ void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layer
               << row.force.y() << ',' << row.force.z() << ',' << row.force.norm() << ',' << row.axialN << ','
               << row.plungerN << ',' << (row.layer >= 0 ? layerStateName(row.state) : "outside") << ','
               << (row.layer >= 0 ? layers[std::size_t(row.layer)].name : "") << ',';
-            for (int k = 0; k < row.eventCount; ++k) o << (k ? ";" : "") << eventName(r.events[std::size_t(row.firstEvent + k)].type);
+            for (int k = 0; k < row.eventCount; ++k)
+                o << (k ? ";" : "") << eventName(r.events[std::size_t(row.firstEvent + k)].type);
             o << '\n';
         }
     });
@@ -150,13 +168,16 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
     o << std::fixed << std::setprecision(1);
     const auto at = [&](const char* what, double d) {
         o << "  " << std::left << std::setw(20) << what;
-        if (std::isfinite(d)) o << "at " << d << " mm\n";
-        else o << "none\n";
+        if (std::isfinite(d))
+            o << "at " << d << " mm\n";
+        else
+            o << "none\n";
     };
     at("skin puncture", s.skinEntryMm);
     o << "  " << std::left << std::setw(20) << "pops" << s.pops;
     for (const Event& e : r.events) {
-        if (e.type == EventType::Pop) o << (&e == &r.events.front() ? " " : "  ") << layers[std::size_t(e.layer)].name << " " << e.depthMm;
+        if (e.type == EventType::Pop)
+            o << (&e == &r.events.front() ? " " : "  ") << layers[std::size_t(e.layer)].name << " " << e.depthMm;
     }
     o << '\n';
     at("loss of resistance", s.lorMm);
@@ -167,7 +188,8 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
     o << "  " << std::setw(20) << "peak force" << s.peakModelN << " N model, " << s.peakRenderedN << " N rendered\n";
     if (s.peakPlungerN > 0.0) o << "  " << std::setw(20) << "peak plunger" << s.peakPlungerN << " N\n";
     if (s.faults) o << "  " << std::setw(20) << "faults" << s.faults << '\n';
-    o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << s.finalDepthMm << " mm in " << s.durationS << " s\n";
+    o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << s.finalDepthMm << " mm in " << s.durationS
+      << " s\n";
     return o.str();
 }
 

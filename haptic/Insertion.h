@@ -30,10 +30,10 @@ struct InsertionScript {
 /// @brief One tick of the record.
 struct InsertionRow {
     double timeS = 0, depthMm = 0, speedMmPerS = 0;
-    Vec3d force{0, 0, 0};     ///< rendered [N]
-    double axialN = 0;        ///< model resistance along the path [N]
+    Vec3d force{0, 0, 0}; ///< rendered [N]
+    double axialN = 0;    ///< model resistance along the path [N]
     double plungerN = 0;
-    int layer = -1;           ///< current layer
+    int layer = -1; ///< current layer
     LayerState state = LayerState::Intact;
     bool critical = false, fault = false;
     int firstEvent = 0, eventCount = 0; ///< into InsertionResult::events

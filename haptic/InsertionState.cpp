@@ -19,10 +19,14 @@ constexpr double kDepthToleranceMm = 1e-9;
 const char* layerStateName(LayerState s)
 {
     switch (s) {
-    case LayerState::Intact: return "intact";
-    case LayerState::Tenting: return "tenting";
-    case LayerState::Punctured: return "punctured";
-    case LayerState::Contact: return "contact";
+    case LayerState::Intact:
+        return "intact";
+    case LayerState::Tenting:
+        return "tenting";
+    case LayerState::Punctured:
+        return "punctured";
+    case LayerState::Contact:
+        return "contact";
     }
     return "?";
 }
@@ -101,8 +105,10 @@ void InsertionState::update(double d, double t, double shaftLengthMm, EventBuffe
     for (int i = 0; i < n; ++i) {
         LayerState& s = mState[std::size_t(i)];
         if (d >= mOrigin[std::size_t(i)]) continue;
-        if (s == LayerState::Tenting) s = LayerState::Intact;
-        else if (s == LayerState::Contact) s = LayerState::Intact, ev.push({EventType::BoneRelease, t, d, i});
+        if (s == LayerState::Tenting)
+            s = LayerState::Intact;
+        else if (s == LayerState::Contact)
+            s = LayerState::Intact, ev.push({EventType::BoneRelease, t, d, i});
     }
 
     TipState tip;

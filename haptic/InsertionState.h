@@ -23,21 +23,26 @@
 
 namespace voxhap::haptic {
 
-enum class LayerState : std::uint8_t { Intact, Tenting, Punctured, Contact };
+enum class LayerState : std::uint8_t {
+    Intact,
+    Tenting,
+    Punctured,
+    Contact
+};
 const char* layerStateName(LayerState s);
 
 /// @brief Where the tip is, after an update.
 struct TipState {
-    double depthMm = 0;         ///< along the path [mm]
-    int inLayer = -1;           ///< deepest entered layer holding the tip, -1 outside the body
-    int pushLayer = -1;         ///< the tenting layer the tip pushes, -1 if none
-    double pushMm = 0;          ///< z: how far it is pushed [mm]
-    int boneLayer = -1;         ///< rigid layer in contact, -1 if none
-    double penetrationMm = 0;   ///< depth past the bone surface [mm]
-    double plateauDepthMm = 0;  ///< w: depth past the tip layer's puncture depth [mm]
-    double cuttingSumN = 0;     ///< Σ cutting force of the entered layers (nested boxes, §2.1) [N]
-    double viscousNsPerMm = 0;  ///< Σ b_i·l_i over the shaft ([LP] Eq. 3) [N·s/mm]
-    bool inBody = false;        ///< the skin has been entered
+    double depthMm = 0;        ///< along the path [mm]
+    int inLayer = -1;          ///< deepest entered layer holding the tip, -1 outside the body
+    int pushLayer = -1;        ///< the tenting layer the tip pushes, -1 if none
+    double pushMm = 0;         ///< z: how far it is pushed [mm]
+    int boneLayer = -1;        ///< rigid layer in contact, -1 if none
+    double penetrationMm = 0;  ///< depth past the bone surface [mm]
+    double plateauDepthMm = 0; ///< w: depth past the tip layer's puncture depth [mm]
+    double cuttingSumN = 0;    ///< Σ cutting force of the entered layers (nested boxes, §2.1) [N]
+    double viscousNsPerMm = 0; ///< Σ b_i·l_i over the shaft ([LP] Eq. 3) [N·s/mm]
+    bool inBody = false;       ///< the skin has been entered
     /// @brief The layer whose tip parameters apply: the one pushed, else the one entered.
     int currentLayer() const noexcept { return pushLayer >= 0 ? pushLayer : inLayer; }
 };
@@ -68,8 +73,8 @@ private:
 
     std::vector<Layer> mLayers;
     std::vector<LayerState> mState;
-    std::vector<double> mOrigin;      ///< where the tip met each layer [mm]
-    std::vector<double> mPopPush;     ///< z at which each layer popped [mm]
+    std::vector<double> mOrigin;  ///< where the tip met each layer [mm]
+    std::vector<double> mPopPush; ///< z at which each layer popped [mm]
     TipState mTip;
     double mLastPopMm = -kNoLimit;
     double mSurfaceMm = kNoLimit;

@@ -18,18 +18,19 @@ struct LabelTracer::Impl {
     openvdb::Vec3d lo, hi;
     mutable tbb::enumerable_thread_specific<std::optional<detail::FieldReaders>> readers;
 
-    explicit Impl(const MaterialField& field) : prototype(field, /*trackLabels=*/true, /*needDamping=*/false, "layer trace")
+    explicit Impl(const MaterialField& field)
+        : prototype(field, /*trackLabels=*/true, /*needDamping=*/false, "layer trace")
     {
         if (!prototype.labels) throw ValueError("layer trace: the material field has no label grid");
         prototype.box(1.0, lo, hi); // once per tracer: the field's active box, padded one voxel
     }
 };
 
-LabelTracer::LabelTracer(const MaterialField& field) : mImpl(std::make_unique<Impl>(field)) {}
+LabelTracer::LabelTracer(const MaterialField& field) : mImpl(std::make_unique<Impl>(field)) { }
 LabelTracer::~LabelTracer() = default;
 
-std::vector<LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                                 std::vector<DampingPiece>* damping) const
+std::vector<LabelRun> LabelTracer::trace(
+    const Vec3d& origin, const Vec3d& direction, double lengthMm, std::vector<DampingPiece>* damping) const
 {
     namespace d = detail;
     const double n = direction.norm();
@@ -50,13 +51,17 @@ std::vector<LabelRun> LabelTracer::trace(const Vec3d& origin, const Vec3d& direc
     const auto add = [&](const openvdb::Coord& c, double ta, double tb) {
         const int label = labels.get(c);
         const double a = ta * s.lengthMm, b = tb * s.lengthMm;
-        if (!runs.empty() && runs.back().label == label) runs.back().endMm = b;
-        else if (!runs.empty() || label != 0) runs.push_back({label, a, b});
+        if (!runs.empty() && runs.back().label == label)
+            runs.back().endMm = b;
+        else if (!runs.empty() || label != 0)
+            runs.push_back({label, a, b});
         if (!beta) return;
         const double x = beta->get(c);
         if (x == 0.0) return;
-        if (!damping->empty() && damping->back().beta == x && damping->back().endMm >= a - 1e-9) damping->back().endMm = b;
-        else damping->push_back({a, b, x});
+        if (!damping->empty() && damping->back().beta == x && damping->back().endMm >= a - 1e-9)
+            damping->back().endMm = b;
+        else
+            damping->push_back({a, b, x});
     };
     // A block is skipped whole only where labels and β are both uniform over it.
     const auto uniform = [&](const openvdb::Coord& c) {

@@ -32,7 +32,7 @@ public:
     /// field) also β along the line. Thread-safe (one reader per thread).
     /// @throw ValueError on a degenerate line
     std::vector<LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                        std::vector<DampingPiece>* damping = nullptr) const;
+        std::vector<DampingPiece>* damping = nullptr) const;
 
 private:
     struct Impl;

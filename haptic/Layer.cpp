@@ -23,15 +23,24 @@ LayerRole roleFromName(const std::string& n, bool rigid, bool critical)
 const char* roleName(LayerRole r)
 {
     switch (r) {
-    case LayerRole::Tissue: return "tissue";
-    case LayerRole::Air: return "air";
-    case LayerRole::Skin: return "skin";
-    case LayerRole::Ligament: return "ligament";
-    case LayerRole::Epidural: return "epidural";
-    case LayerRole::Dura: return "dura";
-    case LayerRole::Csf: return "csf";
-    case LayerRole::Bone: return "bone";
-    case LayerRole::Critical: return "critical";
+    case LayerRole::Tissue:
+        return "tissue";
+    case LayerRole::Air:
+        return "air";
+    case LayerRole::Skin:
+        return "skin";
+    case LayerRole::Ligament:
+        return "ligament";
+    case LayerRole::Epidural:
+        return "epidural";
+    case LayerRole::Dura:
+        return "dura";
+    case LayerRole::Csf:
+        return "csf";
+    case LayerRole::Bone:
+        return "bone";
+    case LayerRole::Critical:
+        return "critical";
     }
     return "?";
 }

@@ -45,30 +45,33 @@ const char* roleName(LayerRole r);
 inline constexpr double kNoLimit = std::numeric_limits<double>::infinity();
 
 struct Layer {
-    std::string name;            ///< tissue or table row name
-    int label = -1;              ///< tissue id, -1 for a fixed-table row
+    std::string name; ///< tissue or table row name
+    int label = -1;   ///< tissue id, -1 for a fixed-table row
     LayerRole role = LayerRole::Tissue;
-    double startMm = 0;          ///< depth along the path where the layer begins [mm]
-    double endMm = 0;            ///< ... and ends [mm]
+    double startMm = 0; ///< depth along the path where the layer begins [mm]
+    double endMm = 0;   ///< ... and ends [mm]
 
     // Elastic stage (intact layer pushed by the tip).
-    std::array<double, 4> elastic{};       ///< c0 [N], c1 [N/mm], c2 [N/mm²], c3 [N/mm³]
-    double punctureForceN = kNoLimit;      ///< pops when the elastic force reaches this [N]
-    double punctureDepthMm = kNoLimit;     ///< ... or when the tip has pushed this far [mm]
-    bool tents = false;                    ///< has an elastic stage; otherwise it is entered at once
-    bool rigid = false;                    ///< bone rendered as contact: the tip stops on it (§1.3)
+    std::array<double, 4> elastic{};   ///< c0 [N], c1 [N/mm], c2 [N/mm²], c3 [N/mm³]
+    double punctureForceN = kNoLimit;  ///< pops when the elastic force reaches this [N]
+    double punctureDepthMm = kNoLimit; ///< ... or when the tip has pushed this far [mm]
+    bool tents = false;                ///< has an elastic stage; otherwise it is entered at once
+    bool rigid = false;                ///< bone rendered as contact: the tip stops on it (§1.3)
 
     // After puncture.
-    double cuttingForceN = 0;              ///< nested-box cutting force, summed over entered layers [N]
-    std::array<double, 3> plateau{};       ///< tip-only plateau p0 [N], p1 [N/mm], p2 [N/mm²] of w
-    double coulombN = 0;                   ///< tip-only Coulomb friction C [N]
-    double viscousNsPerMm2 = 0;            ///< shaft viscous friction b [N·s/mm²]: force b·v·l
+    double cuttingForceN = 0;        ///< nested-box cutting force, summed over entered layers [N]
+    std::array<double, 3> plateau{}; ///< tip-only plateau p0 [N], p1 [N/mm], p2 [N/mm²] of w
+    double coulombN = 0;             ///< tip-only Coulomb friction C [N]
+    double viscousNsPerMm2 = 0;      ///< shaft viscous friction b [N·s/mm²]: force b·v·l
 
-    double lorResistance = 0;              ///< syringe plunger resistance, 0 (free) .. 1 (blocked)
+    double lorResistance = 0; ///< syringe plunger resistance, 0 (free) .. 1 (blocked)
 
     double thicknessMm() const { return endMm - startMm; }
     /// @brief Elastic force at push depth z [N].
-    double elasticForceN(double z) const noexcept { return elastic[0] + z * (elastic[1] + z * (elastic[2] + z * elastic[3])); }
+    double elasticForceN(double z) const noexcept
+    {
+        return elastic[0] + z * (elastic[1] + z * (elastic[2] + z * elastic[3]));
+    }
     /// @brief Plateau at w past the puncture depth [N].
     double plateauN(double w) const noexcept { return plateau[0] + w * (plateau[1] + w * plateau[2]); }
 };

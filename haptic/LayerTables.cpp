@@ -16,8 +16,8 @@
 
 namespace voxhap::haptic {
 
-std::vector<LabelRun> traceLabelRuns(const MaterialField& field, const Vec3d& origin, const Vec3d& direction,
-                                     double lengthMm)
+std::vector<LabelRun> traceLabelRuns(
+    const MaterialField& field, const Vec3d& origin, const Vec3d& direction, double lengthMm)
 {
     return LabelTracer(field).trace(origin, direction, lengthMm);
 }
@@ -34,10 +34,14 @@ LayerModel parseLayerModel(const std::string& name)
 const char* layerModelName(LayerModel m)
 {
     switch (m) {
-    case LayerModel::Kyung: return "kyung";
-    case LayerModel::Senac: return "senac";
-    case LayerModel::Conci: return "conci";
-    case LayerModel::LumbarPuncture: return "lumbar-puncture";
+    case LayerModel::Kyung:
+        return "kyung";
+    case LayerModel::Senac:
+        return "senac";
+    case LayerModel::Conci:
+        return "conci";
+    case LayerModel::LumbarPuncture:
+        return "lumbar-puncture";
     }
     return "?";
 }
@@ -48,12 +52,16 @@ double lorResistance(LayerRole role)
     case LayerRole::Skin:
     case LayerRole::Ligament:
     case LayerRole::Dura:
-    case LayerRole::Bone: return 1.0;
-    case LayerRole::Epidural: return 0.05;
+    case LayerRole::Bone:
+        return 1.0;
+    case LayerRole::Epidural:
+        return 0.05;
     case LayerRole::Csf:
-    case LayerRole::Air: return 0.0;
+    case LayerRole::Air:
+        return 0.0;
     case LayerRole::Tissue:
-    case LayerRole::Critical: return 0.3;
+    case LayerRole::Critical:
+        return 0.3;
     }
     return 0.0;
 }
@@ -129,8 +137,8 @@ bool depthTriggered(LayerRole r, const std::string& name)
     return r == LayerRole::Epidural || r == LayerRole::Dura || name == "ligamentum_flavum";
 }
 
-std::vector<Layer> conciFromLayers(std::vector<Layer> layers, const std::vector<const volume::Tissue*>& tissues,
-                                   const LayerRecipe& r)
+std::vector<Layer> conciFromLayers(
+    std::vector<Layer> layers, const std::vector<const volume::Tissue*>& tissues, const LayerRecipe& r)
 {
     std::vector<ConciSeed> seeds;
     std::vector<std::size_t> which;
@@ -146,7 +154,7 @@ std::vector<Layer> conciFromLayers(std::vector<Layer> layers, const std::vector<
             throw ValueError("conci layers: tissue '" + l.name + "' has no puncture_force in the tissue table");
         }
         seeds.push_back({l.name, tissues[i]->punctureForce->value * r.forceScale, l.thicknessMm(),
-                         depthTriggered(l.role, l.name), true});
+            depthTriggered(l.role, l.name), true});
         which.push_back(i);
     }
     if (seeds.empty()) return layers;
@@ -157,14 +165,15 @@ std::vector<Layer> conciFromLayers(std::vector<Layer> layers, const std::vector<
 
 } // namespace
 
-std::vector<Layer> layersFromRuns(const std::vector<LabelRun>& runs, const volume::TissueTable& table,
-                                  const LayerRecipe& r)
+std::vector<Layer> layersFromRuns(
+    const std::vector<LabelRun>& runs, const volume::TissueTable& table, const LayerRecipe& r)
 {
     std::vector<Layer> layers;
     std::vector<const volume::Tissue*> tissues;
     for (const LabelRun& run : runs) {
         const volume::Tissue* t = table.find(run.label);
-        if (!t) throw ValueError("layers: label " + std::to_string(run.label) + " on the path is not in the tissue table");
+        if (!t)
+            throw ValueError("layers: label " + std::to_string(run.label) + " on the path is not in the tissue table");
         Layer l = baseLayer(*t, run.startMm, run.endMm);
         if (r.model == LayerModel::Senac) applySenac(l, *t, r);
         if (r.model == LayerModel::LumbarPuncture) {
@@ -177,8 +186,8 @@ std::vector<Layer> layersFromRuns(const std::vector<LabelRun>& runs, const volum
     return layers;
 }
 
-std::vector<Layer> fixedLayers(const LayerRecipe& r, const volume::TissueTable& table, volume::LumbarPreset preset,
-                               std::optional<double> bmi)
+std::vector<Layer> fixedLayers(
+    const LayerRecipe& r, const volume::TissueTable& table, volume::LumbarPreset preset, std::optional<double> bmi)
 {
     std::vector<Layer> layers;
     switch (r.model) {
@@ -218,10 +227,9 @@ std::vector<Layer> fixedLayers(const LayerRecipe& r, const volume::TissueTable& 
         p.preset = preset;
         p.bmi = bmi;
         const volume::LumbarLayout lay = volume::lumbarLayout(p, table);
-        const std::pair<const char*, double> rows[] = {
-            {"skin", lay.skin}, {"fat", lay.fat}, {"supraspinous_ligament", lay.supraspinous},
-            {"interspinous_ligament", lay.interspinous}, {"ligamentum_flavum", lay.flavum},
-            {"epidural_space", lay.epidural}, {"dura", lay.dura}, {"csf", lay.csf}};
+        const std::pair<const char*, double> rows[] = {{"skin", lay.skin}, {"fat", lay.fat},
+            {"supraspinous_ligament", lay.supraspinous}, {"interspinous_ligament", lay.interspinous},
+            {"ligamentum_flavum", lay.flavum}, {"epidural_space", lay.epidural}, {"dura", lay.dura}, {"csf", lay.csf}};
         double start = 0.0;
         for (const auto& [name, thickness] : rows) {
             const volume::Tissue& t = table.at(name);

@@ -33,8 +33,8 @@ struct LabelRun {
 /// exactly from the field's label grid (voxel cells, openvdb::math::DDA). Leading
 /// and trailing air are dropped; air inside stays a run.
 /// @throw ValueError if the field has no label grid or the line is degenerate
-std::vector<LabelRun> traceLabelRuns(const MaterialField& field, const Vec3d& origin, const Vec3d& direction,
-                                     double lengthMm);
+std::vector<LabelRun> traceLabelRuns(
+    const MaterialField& field, const Vec3d& origin, const Vec3d& direction, double lengthMm);
 
 /// @brief The layered models (physics.md §1–§4).
 enum class LayerModel {
@@ -43,7 +43,8 @@ enum class LayerModel {
     Conci,          ///< §3: elastic polynomial to S_f,max, drop T_f, plastic plateau
     LumbarPuncture, ///< §4: f_tip = −k·x per layer, viscous b·v·l, Coulomb C
 };
-LayerModel parseLayerModel(const std::string& name); ///< "kyung", "senac", "conci", "lumbar-puncture"; @throw ValueError
+LayerModel parseLayerModel(
+    const std::string& name); ///< "kyung", "senac", "conci", "lumbar-puncture"; @throw ValueError
 const char* layerModelName(LayerModel m);
 
 /// @brief A scene's change to one tissue's parameters (canonical units).
@@ -60,14 +61,14 @@ struct LayerRecipe {
     /// Sénac: push depth at puncture z_p [mm] where no override names one:
     /// z_p = F_p/(2·k) with k the tissue's elasticity, so that a1 = k [chosen].
     std::map<std::string, TissueOverride> overrides; ///< by tissue name
-    double forceScale = 1.0;      ///< needle gauge factor on puncture and cutting forces (Needle.h)
-    TipType tip = TipType::Coned; ///< Conci slope multiplier (§3.3)
+    double forceScale = 1.0;                         ///< needle gauge factor on puncture and cutting forces (Needle.h)
+    TipType tip = TipType::Coned;                    ///< Conci slope multiplier (§3.3)
 };
 
 /// @brief Layers from label runs: parameters from the tissue table by label.
 /// @throw ValueError if a label is not in the table, or (Conci) a tissue lacks its puncture force
-std::vector<Layer> layersFromRuns(const std::vector<LabelRun>& runs, const volume::TissueTable& table,
-                                  const LayerRecipe& recipe);
+std::vector<Layer> layersFromRuns(
+    const std::vector<LabelRun>& runs, const volume::TissueTable& table, const LayerRecipe& recipe);
 
 /// @brief The papers' tables, with the skin surface at depth 0:
 /// - LumbarPuncture: [LP] Table I exactly (its "out of skin" row becomes air at −5..0 mm);
@@ -76,8 +77,7 @@ std::vector<Layer> layersFromRuns(const std::vector<LabelRun>& runs, const volum
 ///   tissue table's other thicknesses and forces (the lumbar phantom's layout);
 /// - Kyung: none (the model reads voxels): throws.
 std::vector<Layer> fixedLayers(const LayerRecipe& recipe, const volume::TissueTable& table,
-                               volume::LumbarPreset preset = volume::LumbarPreset::Average,
-                               std::optional<double> bmi = std::nullopt);
+    volume::LumbarPreset preset = volume::LumbarPreset::Average, std::optional<double> bmi = std::nullopt);
 
 /// @brief Syringe plunger resistance of a role [chosen, physics.md §2.3]: blocked (1)
 /// in skin, ligament, dura and bone; 0.3 in other soft tissue; 0.05 in the epidural

@@ -13,13 +13,13 @@
 namespace voxhap::haptic {
 
 struct LorParams {
-    double blockedForceN = 10.0;   ///< plunger force with the bevel occluded [N] [chosen]
-    double timeConstantS = 0.150;  ///< drop time constant [s] (§2.3 average)
+    double blockedForceN = 10.0;  ///< plunger force with the bevel occluded [N] [chosen]
+    double timeConstantS = 0.150; ///< drop time constant [s] (§2.3 average)
 };
 
 class LorChannel {
 public:
-    explicit LorChannel(const LorParams& p = {}) : mP(p) {}
+    explicit LorChannel(const LorParams& p = {}) : mP(p) { }
     /// @brief Advance by @p dtS with the tip in a layer of resistance @p r (0..1); returns the plunger force [N].
     double update(double r, double dtS) noexcept
     {

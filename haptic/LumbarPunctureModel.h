@@ -18,10 +18,10 @@ namespace voxhap::haptic {
 /// @brief One row of [LP] Table I, in the paper's units.
 struct LpLayer {
     std::string name;
-    double endMm = 0;          ///< end of layer, depth from the start of the table [mm]
-    double kNPerM = 0;         ///< elasticity k [N/m]
-    double bNsPerM2 = 0;       ///< viscosity coefficient b [N·s/m²]
-    double cN = 0;             ///< Coulomb friction C [N]
+    double endMm = 0;    ///< end of layer, depth from the start of the table [mm]
+    double kNPerM = 0;   ///< elasticity k [N/m]
+    double bNsPerM2 = 0; ///< viscosity coefficient b [N·s/m²]
+    double cN = 0;       ///< Coulomb friction C [N]
 };
 
 /// @brief [LP] Table I exactly: out of skin 5, skin 7, fat 14, ligament 30, dura 35,
@@ -39,7 +39,7 @@ struct LpOptions {
 /// @brief Axial force [N] at depth @p depthMm (from the table's start) moving at
 /// @p velocityMmPerS along the insertion axis; positive pushes inward. For v <= 0
 /// it is f_keepdir in the last motion direction (@p lastDirection, +1 or -1).
-double lumbarPunctureForce(const std::vector<LpLayer>& layers, double depthMm, double velocityMmPerS,
-                           int lastDirection, const LpOptions& options = {}) noexcept;
+double lumbarPunctureForce(const std::vector<LpLayer>& layers, double depthMm, double velocityMmPerS, int lastDirection,
+    const LpOptions& options = {}) noexcept;
 
 } // namespace voxhap::haptic

@@ -8,7 +8,7 @@
 #include "haptic/detail/FieldGrids.h"
 #include "core/Errors.h"
 
-#include <openvdb/tools/Count.h>      // for minMax
+#include <openvdb/tools/Count.h> // for minMax
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/enumerable_thread_specific.h>
 
@@ -36,7 +36,7 @@ void checkLabelRange(const LabelGrid& labels)
     const auto mm = openvdb::tools::minMax(labels.tree());
     if (mm.min() < 0 || mm.max() >= kMaxLabels) {
         throw ValueError("label grid: tissue ids must be within 0.." + std::to_string(kMaxLabels - 1) + ", found " +
-                         std::to_string(mm.min()) + ".." + std::to_string(mm.max()));
+            std::to_string(mm.min()) + ".." + std::to_string(mm.max()));
     }
 }
 
@@ -77,7 +77,7 @@ void fillLeaves(FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid
 {
     tbb::enumerable_thread_specific<SourceReader> readers([&] { return SourceReader(labels, t1); });
     openvdb::tree::LeafManager<FloatGrid::TreeType> leaves(tree);
-    leaves.foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
         SourceReader& r = readers.local();
         for (auto it = leaf.beginValueOn(); it; ++it) {
             const openvdb::Coord c = it.getCoord();
@@ -137,8 +137,8 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
                 // MR that is not T1 (MrMaterial.h): never read as T1 silently.
                 const std::string w = v.metadata().mrWeighting.empty() ? "unknown" : v.metadata().mrWeighting;
                 throw ValueError("material field: tissue damping needs T1 or tissue labels, and this MR (" + w +
-                                 ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
-                                 "image with --t1-weighted or a T1 map with --t1-map");
+                    ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
+                    "image with --t1-weighted or a T1 map with --t1-map");
             }
             throw ValueError("material field: tissue damping needs a label or t1 grid (segment the volume first)");
         }
@@ -173,8 +173,9 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
             it.getBoundingBox(box);
             for (auto c = box.begin(); c; ++c) {
                 const float huValue = *it;
-                const bool bone = labelAcc ? mPerLabel[std::size_t(std::clamp(labelAcc->getValue(*c), 0, kMaxLabels - 1))].rigid
-                                           : double(huValue) >= kBoneHuThreshold;
+                const bool bone = labelAcc
+                    ? mPerLabel[std::size_t(std::clamp(labelAcc->getValue(*c), 0, kMaxLabels - 1))].rigid
+                    : double(huValue) >= kBoneHuThreshold;
                 if (!bone) continue;
                 const double e = youngsModulusMPa(options.modulusLaw, densityFromHu(huValue));
                 const double computed = contactStiffnessNPerMm(e, options.tipAreaMm2, lc);
@@ -198,7 +199,8 @@ MaterialField::MaterialField(GridConstPtr beta, GridConstPtr labels, const Tissu
 {
     initializeOpenVdb();
     fillPerLabel(table);
-    if (mBeta && !openvdb::gridConstPtrCast<FloatGrid>(mBeta)) throw ValueError("material field: damping grid must be float");
+    if (mBeta && !openvdb::gridConstPtrCast<FloatGrid>(mBeta))
+        throw ValueError("material field: damping grid must be float");
     if (mLabels) {
         auto l = openvdb::gridConstPtrCast<LabelGrid>(mLabels);
         if (!l) throw ValueError("material field: label grid must be int32");
@@ -214,7 +216,7 @@ void MaterialField::fillPerLabel(const TissueTable& table)
     for (const Tissue& t : table.tissues()) {
         if (t.id >= kMaxLabels) {
             throw ValueError(table.origin() + ": tissue '" + t.name + "' id " + std::to_string(t.id) +
-                             " exceeds the force path's limit of " + std::to_string(kMaxLabels - 1));
+                " exceeds the force path's limit of " + std::to_string(kMaxLabels - 1));
         }
         LabelMaterial& m = mPerLabel[std::size_t(t.id)];
         const auto value = [](const std::optional<Quantity>& q) { return q ? q->value : 0.0; };

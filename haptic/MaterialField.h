@@ -25,8 +25,8 @@ inline constexpr int kMaxLabels = 64;
 
 /// @brief Which property grids to build.
 struct MaterialNeeds {
-    bool damping = true;         ///< β grid (Kyung Eq. 5, physics.md §1.2)
-    bool boneStiffness = false;  ///< contact stiffness grid (physics.md §1.3)
+    bool damping = true;        ///< β grid (Kyung Eq. 5, physics.md §1.2)
+    bool boneStiffness = false; ///< contact stiffness grid (physics.md §1.3)
 };
 
 /// @brief How image values map to mechanics.
@@ -36,29 +36,29 @@ struct MaterialOptions {
     /// volume's metadata names ("field_strength"), else 1.5 T.
     std::optional<volume::FieldStrength> field;
     ModulusLaw modulusLaw = ModulusLaw::Kopperdahl2002; ///< QCT density, as HU gives (§5.3)
-    double tipAreaMm2 = 1.27;     ///< needle tip area [mm²]: 18 G (physics.md §1.3)
-    DeviceLimits device;          ///< bone stiffness is limited to what it renders
+    double tipAreaMm2 = 1.27;                           ///< needle tip area [mm²]: 18 G (physics.md §1.3)
+    DeviceLimits device;                                ///< bone stiffness is limited to what it renders
 };
 
 /// @brief Per-label parameters from the tissue table, in canonical units; zero where absent.
 struct LabelMaterial {
-    bool present = false;          ///< the table has this id
-    bool critical = false;         ///< touching it zeroes the force (physics.md §1.1)
-    bool rigid = false;            ///< bone: contact, not cutting (§1.3)
-    double dampingNsPerMm2 = 0;    ///< β [N·s/mm²]
-    double punctureForceN = 0;     ///< [N]
-    double cuttingForceN = 0;      ///< [N]
-    double elasticityNPerMm = 0;   ///< [N/mm]
+    bool present = false;               ///< the table has this id
+    bool critical = false;              ///< touching it zeroes the force (physics.md §1.1)
+    bool rigid = false;                 ///< bone: contact, not cutting (§1.3)
+    double dampingNsPerMm2 = 0;         ///< β [N·s/mm²]
+    double punctureForceN = 0;          ///< [N]
+    double cuttingForceN = 0;           ///< [N]
+    double elasticityNPerMm = 0;        ///< [N/mm]
     double frictionViscousNsPerMm2 = 0; ///< b [N·s/mm²]
-    double frictionCoulombN = 0;   ///< C [N]
+    double frictionCoulombN = 0;        ///< C [N]
 };
 
 /// @brief Bone stiffness as computed from HU, and as rendered.
 struct StiffnessReport {
     std::int64_t boneVoxels = 0;
-    double computedMaxNPerMm = 0;    ///< k = E(ρ(HU))·A/L_c before limiting
+    double computedMaxNPerMm = 0; ///< k = E(ρ(HU))·A/L_c before limiting
     double computedMeanNPerMm = 0;
-    double renderedMaxNPerMm = 0;    ///< after limiting to the device
+    double renderedMaxNPerMm = 0; ///< after limiting to the device
     double deviceLimitNPerMm = 0;
 };
 
@@ -77,8 +77,8 @@ public:
     /// [N·s/mm²] (may be null), @p labels an Int32Grid (may be null), sharing a transform.
     MaterialField(GridConstPtr beta, GridConstPtr labels, const volume::TissueTable& table);
 
-    GridConstPtr damping() const { return mBeta; }          ///< FloatGrid β [N·s/mm²], or null
-    GridConstPtr labels() const { return mLabels; }         ///< Int32Grid tissue ids, or null
+    GridConstPtr damping() const { return mBeta; }            ///< FloatGrid β [N·s/mm²], or null
+    GridConstPtr labels() const { return mLabels; }           ///< Int32Grid tissue ids, or null
     GridConstPtr boneStiffness() const { return mStiffness; } ///< FloatGrid k [N/mm], device-limited, or null
     const std::array<LabelMaterial, kMaxLabels>& perLabel() const { return mPerLabel; }
     const StiffnessReport& stiffnessReport() const { return mStiffnessReport; }

@@ -40,21 +40,26 @@ T1DampingLaw t1DampingLaw(volume::FieldStrength field)
 ModulusLaw parseModulusLaw(std::string_view name)
 {
     for (ModulusLaw law : {ModulusLaw::Morgan2003, ModulusLaw::Keller1994, ModulusLaw::Kopperdahl2002,
-                           ModulusLaw::KopperdahlKeaveny1998, ModulusLaw::Keaveny1997}) {
+             ModulusLaw::KopperdahlKeaveny1998, ModulusLaw::Keaveny1997}) {
         if (modulusLawName(law) == name) return law;
     }
     throw ValueError("unknown modulus law '" + std::string(name) +
-                     "' (expected morgan2003, keller1994, kopperdahl2002, kopperdahl-keaveny1998 or keaveny1997)");
+        "' (expected morgan2003, keller1994, kopperdahl2002, kopperdahl-keaveny1998 or keaveny1997)");
 }
 
 std::string modulusLawName(ModulusLaw law)
 {
     switch (law) {
-    case ModulusLaw::Morgan2003: return "morgan2003";
-    case ModulusLaw::Keller1994: return "keller1994";
-    case ModulusLaw::Kopperdahl2002: return "kopperdahl2002";
-    case ModulusLaw::KopperdahlKeaveny1998: return "kopperdahl-keaveny1998";
-    case ModulusLaw::Keaveny1997: return "keaveny1997";
+    case ModulusLaw::Morgan2003:
+        return "morgan2003";
+    case ModulusLaw::Keller1994:
+        return "keller1994";
+    case ModulusLaw::Kopperdahl2002:
+        return "kopperdahl2002";
+    case ModulusLaw::KopperdahlKeaveny1998:
+        return "kopperdahl-keaveny1998";
+    case ModulusLaw::Keaveny1997:
+        return "keaveny1997";
     }
     return "?";
 }
@@ -64,11 +69,21 @@ double youngsModulusMPa(ModulusLaw law, double rho)
     if (!(rho > 0.0)) return 0.0; // also catches NaN
     double e = 0.0;
     switch (law) { // physics.md §5.3, coefficients as tabulated in public spine FE code
-    case ModulusLaw::Morgan2003: e = 4730.0 * std::pow(rho, 1.56); break;
-    case ModulusLaw::Keller1994: e = 1890.0 * std::pow(rho, 1.92); break;
-    case ModulusLaw::Kopperdahl2002: e = -34.7 + 3230.0 * rho; break;
-    case ModulusLaw::KopperdahlKeaveny1998: e = -80.0 + 2100.0 * rho; break;
-    case ModulusLaw::Keaveny1997: e = -58.0 + 1540.0 * rho; break;
+    case ModulusLaw::Morgan2003:
+        e = 4730.0 * std::pow(rho, 1.56);
+        break;
+    case ModulusLaw::Keller1994:
+        e = 1890.0 * std::pow(rho, 1.92);
+        break;
+    case ModulusLaw::Kopperdahl2002:
+        e = -34.7 + 3230.0 * rho;
+        break;
+    case ModulusLaw::KopperdahlKeaveny1998:
+        e = -80.0 + 2100.0 * rho;
+        break;
+    case ModulusLaw::Keaveny1997:
+        e = -58.0 + 1540.0 * rho;
+        break;
     }
     return std::isfinite(e) ? std::max(e, 0.0) : 0.0;
 }

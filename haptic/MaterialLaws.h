@@ -16,10 +16,10 @@ namespace voxhap::haptic {
 
 /// @brief Kyung Eq. 4, b = C1·exp(C2·T1), fitted per field strength (physics.md §5.4).
 struct T1DampingLaw {
-    double c1NsPerM2 = 0;  ///< C1 [N·s/m²]
-    double c2PerMs = 0;    ///< C2 [1/ms]
-    double t1MinMs = 0;    ///< T1 clamp: fat [ms] (§5.4: clamp to the fat–muscle range)
-    double t1MaxMs = 0;    ///< T1 clamp: muscle [ms]
+    double c1NsPerM2 = 0; ///< C1 [N·s/m²]
+    double c2PerMs = 0;   ///< C2 [1/ms]
+    double t1MinMs = 0;   ///< T1 clamp: fat [ms] (§5.4: clamp to the fat–muscle range)
+    double t1MaxMs = 0;   ///< T1 clamp: muscle [ms]
 
     /// @brief Damping density [N·s/mm²] for a T1 [ms]; T1 clamped first, so the
     /// result is finite for any input (NaN maps to the lower clamp).
@@ -32,11 +32,11 @@ T1DampingLaw t1DampingLaw(volume::FieldStrength field);
 
 /// @brief Density–modulus relations of physics.md §5.3 (E in MPa, ρ in g/cm³).
 enum class ModulusLaw {
-    Morgan2003,           ///< E = 4730·ρ^1.56, apparent density, vertebra
-    Keller1994,           ///< E = 1890·ρ^1.92, ash density, spine
-    Kopperdahl2002,       ///< E = −34.7 + 3230·ρ, QCT density, vertebra
-    KopperdahlKeaveny1998,///< E = −80 + 2100·ρ, apparent density, spine
-    Keaveny1997,          ///< E = −58 + 1540·ρ, apparent density, lumbar
+    Morgan2003,            ///< E = 4730·ρ^1.56, apparent density, vertebra
+    Keller1994,            ///< E = 1890·ρ^1.92, ash density, spine
+    Kopperdahl2002,        ///< E = −34.7 + 3230·ρ, QCT density, vertebra
+    KopperdahlKeaveny1998, ///< E = −80 + 2100·ρ, apparent density, spine
+    Keaveny1997,           ///< E = −58 + 1540·ρ, apparent density, lumbar
 };
 
 /// @brief Parse "morgan2003", "keller1994", "kopperdahl2002", "kopperdahl-keaveny1998"

@@ -12,8 +12,8 @@ namespace voxhap::haptic {
 double gaugeOuterDiameterMm(int gauge)
 {
     // ISO 9626:2016 nominal outer diameters [mm], 14 G to 27 G.
-    static constexpr double kOd[] = {2.108, 1.829, 1.651, 1.473, 1.270, 1.067, 0.908,
-                                     0.819, 0.718, 0.641, 0.565, 0.515, 0.464, 0.413};
+    static constexpr double kOd[] = {
+        2.108, 1.829, 1.651, 1.473, 1.270, 1.067, 0.908, 0.819, 0.718, 0.641, 0.565, 0.515, 0.464, 0.413};
     if (gauge < 14 || gauge > 27) throw ValueError("needle: gauge " + std::to_string(gauge) + " outside 14..27");
     return kOd[gauge - 14];
 }
@@ -39,9 +39,12 @@ TipType parseTipType(const std::string& name)
 const char* tipTypeName(TipType t)
 {
     switch (t) {
-    case TipType::Coned: return "coned";
-    case TipType::Bevel: return "bevel";
-    case TipType::Triangular: return "triangular";
+    case TipType::Coned:
+        return "coned";
+    case TipType::Bevel:
+        return "bevel";
+    case TipType::Triangular:
+        return "triangular";
     }
     return "?";
 }

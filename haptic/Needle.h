@@ -10,10 +10,10 @@
 namespace voxhap::haptic {
 
 struct Needle {
-    int gauge = 18;                 ///< Birmingham gauge, 14..27
-    TipType tip = TipType::Bevel;   ///< coned, bevel (Tuohy, Quincke) or triangular (trocar)
-    double lengthMm = 90.0;         ///< shaft length [mm] (a 3.5-inch spinal needle)
-    int referenceGauge = 18;        ///< gauge the force tables were measured with [chosen]
+    int gauge = 18;               ///< Birmingham gauge, 14..27
+    TipType tip = TipType::Bevel; ///< coned, bevel (Tuohy, Quincke) or triangular (trocar)
+    double lengthMm = 90.0;       ///< shaft length [mm] (a 3.5-inch spinal needle)
+    int referenceGauge = 18;      ///< gauge the force tables were measured with [chosen]
 
     /// @brief Nominal outer diameter [mm] (ISO 9626 regular-wall table).
     double outerDiameterMm() const;

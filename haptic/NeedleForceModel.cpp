@@ -21,9 +21,8 @@ Vec3d lateralOf(const Vec3d& v, const Vec3d& u) noexcept { return v - v.dot(u) *
 } // namespace
 
 NeedleForceModel::NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms,
-                                   const Needle& needle, const DeviceLimits& device,
-                                   std::unique_ptr<ShaftIntegrator> integrator, const MaterialField* field,
-                                   std::unique_ptr<ShaftIntegrator> locked)
+    const Needle& needle, const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator,
+    const MaterialField* field, std::unique_ptr<ShaftIntegrator> locked)
     : mState(std::move(layers)), mPath(path), mTerms(terms), mNeedle(needle), mDevice(device),
       mIntegrator(std::move(integrator)), mLocked(std::move(locked)), mField(field),
       mProxy(orDevice(terms.couplingNPerMm, device.maxStiffnessNPerMm)), mLor(terms.lor.params),
@@ -56,9 +55,10 @@ double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::ve
 {
     const int current = tip.currentLayer();
     if (!terms.cutting || current < 0) return 0.0;
-    double f = tip.cuttingSumN;                                                                           // §2.1 Eq. 3, nested boxes
-    if (tip.pushLayer < 0 && tip.inLayer >= 0) f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm); // §3.1
-    if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN;           // §4 Eq. 3
+    double f = tip.cuttingSumN; // §2.1 Eq. 3, nested boxes
+    if (tip.pushLayer < 0 && tip.inLayer >= 0)
+        f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm);                   // §3.1
+    if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN; // §4 Eq. 3
     return f;
 }
 
@@ -117,8 +117,10 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     const Vec3d dir = in.direction / dirNorm;
     const double d = (in.tip - mPath.origin).dot(u);
     const double v = in.velocity.dot(u);
-    if (v > 0.0) mLastDirection = 1;
-    else if (v < 0.0) mLastDirection = -1;
+    if (v > 0.0)
+        mLastDirection = 1;
+    else if (v < 0.0)
+        mLastDirection = -1;
     const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
 
     // 2. Insertion state.
@@ -149,9 +151,12 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         threshold += split.frictionN;
     }
     if (popped && v > 0.0) mProxy.preload(d, threshold); // the drop at a pop is exact (§3.1 T_f)
-    if (current >= 0) f.proxy = mProxy.update(d, threshold);
-    else mProxy.reset();
-    if (mTerms.keepDirectionN > 0.0 && v <= 0.0 && tip.inBody) f.keepDirection = -mTerms.keepDirectionN * mLastDirection;
+    if (current >= 0)
+        f.proxy = mProxy.update(d, threshold);
+    else
+        mProxy.reset();
+    if (mTerms.keepDirectionN > 0.0 && v <= 0.0 && tip.inBody)
+        f.keepDirection = -mTerms.keepDirectionN * mLastDirection;
 
     // Bone (§1.3): contact at the device's stiffness; the tip sticks where it met the
     // bone until pulled back; the transient (§2.1 Eq. 2) scales with impact speed.
@@ -181,7 +186,8 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     }
     f.lateral = lateral;
 
-    if (mTerms.lor.on) out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
+    if (mTerms.lor.on)
+        out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
 
     // §1.1 critical structures: zero force and a warning, in this tick.
     const bool critical = mTerms.critical && touchingCritical();

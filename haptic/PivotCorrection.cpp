@@ -23,10 +23,7 @@ double KelvinElement::step(double x, double period) noexcept
     return mF;
 }
 
-PivotCorrection::PivotCorrection(const PivotParams& p) : mP(p)
-{
-    reset();
-}
+PivotCorrection::PivotCorrection(const PivotParams& p) : mP(p) { reset(); }
 
 void PivotCorrection::reset() noexcept
 {
@@ -44,8 +41,8 @@ double PivotCorrection::update(double theta, double depthMm, double period) noex
     double torque = 0.0;
     // Layers never reached have F = 0 and x = 0 and would stay so: only the touched ones step.
     for (int i = 0; i < mTouched; ++i) {
-        const double r = (double(i) + 0.5) * h;            // depth of layer i below the pivot
-        const double x = i < n ? r * theta : 0.0;           // x_i ≈ r_i·θ; layers not reached relax to 0
+        const double r = (double(i) + 0.5) * h;   // depth of layer i below the pivot
+        const double x = i < n ? r * theta : 0.0; // x_i ≈ r_i·θ; layers not reached relax to 0
         torque += mLayers[std::size_t(i)].step(x, period) * r;
     }
     const double f = torque / mP.hubDistanceMm;

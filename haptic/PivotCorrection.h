@@ -15,7 +15,7 @@ class KelvinElement {
 public:
     KelvinElement() = default;
     /// @param k1NPerMm relaxed stiffness, @param k2NPerMm series spring, @param tauS relaxation time b/k2
-    KelvinElement(double k1NPerMm, double k2NPerMm, double tauS) : mK1(k1NPerMm), mK2(k2NPerMm), mTau(tauS) {}
+    KelvinElement(double k1NPerMm, double k2NPerMm, double tauS) : mK1(k1NPerMm), mK2(k2NPerMm), mTau(tauS) { }
     /// @brief Advance by @p periodS with deflection @p xMm; returns the force [N].
     /// A period of 0 (or negative, or NaN) is treated as the smallest positive step: never divides by 0.
     double step(double xMm, double periodS) noexcept;
@@ -29,12 +29,12 @@ private:
 
 /// @brief Parameters of the pivot correction (physics.md §1.4 defaults [chosen]).
 struct PivotParams {
-    double kappa1NPerMm2 = 4.77e-3;   ///< κ1: per-depth stiffness so F_C = 2 N at 10°, D = 60 mm, L_h = 30 mm
-    double kappa2NPerMm2 = 4.77e-3;   ///< κ2 = κ1
-    double tauS = 0.020;              ///< τ = 20 ms
-    double hubDistanceMm = 30.0;      ///< L_h: pivot to hub
-    double layerThicknessMm = 1.0;    ///< h: depth of each Kelvin layer
-    double maxForceN = 2.0;           ///< [K01] |F_C| <= 2 N
+    double kappa1NPerMm2 = 4.77e-3; ///< κ1: per-depth stiffness so F_C = 2 N at 10°, D = 60 mm, L_h = 30 mm
+    double kappa2NPerMm2 = 4.77e-3; ///< κ2 = κ1
+    double tauS = 0.020;            ///< τ = 20 ms
+    double hubDistanceMm = 30.0;    ///< L_h: pivot to hub
+    double layerThicknessMm = 1.0;  ///< h: depth of each Kelvin layer
+    double maxForceN = 2.0;         ///< [K01] |F_C| <= 2 N
 };
 
 /// @brief F_C = (1/L_h)·Σ F_i·r_i with x_i = r_i·θ, clamped to maxForceN (physics.md §1.4).

@@ -30,9 +30,9 @@ namespace voxhap::haptic {
 
 namespace {
 
-constexpr std::uint64_t kPoseMaxBodyBytes = 65536;  // larger bodies drop the connection
-constexpr double kPoseReadTimeoutS = 0.5;           // a message must arrive whole within this
-constexpr int kPoseConnectTimeoutMs = 200;          // a viewer on loopback or a LAN answers far sooner
+constexpr std::uint64_t kPoseMaxBodyBytes = 65536; // larger bodies drop the connection
+constexpr double kPoseReadTimeoutS = 0.5;          // a message must arrive whole within this
+constexpr int kPoseConnectTimeoutMs = 200;         // a viewer on loopback or a LAN answers far sooner
 
 } // namespace
 
@@ -65,7 +65,8 @@ void parseHostPort(const std::string& text, const std::string& what, std::string
 PoseSender::PoseSender(std::string host, int port, double retryS) : mHost(std::move(host)), mPort(port), mRetryS(retryS)
 {
     in_addr a{};
-    if (::inet_pton(AF_INET, mHost.c_str(), &a) != 1) throw ValueError("pose stream: '" + mHost + "' is not an IPv4 address");
+    if (::inet_pton(AF_INET, mHost.c_str(), &a) != 1)
+        throw ValueError("pose stream: '" + mHost + "' is not an IPv4 address");
 }
 
 PoseSender::~PoseSender()
@@ -91,9 +92,10 @@ bool PoseSender::connectNow()
         pollfd p{fd, POLLOUT, 0};
         int err = 0;
         socklen_t len = sizeof err;
-        rc = ::poll(&p, 1, kPoseConnectTimeoutMs) == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 && err == 0
-                 ? 0
-                 : -1;
+        rc = ::poll(&p, 1, kPoseConnectTimeoutMs) == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 &&
+                err == 0
+            ? 0
+            : -1;
     }
     if (rc != 0) {
         ::close(fd);
@@ -157,11 +159,18 @@ bool PoseReceiver::handleMessage(int fd) noexcept
 {
     StreamedPose p;
     switch (detail::readTransform(fd, kPoseReadTimeoutS, kPoseMaxBodyBytes, p.tip, p.direction)) {
-    case detail::WireRead::Broken: return false;
-    case detail::WireRead::BadHeader: mRejected.fetch_add(1); return false;
-    case detail::WireRead::BadPose: mRejected.fetch_add(1); return true; // a bad pose, not a broken stream
-    case detail::WireRead::Skipped: return true;
-    case detail::WireRead::Pose: break;
+    case detail::WireRead::Broken:
+        return false;
+    case detail::WireRead::BadHeader:
+        mRejected.fetch_add(1);
+        return false;
+    case detail::WireRead::BadPose:
+        mRejected.fetch_add(1);
+        return true; // a bad pose, not a broken stream
+    case detail::WireRead::Skipped:
+        return true;
+    case detail::WireRead::Pose:
+        break;
     }
     try {
         const double norm = p.direction.norm();

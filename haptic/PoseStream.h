@@ -29,8 +29,8 @@ namespace voxhap::haptic {
 
 /// @brief One streamed needle pose.
 struct StreamedPose {
-    Vec3d tip{0, 0, 0};        ///< [mm, LPS]
-    Vec3d direction{0, 0, 1};  ///< unit, hub to tip
+    Vec3d tip{0, 0, 0};       ///< [mm, LPS]
+    Vec3d direction{0, 0, 1}; ///< unit, hub to tip
 };
 
 /// @brief "HOST:PORT" or "PORT" (host 127.0.0.1) split and checked.

@@ -100,8 +100,8 @@ private:
 
 } // namespace
 
-std::unique_ptr<ShaftIntegrator> makeRayMarch(const MaterialField& field, double stepMm, bool trilinear,
-                                              bool trackLabels)
+std::unique_ptr<ShaftIntegrator> makeRayMarch(
+    const MaterialField& field, double stepMm, bool trilinear, bool trackLabels)
 {
     return std::make_unique<RayMarch>(field, stepMm, trilinear, trackLabels);
 }

@@ -11,7 +11,7 @@ namespace voxhap::haptic {
 /// box is cut into N = ceil(length/step) equal steps), sampling the nearest
 /// voxel or the trilinear field, trapezoid rule. Error against the exact
 /// integrals: physics.md §7 R1 gives the bound for the trilinear march.
-std::unique_ptr<ShaftIntegrator> makeRayMarch(const MaterialField& field, double stepMm, bool trilinear,
-                                              bool trackLabels);
+std::unique_ptr<ShaftIntegrator> makeRayMarch(
+    const MaterialField& field, double stepMm, bool trilinear, bool trackLabels);
 
 } // namespace voxhap::haptic

@@ -12,14 +12,14 @@
 namespace voxhap::haptic {
 
 struct SafetyParams {
-    double peakN = 3.3;             ///< device peak force [N]
-    double continuousN = 0.88;      ///< device continuous force [N]
+    double peakN = 3.3;        ///< device peak force [N]
+    double continuousN = 0.88; ///< device continuous force [N]
     /// How long the peak may be held before the limit ramps down to the continuous
     /// force (an I²t budget of (peak² − continuous²)·this) [s] [chosen].
     double peakBudgetS = 1.0;
-    double riseNPerS = 2000.0;      ///< |F| may grow by at most this per second [N/s] [chosen: 2 N per 1 ms tick]
-    double maxDtS = 0.01;           ///< longer ticks count as this [s] [chosen: 10 periods at 1 kHz]
-    bool passivity = true;          ///< Hannaford & Ryu (2002) observer and controller (§6.2 guard)
+    double riseNPerS = 2000.0; ///< |F| may grow by at most this per second [N/s] [chosen: 2 N per 1 ms tick]
+    double maxDtS = 0.01;      ///< longer ticks count as this [s] [chosen: 10 periods at 1 kHz]
+    bool passivity = true;     ///< Hannaford & Ryu (2002) observer and controller (§6.2 guard)
 
     static SafetyParams fromDevice(const DeviceLimits& d);
 };
@@ -27,7 +27,7 @@ struct SafetyParams {
 /// @brief Limits one force stream. Never allocates or throws.
 class Safety {
 public:
-    explicit Safety(const SafetyParams& p = {}) : mP(p) {}
+    explicit Safety(const SafetyParams& p = {}) : mP(p) { }
 
     /// @brief The force to render for the model's @p force with the device at @p devicePoint
     /// [mm] after @p dtS. Non-finite input latches the fault; a faulted stream renders zero.

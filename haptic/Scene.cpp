@@ -189,7 +189,8 @@ Scene parseScene(const std::string& text, const std::string& origin)
         s.approachMm = i.number("approach_mm", s.approachMm);
         s.depthMm = i.optNumber("depth_mm", true);
     }
-    if (s.recipe.model == LayerModel::Kyung && s.fixedTable) top.fail("layers", "the kyung model reads voxels: use \"labels\"");
+    if (s.recipe.model == LayerModel::Kyung && s.fixedTable)
+        top.fail("layers", "the kyung model reads voxels: use \"labels\"");
     return s;
 }
 
@@ -235,22 +236,23 @@ std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, co
     return std::make_shared<const volume::Volume>(volume::makePhantom(m, grid, table));
 }
 
-
 SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::Volume> vol,
-                             const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
+    const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
     : mScene(scene), mVolume(vol ? std::move(vol) : makeSourceVolume(scene.volume, table))
 {
     const bool needLabels = !scene.fixedTable || scene.terms.critical;
     if (needLabels && !mVolume->has(volume::Channel::Label)) {
-        throw ValueError(scene.origin + ": the volume has no tissue labels, which this scene's layers and critical-structure "
-                                        "rule read: give a labelled volume (a phantom, or a segmented scan)");
+        throw ValueError(scene.origin +
+            ": the volume has no tissue labels, which this scene's layers and critical-structure "
+            "rule read: give a labelled volume (a phantom, or a segmented scan)");
     }
     const auto pick = [&](std::optional<Vec3d> given, std::optional<Vec3d> fromScene, const std::string& mark,
                           const char* what) {
         if (given) return *given;
         if (fromScene) return *fromScene;
         if (auto p = mark.empty() ? std::nullopt : volume::phantomLandmark(*mVolume, mark)) return *p;
-        throw ValueError(scene.origin + ": path." + what + ": not given, and the volume has no landmark '" + mark + "'");
+        throw ValueError(
+            scene.origin + ": path." + what + ": not given, and the volume has no landmark '" + mark + "'");
     };
     mEntry = pick(entry, scene.entry, scene.entryLandmark, "entry");
     mTarget = pick(target, scene.target, scene.targetLandmark, "target");
@@ -282,14 +284,15 @@ std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
         o.strategy = Strategy::ExactVoxel;
         o.trackLabels = mScene.terms.critical && mField->labels();
         integrator = makeIntegrator(*mField, o);
-        if (mScene.terms.damping.on) { // the profile integrates β: after skin entry (architecture.md "Shaft integration")
+        if (mScene.terms.damping
+                .on) { // the profile integrates β: after skin entry (architecture.md "Shaft integration")
             o.strategy = Strategy::Profile;
             o.profileMaxLengthMm = std::max(o.profileMaxLengthMm, 2.0 * mScene.needle.lengthMm);
             locked = makeIntegrator(*mField, o);
         }
     }
-    return std::make_unique<NeedleForceModel>(mLayers, NeedlePath{mEntry, mTarget - mEntry}, mScene.terms, mScene.needle,
-                                              mScene.device, std::move(integrator), mField.get(), std::move(locked));
+    return std::make_unique<NeedleForceModel>(mLayers, NeedlePath{mEntry, mTarget - mEntry}, mScene.terms,
+        mScene.needle, mScene.device, std::move(integrator), mField.get(), std::move(locked));
 }
 
 } // namespace voxhap::haptic

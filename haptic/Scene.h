@@ -23,27 +23,27 @@ namespace voxhap::haptic {
 
 /// @brief Where the volume comes from: a built-in phantom or a file.
 struct VolumeSource {
-    std::string phantom;             ///< "lumbar", "torso", "slab", "sphere"; empty for a file
-    std::string preset = "average";  ///< lumbar preset
-    std::optional<double> bmi;       ///< lumbar BMI
-    double spacingMm = 0.5;          ///< phantom voxel size [mm]
-    std::string file;                ///< a .vdb volume
+    std::string phantom;            ///< "lumbar", "torso", "slab", "sphere"; empty for a file
+    std::string preset = "average"; ///< lumbar preset
+    std::optional<double> bmi;      ///< lumbar BMI
+    double spacingMm = 0.5;         ///< phantom voxel size [mm]
+    std::string file;               ///< a .vdb volume
 };
 
 struct Scene {
     std::string name, description, source, origin; ///< origin: the file or "builtin:<name>"
     VolumeSource volume;
-    std::optional<Vec3d> entry, target;   ///< path [mm, LPS]; else the phantom's landmarks
+    std::optional<Vec3d> entry, target; ///< path [mm, LPS]; else the phantom's landmarks
     std::string entryLandmark = "entry", targetLandmark;
-    bool fixedTable = false;              ///< the paper's layer table instead of the labels
+    bool fixedTable = false; ///< the paper's layer table instead of the labels
     LayerRecipe recipe;
     ForceTerms terms;
     Needle needle;
     DeviceLimits device;
-    double speedMmPerS = 10.0;            ///< default constant insertion speed
-    double rateHz = 1000.0;               ///< servo rate of the simulation
-    double approachMm = 5.0;              ///< the tip starts this far outside the entry point
-    std::optional<double> depthMm;        ///< insertion depth past the entry; else to the target
+    double speedMmPerS = 10.0;     ///< default constant insertion speed
+    double rateHz = 1000.0;        ///< servo rate of the simulation
+    double approachMm = 5.0;       ///< the tip starts this far outside the entry point
+    std::optional<double> depthMm; ///< insertion depth past the entry; else to the target
 };
 
 /// @brief Parse a scene; errors name @p origin and the field. @throw ValueError
@@ -60,7 +60,7 @@ public:
     /// @param volume the volume to use instead of the scene's (may be null)
     /// @param entry, target override the scene's path
     SceneInstance(const Scene& scene, std::shared_ptr<const volume::Volume> volume, const volume::TissueTable& table,
-                  std::optional<Vec3d> entry = std::nullopt, std::optional<Vec3d> target = std::nullopt);
+        std::optional<Vec3d> entry = std::nullopt, std::optional<Vec3d> target = std::nullopt);
 
     const Scene& scene() const { return mScene; }
     const volume::Volume& volume() const { return *mVolume; }

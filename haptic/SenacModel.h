@@ -10,8 +10,8 @@ namespace voxhap::haptic {
 
 /// @brief [S19] Eq. 4, F = a1·z + a2·z² along the elastic-plane normal, z >= 0.
 struct PrePunctureStiffness {
-    double a1NPerMm = 0;   ///< [N/mm]
-    double a2NPerMm2 = 0;  ///< [N/mm²]
+    double a1NPerMm = 0;  ///< [N/mm]
+    double a2NPerMm2 = 0; ///< [N/mm²]
 
     /// @brief §2.2 [chosen]: a1 = F_p/(2 z_p), a2 = F_p/(2 z_p²), so that both terms are
     /// equal at puncture and F(z_p) = F_p.
@@ -26,8 +26,8 @@ struct PrePunctureStiffness {
 /// while the speed exceeds ε (0.2 mm/s, §2.2 [chosen]).
 struct NestedBoxCutting {
     struct Box {
-        double startMm;  ///< depth at which the tip enters the layer [mm]
-        double forceN;   ///< F_layer [N]
+        double startMm; ///< depth at which the tip enters the layer [mm]
+        double forceN;  ///< F_layer [N]
     };
     std::vector<Box> boxes;
     double epsilonMmPerS = 0.2;

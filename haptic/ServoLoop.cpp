@@ -129,8 +129,7 @@ void ServoLoop::loop() noexcept
     while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished()) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
         if (spin) {
-            while (nowNs() < deadline) {
-            }
+            while (nowNs() < deadline) { }
         } else {
             const timespec ts = toTimespec(deadline);
             clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);

@@ -24,8 +24,8 @@ struct ServoOptions {
     double rateHz = 1000.0;
     /// The watchdog ramps the force to zero over rampS when the device has been
     /// quiet (no valid reading) this long, or when a period lasted this long [s].
-    double watchdogS = 0.020;      ///< [chosen] 20 periods at 1 kHz
-    double rampS = 0.050;          ///< [chosen]
+    double watchdogS = 0.020; ///< [chosen] 20 periods at 1 kHz
+    double rampS = 0.050;     ///< [chosen]
     /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
     /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
     double spinBelowS = 100e-6;
@@ -45,7 +45,7 @@ struct ServoRecord {
 /// @brief Lock-free timing statistics: compute time per tick and period error.
 class TickStats {
 public:
-    static constexpr int kBins = 4096;          ///< compute: 25 ns bins up to 102 µs; period: 1 µs bins
+    static constexpr int kBins = 4096; ///< compute: 25 ns bins up to 102 µs; period: 1 µs bins
     void addCompute(double ns) noexcept { add(mCompute, ns / 25.0); }
     void addPeriodError(double ns) noexcept { add(mJitter, ns / 1000.0); }
     /// @brief Quantile @p q of the compute time [ns] (upper edge of its bin).

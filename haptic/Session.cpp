@@ -46,7 +46,8 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
     });
     writeCsv(dir / "events.csv", [&](std::ostream& o) {
         o << "t_s,depth_mm,event,layer\n";
-        for (const Event& e : s.events) o << e.timeS << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
+        for (const Event& e : s.events)
+            o << e.timeS << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
     });
 }
 
@@ -128,7 +129,8 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
         const double dt = b.timeS - a.timeS;
         const double v = dt > 0.0 ? (b.depthMm - a.depthMm) / dt : 0.0;
         if (b.timeS >= skinT && v > 0.0) sum += v, sum2 += v * v, ++n;
-        const bool epi = b.layer >= 0 && b.layer < int(layers.size()) && layers[std::size_t(b.layer)].role == LayerRole::Epidural;
+        const bool epi =
+            b.layer >= 0 && b.layer < int(layers.size()) && layers[std::size_t(b.layer)].role == LayerRole::Epidural;
         if (epi) epidural += std::abs(b.depthMm - a.depthMm), inEpidural = true;
     }
     if (inEpidural) m.overshootMm = epidural;

@@ -32,7 +32,7 @@ class ReplayDevice final : public Device {
 public:
     ReplayDevice(std::vector<ServoRecord> poses, const DeviceLimits& limits);
     DeviceReading read(double timeS) noexcept override;
-    void write(const Vec3d&, double, double) noexcept override {}
+    void write(const Vec3d&, double, double) noexcept override { }
     const DeviceLimits& limits() const noexcept override { return mLimits; }
     std::string name() const override { return "replay"; }
     bool finished() const noexcept override { return mFinished; }
@@ -46,11 +46,11 @@ private:
 
 /// @brief Trainee metrics after [S19] (physics.md §2.3).
 struct TraineeMetrics {
-    bool success = true;              ///< the dura was not punctured
+    bool success = true; ///< the dura was not punctured
     int boneContacts = 0;
     int pops = 0;
     std::optional<double> insertionAngleDeg; ///< needle against the planned path at skin entry
-    double speedMeanMmPerS = 0;       ///< along the path, while advancing inside the body
+    double speedMeanMmPerS = 0;              ///< along the path, while advancing inside the body
     double speedVarianceMm2PerS2 = 0;
     std::optional<double> overshootMm; ///< distance travelled inside the epidural space
     std::optional<double> syrrate;     ///< fraction emptied per metre [1/m]; null without a plunger channel

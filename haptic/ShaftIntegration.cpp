@@ -13,10 +13,14 @@ namespace voxhap::haptic {
 std::unique_ptr<ShaftIntegrator> makeIntegrator(const MaterialField& field, const IntegratorOptions& o)
 {
     switch (o.strategy) {
-    case Strategy::ExactVoxel: return makeExactVoxel(field, o.trackLabels);
-    case Strategy::ExactTrilinear: return makeExactTrilinear(field, o.trackLabels);
-    case Strategy::MarchNearest: return makeRayMarch(field, o.stepMm, false, o.trackLabels);
-    case Strategy::MarchTrilinear: return makeRayMarch(field, o.stepMm, true, o.trackLabels);
+    case Strategy::ExactVoxel:
+        return makeExactVoxel(field, o.trackLabels);
+    case Strategy::ExactTrilinear:
+        return makeExactTrilinear(field, o.trackLabels);
+    case Strategy::MarchNearest:
+        return makeRayMarch(field, o.stepMm, false, o.trackLabels);
+    case Strategy::MarchTrilinear:
+        return makeRayMarch(field, o.stepMm, true, o.trackLabels);
     case Strategy::Profile:
         return std::make_unique<TrajectoryProfile>(field, o.profileToleranceMm, o.profileMaxLengthMm, o.trackLabels);
     }

@@ -34,11 +34,12 @@ inline constexpr double kNotHit = std::numeric_limits<double>::infinity();
 
 /// @brief The result of one integration. Fixed size: filling it never allocates.
 struct ShaftIntegral {
-    double lengthMm = 0;            ///< |tip - entry| [mm]
-    double dampingIntegral = 0;     ///< ∫β ds [N·s/mm]: the damping force at speed v [mm/s] is v times this
+    double lengthMm = 0;        ///< |tip - entry| [mm]
+    double dampingIntegral = 0; ///< ∫β ds [N·s/mm]: the damping force at speed v [mm/s] is v times this
     std::array<double, kMaxLabels> labelLengthMm{}; ///< shaft length in each label [mm] (air outside the volume)
-    std::array<double, kMaxLabels> firstHitMm{};    ///< distance from the entry to each label's first voxel [mm], or kNotHit
-    bool labelsValid = false;       ///< labels were tracked (the integrator had a label grid and was asked to)
+    std::array<double, kMaxLabels>
+        firstHitMm{};         ///< distance from the entry to each label's first voxel [mm], or kNotHit
+    bool labelsValid = false; ///< labels were tracked (the integrator had a label grid and was asked to)
 
     void reset() noexcept
     {

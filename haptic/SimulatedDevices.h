@@ -16,7 +16,7 @@ class ScriptedDevice final : public Device {
 public:
     ScriptedDevice(const NeedlePath& path, InsertionScript script, const DeviceLimits& limits);
     DeviceReading read(double timeS) noexcept override;
-    void write(const Vec3d&, double, double) noexcept override {}
+    void write(const Vec3d&, double, double) noexcept override { }
     const DeviceLimits& limits() const noexcept override { return mLimits; }
     std::string name() const override { return "sim-script"; }
     bool finished() const noexcept override { return mFinished; }
@@ -38,11 +38,11 @@ struct HandParams {
     double massKg = 0.3;
     double gripNPerMm = 1.0;
     double dampingNsPerMm = 0.035;
-    double speedMmPerS = 2.0;     ///< set-point speed
-    double startMm = -5.0;        ///< depth where the hand starts
-    double maxDepthMm = 80.0;     ///< the set point stops here
-    bool stopOnLor = true;        ///< careful: stop after feeling the loss of resistance
-    double lorDropN = 3.0;        ///< the plunger force below which the hand feels the loss [N]
+    double speedMmPerS = 2.0; ///< set-point speed
+    double startMm = -5.0;    ///< depth where the hand starts
+    double maxDepthMm = 80.0; ///< the set point stops here
+    bool stopOnLor = true;    ///< careful: stop after feeling the loss of resistance
+    double lorDropN = 3.0;    ///< the plunger force below which the hand feels the loss [N]
     double reactionS = 0.25;
     /// The syringe: once the plunger has been felt blocked, the thumb presses it with
     /// this force, and it empties at emptyPerS·(1 − plunger force/thumb force) while

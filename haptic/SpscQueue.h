@@ -11,8 +11,7 @@
 
 namespace voxhap::haptic {
 
-template <typename T, std::size_t Capacity>
-class SpscQueue {
+template <typename T, std::size_t Capacity> class SpscQueue {
     static_assert(Capacity >= 2 && (Capacity & (Capacity - 1)) == 0, "capacity must be a power of two");
 
 public:

@@ -14,7 +14,7 @@ namespace voxhap::haptic {
 
 class StickSlipProxy {
 public:
-    explicit StickSlipProxy(double couplingNPerMm = 0.5) : mK(couplingNPerMm > 0.0 ? couplingNPerMm : 0.5) {}
+    explicit StickSlipProxy(double couplingNPerMm = 0.5) : mK(couplingNPerMm > 0.0 ? couplingNPerMm : 0.5) { }
 
     /// @brief Move the needle to depth @p d [mm] against threshold @p thresholdN [N];
     /// returns the resistance along the insertion axis [N] (positive pushes the needle out).
@@ -24,8 +24,10 @@ public:
         const double t = std::isfinite(thresholdN) ? std::max(0.0, thresholdN) : 0.0;
         if (!mEngaged) mProxy = d, mEngaged = true;
         double f = mK * (d - mProxy);
-        if (f > t) mProxy = d - t / mK, f = t;        // slip forward
-        else if (f < -t) mProxy = d + t / mK, f = -t; // slip backward
+        if (f > t)
+            mProxy = d - t / mK, f = t; // slip forward
+        else if (f < -t)
+            mProxy = d + t / mK, f = -t; // slip backward
         return f;
     }
     /// @brief Start sliding forward at @p thresholdN: at a pop the tissue gives way and

@@ -25,7 +25,7 @@ struct TrajectoryProfile::Impl {
         const double hMin = g.spacing.minCoeff();
         if (!(tolerance >= 0.0) || tolerance >= 0.5 * hMin) {
             throw ValueError("trajectory profile: tolerance must be in [0, half the smallest voxel size = " +
-                             std::to_string(0.5 * hMin) + " mm)");
+                std::to_string(0.5 * hMin) + " mm)");
         }
         if (!(maxLength > 0.0) || !std::isfinite(maxLength)) throw ValueError("trajectory profile: bad maximum length");
         // Rows of the world->index linear map: index displacement along axis a is row_a · world displacement.
@@ -228,7 +228,8 @@ struct TrajectoryProfile::Impl {
     std::vector<double> nextStart; // [(run) * slots + slot]: start of the first run at or after it with that label
 };
 
-TrajectoryProfile::TrajectoryProfile(const MaterialField& field, double toleranceMm, double maxLengthMm, bool trackLabels)
+TrajectoryProfile::TrajectoryProfile(
+    const MaterialField& field, double toleranceMm, double maxLengthMm, bool trackLabels)
     : mImpl(std::make_unique<Impl>(field, toleranceMm, maxLengthMm, trackLabels)), mTolerance(toleranceMm),
       mMaxLength(maxLengthMm)
 {

@@ -16,14 +16,15 @@ namespace {
 constexpr double kLipschitz = 1.7320508075688772;
 } // namespace
 
-Clearance clearanceAlong(const volume::Volume::GridConstPtr& field, const Vec3d& a, const Vec3d& b, double toleranceMm,
-                         double bandMm)
+Clearance clearanceAlong(
+    const volume::Volume::GridConstPtr& field, const Vec3d& a, const Vec3d& b, double toleranceMm, double bandMm)
 {
     const auto grid = openvdb::gridConstPtrCast<volume::FloatGrid>(field);
     Clearance c;
     if (!grid) return c;
     auto acc = grid->getConstAccessor();
-    const openvdb::tools::GridSampler<volume::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(acc, grid->transform());
+    const openvdb::tools::GridSampler<volume::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(
+        acc, grid->transform());
     const double len = (b - a).norm();
     const Vec3d u = len > 0 ? Vec3d((b - a) / len) : Vec3d(0, 0, 1);
     const double h = std::max(toleranceMm, 1e-3);

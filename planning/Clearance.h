@@ -23,7 +23,7 @@ namespace voxhap::planning {
 /// the candidate search fast; near one they shrink to @p toleranceMm.
 /// @param field a FloatGrid sharing its transform with the volume
 /// @param bandMm the field's background: a minimum at or beyond it is reported beyondBand
-Clearance clearanceAlong(const volume::Volume::GridConstPtr& field, const Vec3d& a, const Vec3d& b, double toleranceMm,
-                         double bandMm);
+Clearance clearanceAlong(
+    const volume::Volume::GridConstPtr& field, const Vec3d& a, const Vec3d& b, double toleranceMm, double bandMm);
 
 } // namespace voxhap::planning

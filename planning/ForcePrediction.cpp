@@ -23,7 +23,8 @@ DampingLine::DampingLine(std::vector<haptic::DampingPiece> pieces) : mPieces(std
 double DampingLine::to(double x) const
 {
     // The last piece starting before x.
-    const auto it = std::upper_bound(mPieces.begin(), mPieces.end(), x, [](double v, const haptic::DampingPiece& p) { return v < p.startMm; });
+    const auto it = std::upper_bound(
+        mPieces.begin(), mPieces.end(), x, [](double v, const haptic::DampingPiece& p) { return v < p.startMm; });
     if (it == mPieces.begin()) return 0.0;
     const std::size_t k = std::size_t(it - mPieces.begin()) - 1;
     const haptic::DampingPiece& p = mPieces[k];
@@ -79,7 +80,8 @@ ForceProfile predictForce(const ForceModelInputs& in, double lengthMm)
                 if (e.type != haptic::EventType::Pop || e.layer < 0) continue;
                 const auto& l = layers[std::size_t(e.layer)];
                 if (!l.tents) continue;
-                const double fp = std::isfinite(l.punctureForceN) ? l.punctureForceN : l.elasticForceN(l.punctureDepthMm);
+                const double fp =
+                    std::isfinite(l.punctureForceN) ? l.punctureForceN : l.elasticForceN(l.punctureDepthMm);
                 add(d, critical ? 0.0 : fp + nonElastic);
             }
         }
@@ -88,7 +90,8 @@ ForceProfile predictForce(const ForceModelInputs& in, double lengthMm)
             add(p.contactMm, critical ? 0.0 : nonElastic);
             break;
         }
-        const double elastic = in.terms.tip && tip.pushLayer >= 0 ? layers[std::size_t(tip.pushLayer)].elasticForceN(tip.pushMm) : 0.0;
+        const double elastic =
+            in.terms.tip && tip.pushLayer >= 0 ? layers[std::size_t(tip.pushLayer)].elasticForceN(tip.pushMm) : 0.0;
         add(d, critical ? 0.0 : elastic + nonElastic);
     }
     return p;

@@ -52,7 +52,7 @@ struct ForceModelInputs {
     haptic::DeviceLimits device;
     double speedMmPerS = 10.0;
     double stepMm = 1.0;
-    const DampingLine* damping = nullptr;              ///< β along the path (when terms.damping.on)
+    const DampingLine* damping = nullptr; ///< β along the path (when terms.damping.on)
 };
 
 struct ForceProfile {

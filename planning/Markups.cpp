@@ -18,16 +18,10 @@ using Json = nlohmann::json;
 
 Json controlPoint(int id, const std::string& label, const Vec3d& p)
 {
-    return {{"id", std::to_string(id)},
-            {"label", label},
-            {"description", ""},
-            {"associatedNodeID", ""},
-            {"position", {p.x(), p.y(), p.z()}},
-            {"orientation", {-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0}}, // identity in RAS, as Slicer writes in LPS
-            {"selected", true},
-            {"locked", true},
-            {"visibility", true},
-            {"positionStatus", "defined"}};
+    return {{"id", std::to_string(id)}, {"label", label}, {"description", ""}, {"associatedNodeID", ""},
+        {"position", {p.x(), p.y(), p.z()}},
+        {"orientation", {-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0}}, // identity in RAS, as Slicer writes in LPS
+        {"selected", true}, {"locked", true}, {"visibility", true}, {"positionStatus", "defined"}};
 }
 
 } // namespace
@@ -48,12 +42,12 @@ std::string markupsJson(const std::vector<MarkupLine>& lines)
         m["labelFormat"] = "%N-%d";
         m["lastUsedControlPointNumber"] = 2;
         m["controlPoints"] = {controlPoint(1, "entry", l.entry), controlPoint(2, "target", l.target)};
-        m["measurements"] = {{{"name", "length"}, {"enabled", true}, {"value", (l.target - l.entry).norm()}, {"units", "mm"},
-                              {"printFormat", "%-#4.4g%s"}}};
-        m["display"] = {{"visibility", true}, {"opacity", 1.0}, {"color", {0.4, 1.0, 1.0}}, {"selectedColor", {1.0, 0.5, 0.5}},
-                        {"propertiesLabelVisibility", true}, {"pointLabelsVisibility", true}, {"textScale", 3.0},
-                        {"glyphType", "Sphere3D"}, {"glyphScale", 1.0}, {"glyphSize", 5.0}, {"useGlyphScale", true},
-                        {"lineThickness", 0.2}};
+        m["measurements"] = {{{"name", "length"}, {"enabled", true}, {"value", (l.target - l.entry).norm()},
+            {"units", "mm"}, {"printFormat", "%-#4.4g%s"}}};
+        m["display"] = {{"visibility", true}, {"opacity", 1.0}, {"color", {0.4, 1.0, 1.0}},
+            {"selectedColor", {1.0, 0.5, 0.5}}, {"propertiesLabelVisibility", true}, {"pointLabelsVisibility", true},
+            {"textScale", 3.0}, {"glyphType", "Sphere3D"}, {"glyphScale", 1.0}, {"glyphSize", 5.0},
+            {"useGlyphScale", true}, {"lineThickness", 0.2}};
         doc["markups"].push_back(std::move(m));
     }
     return doc.dump(4) + "\n";
@@ -73,7 +67,9 @@ std::vector<MarkupLine> parseMarkups(std::string_view json, const std::string& o
     } catch (const Json::parse_error& e) {
         throw ValueError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
     }
-    const auto fail = [&](const std::string& field, const std::string& why) { throw ValueError(origin + ": " + field + ": " + why); };
+    const auto fail = [&](const std::string& field, const std::string& why) {
+        throw ValueError(origin + ": " + field + ": " + why);
+    };
     if (!j.is_object() || !j.contains("markups") || !j["markups"].is_array()) fail("markups", "must be an array");
     std::vector<MarkupLine> lines;
     try {
@@ -83,7 +79,8 @@ std::vector<MarkupLine> parseMarkups(std::string_view json, const std::string& o
             if (!mk.is_object() || mk.value("type", "") != "Line") continue;
             const std::string system = mk.value("coordinateSystem", "LPS");
             if (system != "LPS" && system != "RAS") fail(at + ".coordinateSystem", "must be LPS or RAS");
-            if (mk.contains("coordinateUnits") && mk["coordinateUnits"] != "mm") fail(at + ".coordinateUnits", "must be mm");
+            if (mk.contains("coordinateUnits") && mk["coordinateUnits"] != "mm")
+                fail(at + ".coordinateUnits", "must be mm");
             if (!mk.contains("controlPoints") || !mk["controlPoints"].is_array() || mk["controlPoints"].size() != 2) {
                 fail(at + ".controlPoints", "a Line needs exactly two control points");
             }

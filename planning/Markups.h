@@ -17,13 +17,13 @@
 
 namespace voxhap::planning {
 
-inline constexpr const char* kMarkupsSchema =
-    "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/markups-schema-v1.0.3.json#";
+inline constexpr const char* kMarkupsSchema = "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/"
+                                              "Markups/Resources/Schema/markups-schema-v1.0.3.json#";
 
 struct MarkupLine {
     std::string name;
-    Vec3d entry{0, 0, 0};   ///< first control point [mm, LPS]
-    Vec3d target{0, 0, 0};  ///< second control point [mm, LPS]
+    Vec3d entry{0, 0, 0};  ///< first control point [mm, LPS]
+    Vec3d target{0, 0, 0}; ///< second control point [mm, LPS]
 };
 
 /// @brief The markups document text.

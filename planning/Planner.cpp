@@ -47,14 +47,16 @@ std::string fmt(double x, int digits = 1)
 } // namespace
 
 Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTable& table, const haptic::Scene& scene,
-                 const PlanOptions& options)
+    const PlanOptions& options)
     : mVolume(std::move(v)), mTable(table), mScene(scene), mOptions(options), mImpl(std::make_unique<Impl>())
 {
     if (!mVolume || !mVolume->has(volume::Channel::Label)) {
         throw ValueError("planning: the volume has no tissue labels: segment it first (voxhap segment)");
     }
-    if (!(options.profileStepMm > 0) || !(options.marginMm > 0) || options.minClearanceMm < 0 || options.speedMmPerS < 0) {
-        throw ValueError("planning: profile step and margin must be positive, minimum clearance and speed not negative");
+    if (!(options.profileStepMm > 0) || !(options.marginMm > 0) || options.minClearanceMm < 0 ||
+        options.speedMmPerS < 0) {
+        throw ValueError(
+            "planning: profile step and margin must be positive, minimum clearance and speed not negative");
     }
     mSpeed = options.speedMmPerS > 0 ? options.speedMmPerS : scene.speedMmPerS;
     if (const auto* skin = table.find("skin")) mSkin = skin->id;
@@ -93,8 +95,8 @@ int Planner::labelAt(const Vec3d& w) const
         openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
 }
 
-std::vector<haptic::LabelRun> Planner::trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                             std::vector<haptic::DampingPiece>* damping) const
+std::vector<haptic::LabelRun> Planner::trace(
+    const Vec3d& origin, const Vec3d& direction, double lengthMm, std::vector<haptic::DampingPiece>* damping) const
 {
     return mImpl->tracer->trace(origin, direction, lengthMm, mScene.terms.damping.on ? damping : nullptr);
 }
@@ -112,8 +114,7 @@ TrajectoryReport Planner::analyze(const Vec3d& entry, const Vec3d& target) const
 }
 
 TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
-                                        const std::vector<haptic::LabelRun>& fromTarget,
-                                        const std::vector<haptic::DampingPiece>& dampingFromTarget) const
+    const std::vector<haptic::LabelRun>& fromTarget, const std::vector<haptic::DampingPiece>& dampingFromTarget) const
 {
     TrajectoryReport r;
     r.entry = entry, r.target = target, r.lengthMm = (target - entry).norm();
@@ -131,7 +132,8 @@ TrajectoryReport Planner::analyzeTraced(const Vec3d& entry, const Vec3d& target,
     return finish(std::move(r), std::move(runs), std::move(damping));
 }
 
-TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const
+TrajectoryReport Planner::finish(
+    TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const
 {
     const int targetLabel = labelAt(r.target);
     if (const auto* t = mTable.find(targetLabel)) r.targetTissue = t->name;
@@ -143,8 +145,10 @@ TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRu
         s.label = run.label;
         s.startMm = run.startMm;
         s.endMm = std::min(run.endMm, r.lengthMm);
-        if (const auto* t = mTable.find(run.label)) s.tissue = t->name, s.critical = t->critical, s.rigid = t->rigid;
-        else s.tissue = "label " + std::to_string(run.label);
+        if (const auto* t = mTable.find(run.label))
+            s.tissue = t->name, s.critical = t->critical, s.rigid = t->rigid;
+        else
+            s.tissue = "label " + std::to_string(run.label);
         if (s.endMm > s.startMm) r.segments.push_back(std::move(s));
     }
     // Bone entries: each maximal run of rigid segments. The last one counts as the
@@ -155,8 +159,10 @@ TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRu
     std::vector<std::pair<int, int>> groups; // [first, last] segment indices
     for (int i = 0; i < int(r.segments.size()); ++i) {
         if (!r.segments[std::size_t(i)].rigid) continue;
-        if (lastGroupEnd == i - 1 && !groups.empty()) groups.back().second = i;
-        else groups.emplace_back(i, i);
+        if (lastGroupEnd == i - 1 && !groups.empty())
+            groups.back().second = i;
+        else
+            groups.emplace_back(i, i);
         lastGroupEnd = i;
     }
     r.boneEntries = int(groups.size());
@@ -181,10 +187,12 @@ TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRu
     }
     // A critical label on the path is a breach even where no distance field exists.
     for (const auto& s : r.segments) {
-        if (s.critical && mImpl->sdf.end() == std::find_if(mImpl->sdf.begin(), mImpl->sdf.end(),
-                                                              [&](const auto& p) { return p.first == s.tissue; })) {
+        if (s.critical && mImpl->sdf.end() == std::find_if(mImpl->sdf.begin(), mImpl->sdf.end(), [&](const auto& p) {
+                return p.first == s.tissue;
+            })) {
             r.clearances.push_back({s.tissue, -0.5 * s.lengthMm(), 0.5 * (s.startMm + s.endMm), false});
-            if (r.clearances.back().minMm < r.minClearanceMm) r.minClearanceMm = r.clearances.back().minMm, r.nearestStructure = s.tissue;
+            if (r.clearances.back().minMm < r.minClearanceMm)
+                r.minClearanceMm = r.clearances.back().minMm, r.nearestStructure = s.tissue;
         }
     }
 
@@ -209,24 +217,27 @@ TrajectoryReport Planner::finish(TrajectoryReport r, std::vector<haptic::LabelRu
     // Warnings.
     for (const auto& c : r.clearances) {
         if (c.minMm <= 0.0) {
-            r.warnings.push_back({"critical_breach", "the path enters the " + c.tissue + " (at " + fmt(c.atDepthMm) + " mm)"});
+            r.warnings.push_back(
+                {"critical_breach", "the path enters the " + c.tissue + " (at " + fmt(c.atDepthMm) + " mm)"});
         } else if (c.minMm < mOptions.minClearanceMm) {
-            r.warnings.push_back({"clearance_below_minimum", "the path passes " + fmt(c.minMm) + " mm from the " + c.tissue +
-                                                                 " (minimum " + fmt(mOptions.minClearanceMm) + " mm)"});
+            r.warnings.push_back({"clearance_below_minimum",
+                "the path passes " + fmt(c.minMm) + " mm from the " + c.tissue + " (minimum " +
+                    fmt(mOptions.minClearanceMm) + " mm)"});
         }
     }
     if (r.peakForceN > mScene.device.maxForceN) {
-        r.warnings.push_back({"force_above_device_limit", "predicted peak " + fmt(r.peakForceN, 2) + " N at " + fmt(r.peakDepthMm) +
-                                                              " mm exceeds the " + mScene.device.name + "'s " +
-                                                              fmt(mScene.device.maxForceN, 2) + " N"});
+        r.warnings.push_back({"force_above_device_limit",
+            "predicted peak " + fmt(r.peakForceN, 2) + " N at " + fmt(r.peakDepthMm) + " mm exceeds the " +
+                mScene.device.name + "'s " + fmt(mScene.device.maxForceN, 2) + " N"});
     }
     if (r.lengthMm > mScene.needle.lengthMm) {
-        r.warnings.push_back({"needle_too_short", "the path is " + fmt(r.lengthMm) + " mm, the needle " +
-                                                      fmt(mScene.needle.lengthMm) + " mm"});
+        r.warnings.push_back({"needle_too_short",
+            "the path is " + fmt(r.lengthMm) + " mm, the needle " + fmt(mScene.needle.lengthMm) + " mm"});
     }
     if (r.boneObstacles > 0) {
-        r.warnings.push_back({"bone_before_target", std::to_string(r.boneObstacles) + " bone crossing(s) before the target, the first at " +
-                                                        fmt(r.firstBoneMm) + " mm"});
+        r.warnings.push_back({"bone_before_target",
+            std::to_string(r.boneObstacles) + " bone crossing(s) before the target, the first at " +
+                fmt(r.firstBoneMm) + " mm"});
     }
     r.risk = riskScore(r, mScene.needle.lengthMm, mScene.device.maxForceN, mOptions.marginMm);
     return r;

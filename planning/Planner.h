@@ -21,11 +21,11 @@
 namespace voxhap::planning {
 
 struct PlanOptions {
-    double speedMmPerS = 0;          ///< insertion speed of the force prediction; 0: the scene's
-    double profileStepMm = 1.0;      ///< depth step of the predicted force profile [mm]
-    double minClearanceMm = 5.0;     ///< closer than this to a critical structure warns [chosen: a needle's
-                                     ///< lateral deflection over 10 cm is a few mm]
-    double marginMm = 20.0;          ///< structures nearer than this raise the risk (RiskScore.h) [chosen]
+    double speedMmPerS = 0;      ///< insertion speed of the force prediction; 0: the scene's
+    double profileStepMm = 1.0;  ///< depth step of the predicted force profile [mm]
+    double minClearanceMm = 5.0; ///< closer than this to a critical structure warns [chosen: a needle's
+                                 ///< lateral deflection over 10 cm is a few mm]
+    double marginMm = 20.0;      ///< structures nearer than this raise the risk (RiskScore.h) [chosen]
     /// Clearance is found to within this [mm]; 0: half the finest voxel (the field's own accuracy, DistanceField.h).
     double clearanceToleranceMm = 0;
 };
@@ -36,7 +36,7 @@ public:
     ///        grids give the clearances (segmentation::segment makes them)
     /// @throw ValueError if the volume has no label grid or an option is out of range
     Planner(std::shared_ptr<const volume::Volume> volume, const volume::TissueTable& table, const haptic::Scene& scene,
-            const PlanOptions& options = {});
+        const PlanOptions& options = {});
     ~Planner();
 
     /// @brief Analyse the straight path entry → target. @throw ValueError on coincident or non-finite points
@@ -44,13 +44,14 @@ public:
 
     /// @brief The same, from the label runs already traced outward from the target along
     /// -direction up to the entry (Search.h traces them to find the entry).
-    TrajectoryReport analyzeTraced(const Vec3d& entry, const Vec3d& target, const std::vector<haptic::LabelRun>& runsFromTarget,
-                                   const std::vector<haptic::DampingPiece>& dampingFromTarget) const;
+    TrajectoryReport analyzeTraced(const Vec3d& entry, const Vec3d& target,
+        const std::vector<haptic::LabelRun>& runsFromTarget,
+        const std::vector<haptic::DampingPiece>& dampingFromTarget) const;
 
     /// @brief The label runs from @p origin along @p direction over @p lengthMm (leading and
     /// trailing air dropped), and β along it when @p damping is given and the scene damps.
     std::vector<haptic::LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
-                                        std::vector<haptic::DampingPiece>* damping = nullptr) const;
+        std::vector<haptic::DampingPiece>* damping = nullptr) const;
 
     const volume::Volume& volume() const { return *mVolume; }
     const volume::TissueTable& table() const { return mTable; }
@@ -65,7 +66,8 @@ public:
 
 private:
     struct Impl;
-    TrajectoryReport finish(TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const;
+    TrajectoryReport finish(
+        TrajectoryReport r, std::vector<haptic::LabelRun> runs, std::vector<haptic::DampingPiece> damping) const;
 
     std::shared_ptr<const volume::Volume> mVolume;
     const volume::TissueTable& mTable;

@@ -22,12 +22,13 @@ nlohmann::json pathJson(const TrajectoryReport& r, int rank)
     j["target_tissue"] = r.targetTissue;
     j["segments"] = nlohmann::json::array();
     for (const auto& s : r.segments) {
-        j["segments"].push_back({{"tissue", s.tissue}, {"start_mm", s.startMm}, {"end_mm", s.endMm}, {"length_mm", s.lengthMm()},
-                                 {"critical", s.critical}, {"rigid", s.rigid}});
+        j["segments"].push_back({{"tissue", s.tissue}, {"start_mm", s.startMm}, {"end_mm", s.endMm},
+            {"length_mm", s.lengthMm()}, {"critical", s.critical}, {"rigid", s.rigid}});
     }
     j["clearances"] = nlohmann::json::array();
     for (const auto& c : r.clearances) {
-        j["clearances"].push_back({{"structure", c.tissue}, {"min_mm", c.minMm}, {"at_mm", c.atDepthMm}, {"at_least", c.beyondBand}});
+        j["clearances"].push_back(
+            {{"structure", c.tissue}, {"min_mm", c.minMm}, {"at_mm", c.atDepthMm}, {"at_least", c.beyondBand}});
     }
     j["min_clearance_mm"] = depth(r.minClearanceMm);
     j["nearest_structure"] = r.nearestStructure;
@@ -43,45 +44,36 @@ nlohmann::json pathJson(const TrajectoryReport& r, int rank)
     j["force"] = std::move(f);
     j["warnings"] = nlohmann::json::array();
     for (const auto& w : r.warnings) j["warnings"].push_back({{"code", w.code}, {"message", w.message}});
-    j["risk"] = {{"total", r.risk.total},       {"breach", r.risk.breach},       {"too_short", r.risk.tooShort},
-                 {"bone_obstacles", r.risk.boneObstacles}, {"over_force", r.risk.overForce}, {"proximity", r.risk.proximity},
-                 {"length", r.risk.length},     {"force", r.risk.force}};
+    j["risk"] = {{"total", r.risk.total}, {"breach", r.risk.breach}, {"too_short", r.risk.tooShort},
+        {"bone_obstacles", r.risk.boneObstacles}, {"over_force", r.risk.overForce}, {"proximity", r.risk.proximity},
+        {"length", r.risk.length}, {"force", r.risk.force}};
     return j;
 }
 
 nlohmann::json reportHeader(const Planner& p, const std::string& volumeName)
 {
     const auto& s = p.scene();
-    return {{"schema", kReportSchema},
-            {"volume", volumeName},
-            {"scene", s.name},
-            {"model", haptic::layerModelName(s.recipe.model)},
-            {"speed_mm_per_s", p.speedMmPerS()},
-            {"needle_mm", s.needle.lengthMm},
-            {"device", {{"name", s.device.name}, {"max_force_N", s.device.maxForceN}}},
-            {"min_clearance_mm", p.options().minClearanceMm},
-            {"margin_mm", p.options().marginMm},
-            {"distance_band_mm", p.distanceBandMm()},
-            {"critical_structures", p.criticalStructures()},
-            {"risk_formula", kRiskFormula}};
+    return {{"schema", kReportSchema}, {"volume", volumeName}, {"scene", s.name},
+        {"model", haptic::layerModelName(s.recipe.model)}, {"speed_mm_per_s", p.speedMmPerS()},
+        {"needle_mm", s.needle.lengthMm}, {"device", {{"name", s.device.name}, {"max_force_N", s.device.maxForceN}}},
+        {"min_clearance_mm", p.options().minClearanceMm}, {"margin_mm", p.options().marginMm},
+        {"distance_band_mm", p.distanceBandMm()}, {"critical_structures", p.criticalStructures()},
+        {"risk_formula", kRiskFormula}};
 }
 
-nlohmann::json searchJson(const Planner& planner, const SearchResult& found, const SearchConstraints& k,
-                          const SearchOptions& options)
+nlohmann::json searchJson(
+    const Planner& planner, const SearchResult& found, const SearchConstraints& k, const SearchOptions& options)
 {
     const SearchCounts& c = found.counts;
-    return {{"directions", c.directions},
-            {"analysed", c.analysed},
-            {"feasible", c.feasible},
-            {"seconds", found.seconds},
-            {"candidates_per_s", found.seconds > 0 ? double(c.analysed) / found.seconds : 0.0},
-            {"rejected", {{"no_skin_exit", c.noSkinExit}, {"not_skin", c.notSkin}, {"outside_box", c.outsideBox},
-                          {"critical_breach", c.breach}, {"clearance", c.clearance}, {"bone", c.bone}, {"too_long", c.tooLong}}},
-            {"constraints", {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}},
-                             {"max_angle_deg", k.maxAngleDeg},
-                             {"max_length_mm", found.maxLengthMm},
-                             {"min_clearance_mm", planner.options().minClearanceMm},
-                             {"step_deg", options.stepDeg}}}};
+    return {{"directions", c.directions}, {"analysed", c.analysed}, {"feasible", c.feasible},
+        {"seconds", found.seconds}, {"candidates_per_s", found.seconds > 0 ? double(c.analysed) / found.seconds : 0.0},
+        {"rejected",
+            {{"no_skin_exit", c.noSkinExit}, {"not_skin", c.notSkin}, {"outside_box", c.outsideBox},
+                {"critical_breach", c.breach}, {"clearance", c.clearance}, {"bone", c.bone}, {"too_long", c.tooLong}}},
+        {"constraints",
+            {{"reference", {k.reference.x(), k.reference.y(), k.reference.z()}}, {"max_angle_deg", k.maxAngleDeg},
+                {"max_length_mm", found.maxLengthMm}, {"min_clearance_mm", planner.options().minClearanceMm},
+                {"step_deg", options.stepDeg}}}};
 }
 
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file)

@@ -10,8 +10,8 @@
 ///  "pareto": [ <path>, ... ],             // search only
 ///  "search": {"directions": n, "analysed": n, "feasible": n, "rejected": {...}, "seconds": s}}
 /// <path> = {"rank": 1, "entry": [x,y,z], "target": [x,y,z], "length_mm": l, "target_tissue": "lesion",
-///           "segments": [{"tissue": "skin", "start_mm": 0, "end_mm": 2, "length_mm": 2, "critical": false, "rigid": false}],
-///           "clearances": [{"structure": "kidney", "min_mm": 12.5, "at_mm": 40, "at_least": false}],
+///           "segments": [{"tissue": "skin", "start_mm": 0, "end_mm": 2, "length_mm": 2, "critical": false, "rigid":
+///           false}], "clearances": [{"structure": "kidney", "min_mm": 12.5, "at_mm": 40, "at_least": false}],
 ///           "min_clearance_mm": 12.5, "nearest_structure": "kidney",
 ///           "bone": {"entries": 1, "obstacles": 0, "first_mm": 55},
 ///           "force": {"peak_N": 3.1, "peak_depth_mm": 50, "contact_mm": 55, "depth_mm": [...], "force_N": [...]},
@@ -42,8 +42,8 @@ nlohmann::json pathJson(const TrajectoryReport& r, int rank);
 nlohmann::json reportHeader(const Planner& planner, const std::string& volumeName);
 
 /// @brief The "search" block of a report: counts, rejections by reason, time and the constraints used.
-nlohmann::json searchJson(const Planner& planner, const SearchResult& found, const SearchConstraints& k,
-                          const SearchOptions& options);
+nlohmann::json searchJson(
+    const Planner& planner, const SearchResult& found, const SearchConstraints& k, const SearchOptions& options);
 /// @brief Write @p report atomically (core/AtomicFile.h). @throw IoError
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file);
 

@@ -16,7 +16,8 @@ RiskTerms riskScore(const TrajectoryReport& r, double needleMm, double deviceMax
     for (const auto& c : r.clearances) t.proximity += std::max(0.0, 1.0 - c.minMm / marginMm);
     t.length = r.lengthMm / needleMm;
     t.force = r.peakForceN / deviceMaxN;
-    t.total = 100.0 * (t.breach + t.tooShort) + 10.0 * (t.boneObstacles + t.overForce) + t.proximity + t.length + t.force;
+    t.total =
+        100.0 * (t.breach + t.tooShort) + 10.0 * (t.boneObstacles + t.overForce) + t.proximity + t.length + t.force;
     return t;
 }
 

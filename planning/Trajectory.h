@@ -41,33 +41,33 @@ struct ForceSample {
 
 /// @brief A machine-readable code and a human sentence.
 struct Warning {
-    std::string code;    ///< "critical_breach", "clearance_below_minimum", "force_above_device_limit",
-                         ///< "needle_too_short", "bone_before_target"
+    std::string code; ///< "critical_breach", "clearance_below_minimum", "force_above_device_limit",
+                      ///< "needle_too_short", "bone_before_target"
     std::string message;
 };
 
 /// @brief The terms of the risk score (RiskScore.h gives the formula).
 struct RiskTerms {
     double breach = 0, tooShort = 0, boneObstacles = 0, overForce = 0; ///< hard terms (flags and counts)
-    double proximity = 0, length = 0, force = 0;                      ///< soft terms, each in [0, 1] per unit
+    double proximity = 0, length = 0, force = 0;                       ///< soft terms, each in [0, 1] per unit
     double total = 0;
 };
 
 struct TrajectoryReport {
     Vec3d entry{0, 0, 0}, target{0, 0, 0};
     double lengthMm = 0;
-    std::string targetTissue;                 ///< the tissue at the target point
-    std::vector<TissueSegment> segments;      ///< entry to target, in order (air inside the body kept)
-    std::vector<Clearance> clearances;        ///< one per critical structure with a distance field
-    double minClearanceMm = kNoDepth;         ///< smallest of clearances
+    std::string targetTissue;            ///< the tissue at the target point
+    std::vector<TissueSegment> segments; ///< entry to target, in order (air inside the body kept)
+    std::vector<Clearance> clearances;   ///< one per critical structure with a distance field
+    double minClearanceMm = kNoDepth;    ///< smallest of clearances
     std::string nearestStructure;
-    int boneEntries = 0;                      ///< separate bone runs entered before the target
-    int boneObstacles = 0;                    ///< ... of them not the bone holding the target (see Planner.cpp)
-    double firstBoneMm = kNoDepth;            ///< depth of the first bone [mm]
-    double speedMmPerS = 0;                   ///< of the force prediction
-    std::vector<ForceSample> force;           ///< predicted profile, entry to first rigid contact or target
+    int boneEntries = 0;            ///< separate bone runs entered before the target
+    int boneObstacles = 0;          ///< ... of them not the bone holding the target (see Planner.cpp)
+    double firstBoneMm = kNoDepth;  ///< depth of the first bone [mm]
+    double speedMmPerS = 0;         ///< of the force prediction
+    std::vector<ForceSample> force; ///< predicted profile, entry to first rigid contact or target
     double peakForceN = 0, peakDepthMm = 0;
-    double contactMm = kNoDepth;              ///< the profile stops at rigid (bone) contact here (physics.md §1.3)
+    double contactMm = kNoDepth; ///< the profile stops at rigid (bone) contact here (physics.md §1.3)
     std::vector<Warning> warnings;
     RiskTerms risk;
     bool hasWarning(const std::string& code) const;

@@ -10,8 +10,8 @@
 
 namespace voxhap::render {
 
-inline constexpr int kGlyphWidth = 5;  ///< [font pixels]
-inline constexpr int kGlyphHeight = 7; ///< [font pixels]
+inline constexpr int kGlyphWidth = 5;   ///< [font pixels]
+inline constexpr int kGlyphHeight = 7;  ///< [font pixels]
 inline constexpr int kGlyphAdvance = 6; ///< glyph width plus one blank column
 
 /// @brief The rows of a glyph, top first; bit 4 of a row is its leftmost pixel.

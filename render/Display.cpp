@@ -65,16 +65,21 @@ DisplayGuard::~DisplayGuard()
 {
     if (mKind != DisplayKind::Xvfb) return;
     stopXvfb();
-    if (mHadDisplay) ::setenv("DISPLAY", mPreviousDisplay.c_str(), 1);
-    else ::unsetenv("DISPLAY");
+    if (mHadDisplay)
+        ::setenv("DISPLAY", mPreviousDisplay.c_str(), 1);
+    else
+        ::unsetenv("DISPLAY");
 }
 
 std::string DisplayGuard::description() const
 {
     switch (mKind) {
-    case DisplayKind::Existing: return "3D view on display " + mDisplay;
-    case DisplayKind::Xvfb: return "no display: started Xvfb on " + mDisplay + " for the 3D view (stopped on exit)";
-    case DisplayKind::Unavailable: break;
+    case DisplayKind::Existing:
+        return "3D view on display " + mDisplay;
+    case DisplayKind::Xvfb:
+        return "no display: started Xvfb on " + mDisplay + " for the 3D view (stopped on exit)";
+    case DisplayKind::Unavailable:
+        break;
     }
     return "no display (" + mWhy + "): slices only, through the GL-free path";
 }
@@ -84,7 +89,7 @@ void DisplayGuard::startXvfb(double timeoutS)
     const std::string xvfb = findOnPath("Xvfb");
     if (xvfb.empty()) {
         mWhy = std::string(mHadDisplay ? "$DISPLAY " + mPreviousDisplay + " unreachable" : "$DISPLAY unset") +
-               " and Xvfb not installed (Debian package xvfb)";
+            " and Xvfb not installed (Debian package xvfb)";
         return;
     }
     int fds[2];
@@ -110,7 +115,7 @@ void DisplayGuard::startXvfb(double timeoutS)
         const int devnull = ::open("/dev/null", O_RDWR);
         if (devnull >= 0) ::dup2(devnull, 0), ::dup2(devnull, 1), ::dup2(devnull, 2);
         ::execl(xvfb.c_str(), "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1280x1024x24", "-nolisten", "tcp",
-                "-noreset", static_cast<char*>(nullptr));
+            "-noreset", static_cast<char*>(nullptr));
         ::_exit(127);
     }
     ::close(fds[1]);
@@ -122,7 +127,8 @@ void DisplayGuard::startXvfb(double timeoutS)
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeoutS);
     bool done = false;
     while (!done) {
-        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+        const auto left =
+            std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
         if (left.count() <= 0) break;
         pollfd p{fds[0], POLLIN, 0};
         if (::poll(&p, 1, int(left.count())) <= 0) continue;
@@ -130,8 +136,10 @@ void DisplayGuard::startXvfb(double timeoutS)
         const ssize_t n = ::read(fds[0], buf, sizeof buf);
         if (n <= 0) break; // Xvfb exited (or failed to exec)
         for (ssize_t i = 0; i < n && !done; ++i) {
-            if (buf[i] == '\n') done = true;
-            else number += buf[i];
+            if (buf[i] == '\n')
+                done = true;
+            else
+                number += buf[i];
         }
     }
     ::close(fds[0]);
@@ -146,8 +154,10 @@ void DisplayGuard::startXvfb(double timeoutS)
         stopXvfb();
         mWhy = "Xvfb started on " + mDisplay + " but does not accept connections";
         mDisplay.clear();
-        if (mHadDisplay) ::setenv("DISPLAY", mPreviousDisplay.c_str(), 1);
-        else ::unsetenv("DISPLAY");
+        if (mHadDisplay)
+            ::setenv("DISPLAY", mPreviousDisplay.c_str(), 1);
+        else
+            ::unsetenv("DISPLAY");
         return;
     }
     mKind = DisplayKind::Xvfb;

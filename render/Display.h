@@ -20,8 +20,8 @@ bool displayReachable(const std::string& display);
 
 /// @brief Where the 3D view's OpenGL comes from.
 enum class DisplayKind {
-    Existing, ///< the $DISPLAY the process was given
-    Xvfb,     ///< an Xvfb started for this process
+    Existing,    ///< the $DISPLAY the process was given
+    Xvfb,        ///< an Xvfb started for this process
     Unavailable, ///< no X server: only the GL-free slice path works
 };
 

@@ -44,8 +44,10 @@ bool clipSegment(const Vec2d& a, const Vec2d& b, const Vec2d& lo, const Vec2d& h
                 continue;
             }
             const double r = q[e] / p[e];
-            if (p[e] < 0.0) t0 = std::max(t0, r);
-            else t1 = std::min(t1, r);
+            if (p[e] < 0.0)
+                t0 = std::max(t0, r);
+            else
+                t1 = std::min(t1, r);
         }
     }
     return t0 <= t1;

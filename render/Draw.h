@@ -13,9 +13,9 @@ namespace voxhap::render {
 /// @brief How a line or ring is drawn.
 struct Stroke {
     Rgb colour{255, 255, 255};
-    double widthPx = 1.0;  ///< line width [px]
-    double dashPx = 0.0;   ///< dash and gap length [px]; 0: solid
-    double alpha = 1.0;    ///< opacity in [0, 1]
+    double widthPx = 1.0; ///< line width [px]
+    double dashPx = 0.0;  ///< dash and gap length [px]; 0: solid
+    double alpha = 1.0;   ///< opacity in [0, 1]
 };
 
 /// @brief A line from @p a to @p b (pixel coordinates, centres at integers).

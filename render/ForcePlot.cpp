@@ -26,7 +26,8 @@ bool plotForceDepth(const ForceTrace& trace, const std::string& pngFile, std::st
     std::ostringstream g;
     g << "set title \"" << trace.title << "\" noenhanced\n"
       << "set xlabel 'tip depth along the path [mm]'\nset ylabel 'force [N]'\nset y2label 'plunger force [N]'\n"
-      << "set ytics nomirror\nset y2tics\nset grid\nset key below\nset xrange [" << minDepth << ':' << maxDepth << "]\n";
+      << "set ytics nomirror\nset y2tics\nset grid\nset key below\nset xrange [" << minDepth << ':' << maxDepth
+      << "]\n";
     // Layer bands, alternately shaded and named at the top.
     int n = 0;
     for (const ForceTrace::Band& l : trace.layers) {
@@ -34,7 +35,8 @@ bool plotForceDepth(const ForceTrace& trace, const std::string& pngFile, std::st
         const double end = std::min(l.endMm, maxDepth);
         ++n;
         g << "set object " << n << " rect from " << l.startMm << ", graph 0 to " << end
-          << ", graph 1 behind fillstyle solid 0.12 noborder fillcolor rgb '" << (n % 2 ? "#4a90d9" : "#d9a04a") << "'\n"
+          << ", graph 1 behind fillstyle solid 0.12 noborder fillcolor rgb '" << (n % 2 ? "#4a90d9" : "#d9a04a")
+          << "'\n"
           << "set label " << n << " \"" << l.name << "\" at " << 0.5 * (l.startMm + end)
           << ", graph 0.97 right rotate by 90 font ',8' noenhanced\n";
     }

@@ -27,7 +27,10 @@ public:
         if (!std::getline(mIn, header)) throw ValueError(file.string() + ": line 1: empty file");
         mHeader = split(header);
     }
-    bool hasColumn(const std::string& name) const { return std::find(mHeader.begin(), mHeader.end(), name) != mHeader.end(); }
+    bool hasColumn(const std::string& name) const
+    {
+        return std::find(mHeader.begin(), mHeader.end(), name) != mHeader.end();
+    }
     std::size_t column(const std::string& name) const
     {
         const auto it = std::find(mHeader.begin(), mHeader.end(), name);
@@ -43,7 +46,7 @@ public:
         mRow = split(line);
         if (mRow.size() < mHeader.size()) {
             throw ValueError(mFile.string() + ": line " + std::to_string(mLine) + ": " + std::to_string(mRow.size()) +
-                             " fields, the header has " + std::to_string(mHeader.size()));
+                " fields, the header has " + std::to_string(mHeader.size()));
         }
         return true;
     }
@@ -54,7 +57,8 @@ public:
         double x = 0;
         const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
         if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(x)) {
-            throw ValueError(mFile.string() + ": line " + std::to_string(mLine) + ": " + mHeader[c] + ": not a finite number");
+            throw ValueError(
+                mFile.string() + ": line " + std::to_string(mLine) + ": " + mHeader[c] + ": not a finite number");
         }
         return x;
     }
@@ -112,8 +116,9 @@ private:
 ForceTrace readInsertionCsv(const fs::path& file)
 {
     Csv csv(file);
-    const std::size_t depth = csv.column("depth_mm"), force = csv.column("force_N"), axial = csv.column("axial_model_N"),
-                      plunger = csv.column("plunger_N"), layer = csv.column("layer"), events = csv.column("events");
+    const std::size_t depth = csv.column("depth_mm"), force = csv.column("force_N"),
+                      axial = csv.column("axial_model_N"), plunger = csv.column("plunger_N"),
+                      layer = csv.column("layer"), events = csv.column("events");
     ForceTrace t;
     t.title = file.parent_path().filename().string() + ": insertion";
     BandBuilder bands;
@@ -162,16 +167,20 @@ ForceTrace readSessionCsv(const fs::path& file)
 void ForceTrace::addEvent(double depthMm, const std::string& name)
 {
     if (name.empty() || name == "skin_contact" || name == "critical_clear") return;
-    if (!events.empty() && std::abs(events.back().depthMm - depthMm) < 1e-9) events.back().text += ", " + name;
-    else events.push_back({depthMm, name});
+    if (!events.empty() && std::abs(events.back().depthMm - depthMm) < 1e-9)
+        events.back().text += ", " + name;
+    else
+        events.push_back({depthMm, name});
 }
 
-ForceTrace forceTrace(const haptic::InsertionResult& r, const std::vector<haptic::Layer>& layers, const std::string& title)
+ForceTrace forceTrace(
+    const haptic::InsertionResult& r, const std::vector<haptic::Layer>& layers, const std::string& title)
 {
     ForceTrace t;
     t.title = title;
     t.samples.reserve(r.rows.size());
-    for (const haptic::InsertionRow& row : r.rows) t.samples.push_back({row.depthMm, row.force.norm(), row.axialN, row.plungerN});
+    for (const haptic::InsertionRow& row : r.rows)
+        t.samples.push_back({row.depthMm, row.force.norm(), row.axialN, row.plungerN});
     for (const haptic::Layer& l : layers) {
         if (l.role != haptic::LayerRole::Air) t.layers.push_back({l.name, l.startMm, l.endMm});
     }
@@ -183,14 +192,18 @@ ForceTrace readForceTrace(const fs::path& path)
 {
     fs::path file = path;
     if (fs::is_directory(path)) {
-        if (fs::exists(path / "insertion.csv")) file = path / "insertion.csv";
-        else if (fs::exists(path / "session.csv")) file = path / "session.csv";
-        else throw IoError(path.string() + ": no insertion.csv or session.csv in the folder");
+        if (fs::exists(path / "insertion.csv"))
+            file = path / "insertion.csv";
+        else if (fs::exists(path / "session.csv"))
+            file = path / "session.csv";
+        else
+            throw IoError(path.string() + ": no insertion.csv or session.csv in the folder");
     }
     const Csv probe(file);
     if (probe.hasColumn("tip_x_mm")) return readSessionCsv(file);
     if (probe.hasColumn("axial_model_N")) return readInsertionCsv(file);
-    throw ValueError(file.string() + ": line 1: neither an insertion.csv (voxhap simulate) nor a session.csv (voxhap serve)");
+    throw ValueError(
+        file.string() + ": line 1: neither an insertion.csv (voxhap simulate) nor a session.csv (voxhap serve)");
 }
 
 } // namespace voxhap::render

@@ -22,12 +22,12 @@ struct ForceTrace {
         double plungerN = 0;  ///< syringe plunger force [N]
     };
     struct Band {
-        std::string name;     ///< tissue or table row
+        std::string name; ///< tissue or table row
         double startMm = 0, endMm = 0;
     };
     struct Mark {
         double depthMm = 0;
-        std::string text;     ///< event names at this depth, comma-separated
+        std::string text; ///< event names at this depth, comma-separated
     };
     std::string title;
     std::vector<Sample> samples;
@@ -39,7 +39,8 @@ struct ForceTrace {
 };
 
 /// @brief The trace of a simulated insertion; bands are the model's layers (air left out).
-ForceTrace forceTrace(const haptic::InsertionResult& r, const std::vector<haptic::Layer>& layers, const std::string& title);
+ForceTrace forceTrace(
+    const haptic::InsertionResult& r, const std::vector<haptic::Layer>& layers, const std::string& title);
 
 /// @brief Read a recording: an insertion.csv, a session.csv (its events.csv
 /// beside it is read too), or a folder holding one of them. Bands come from the

@@ -15,7 +15,7 @@ PlotDir::PlotDir()
 {
     static std::atomic<int> counter{0};
     mDir = fs::temp_directory_path() /
-           ("voxhap-plot-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1)));
+        ("voxhap-plot-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1)));
     fs::create_directories(mDir);
 }
 
@@ -26,7 +26,7 @@ PlotDir::~PlotDir()
 }
 
 bool runGnuplot(const PlotDir& dir, const std::string& commands, const std::string& pngFile, int width, int height,
-                std::string& why)
+    std::string& why)
 {
     const std::string tmp = pngFile + ".tmp";
     {

@@ -26,6 +26,6 @@ private:
 /// @p pngFile of @p width × @p height pixels. The PNG appears complete or not at all.
 /// @return false with @p why set when gnuplot is missing or fails
 bool runGnuplot(const PlotDir& dir, const std::string& commands, const std::string& pngFile, int width, int height,
-                std::string& why);
+    std::string& why);
 
 } // namespace voxhap::render

@@ -10,8 +10,7 @@
 
 namespace voxhap::render {
 
-Image::Image(int width, int height, Rgb fill)
-    : mWidth(width), mHeight(height)
+Image::Image(int width, int height, Rgb fill) : mWidth(width), mHeight(height)
 {
     // 16384 px a side is far beyond any view and keeps width*height in range.
     if (width < 0 || height < 0 || width > 16384 || height > 16384) {

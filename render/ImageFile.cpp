@@ -41,7 +41,8 @@ Image readImage(const fs::path& file)
     Image img(spec.width, spec.height);
     for (int y = 0; y < spec.height; ++y) {
         for (int x = 0; x < spec.width; ++x) {
-            const std::uint8_t* p = &pixels[(std::size_t(y) * std::size_t(spec.width) + std::size_t(x)) * std::size_t(channels)];
+            const std::uint8_t* p =
+                &pixels[(std::size_t(y) * std::size_t(spec.width) + std::size_t(x)) * std::size_t(channels)];
             img.at(x, y) = channels >= 3 ? Rgb{p[0], p[1], p[2]} : Rgb{p[0], p[0], p[0]};
         }
     }

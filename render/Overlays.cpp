@@ -12,8 +12,8 @@ namespace voxhap::render {
 
 namespace {
 
-constexpr int kMarginPx = 6;        ///< annotations keep this far from the edges
-constexpr double kMarkerPx = 5.0;   ///< radius of the entry, target and crossing rings
+constexpr int kMarginPx = 6;      ///< annotations keep this far from the edges
+constexpr double kMarkerPx = 5.0; ///< radius of the entry, target and crossing rings
 
 /// The part of segment a→b (as fractions) within @p slab of the plane, if any.
 bool inPlanePart(const ViewFrame& f, const Vec3d& a, const Vec3d& b, double slab, double& t0, double& t1)
@@ -39,13 +39,14 @@ std::optional<Vec3d> crossing(const ViewFrame& f, const Vec3d& a, const Vec3d& b
 
 /// A segment: dashed where it lies off the plane, solid and wider where it is
 /// within the slab, a filled ring where it crosses.
-void drawSegment(Image& img, const ViewFrame& f, const Vec3d& a, const Vec3d& b, Rgb colour, double widthPx,
-                 const OverlayStyle& s)
+void drawSegment(
+    Image& img, const ViewFrame& f, const Vec3d& a, const Vec3d& b, Rgb colour, double widthPx, const OverlayStyle& s)
 {
     drawLine(img, f.toPixel(a), f.toPixel(b), Stroke{colour, widthPx, 6.0, 1.0});
     double t0 = 0.0, t1 = 0.0;
     if (inPlanePart(f, a, b, s.inPlaneMm, t0, t1)) {
-        drawLine(img, f.toPixel(a + t0 * (b - a)), f.toPixel(a + t1 * (b - a)), Stroke{colour, widthPx + 1.0, 0.0, 1.0});
+        drawLine(
+            img, f.toPixel(a + t0 * (b - a)), f.toPixel(a + t1 * (b - a)), Stroke{colour, widthPx + 1.0, 0.0, 1.0});
     }
     if (const auto x = crossing(f, a, b)) {
         drawRing(img, f.toPixel(*x), kMarkerPx, Stroke{colour, 2.0, 0.0, 1.0});

@@ -17,13 +17,13 @@ namespace voxhap::render {
 
 /// @brief Colours and sizes of the overlays.
 struct OverlayStyle {
-    Rgb path{0, 220, 255};      ///< planned path
-    Rgb entry{60, 230, 60};     ///< entry marker
-    Rgb target{255, 60, 60};    ///< target marker
-    Rgb needle{255, 150, 0};    ///< needle shaft and tip
+    Rgb path{0, 220, 255};   ///< planned path
+    Rgb entry{60, 230, 60};  ///< entry marker
+    Rgb target{255, 60, 60}; ///< target marker
+    Rgb needle{255, 150, 0}; ///< needle shaft and tip
     Rgb crosshair{0, 255, 0};
-    Rgb letters{255, 255, 0};   ///< orientation letters
-    Rgb text{255, 255, 255};    ///< title and scale bar
+    Rgb letters{255, 255, 0}; ///< orientation letters
+    Rgb text{255, 255, 255};  ///< title and scale bar
     /// A path within this distance of a slice's plane is drawn solid ("in the
     /// slice"); farther parts are dashed projections [mm].
     double inPlaneMm = 1.0;

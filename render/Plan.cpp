@@ -78,7 +78,8 @@ Plan parsePlan(std::string_view json, const std::string& origin)
     }
     if (j.is_object() && j.contains("markups")) { // 3D Slicer markups: the one parser is planning's
         Plan plan;
-        for (auto& l : planning::parseMarkups(json, origin)) plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+        for (auto& l : planning::parseMarkups(json, origin))
+            plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
         return plan;
     }
     Fields top(j, origin, "");
@@ -103,7 +104,7 @@ std::string planJson(const Plan& plan)
         if (!p.name.empty()) j["name"] = p.name;
         if (p.needle) {
             j["needle"] = {{"tip", point(p.needle->tip)}, {"direction", point(p.needle->direction)},
-                           {"length_mm", p.needle->lengthMm}};
+                {"length_mm", p.needle->lengthMm}};
         }
         paths.push_back(std::move(j));
     }

@@ -27,16 +27,16 @@ namespace voxhap::render {
 
 /// @brief Where the needle is: tip and shaft direction.
 struct NeedlePose {
-    Vec3d tip{0, 0, 0};        ///< [mm, LPS]
-    Vec3d direction{0, 0, 1};  ///< unit, hub to tip
-    double lengthMm = 90.0;    ///< shaft length drawn behind the tip [mm] (haptic::Needle's default)
+    Vec3d tip{0, 0, 0};       ///< [mm, LPS]
+    Vec3d direction{0, 0, 1}; ///< unit, hub to tip
+    double lengthMm = 90.0;   ///< shaft length drawn behind the tip [mm] (haptic::Needle's default)
     Vec3d hub() const { return tip - lengthMm * direction; }
 };
 
 struct PlannedPath {
     std::string name;
-    Vec3d entry{0, 0, 0};   ///< skin entry [mm, LPS]
-    Vec3d target{0, 0, 0};  ///< [mm, LPS]
+    Vec3d entry{0, 0, 0};  ///< skin entry [mm, LPS]
+    Vec3d target{0, 0, 0}; ///< [mm, LPS]
     std::optional<NeedlePose> needle;
 };
 

@@ -10,15 +10,19 @@ namespace voxhap::render {
 std::string_view toolName(Tool t)
 {
     switch (t) {
-    case Tool::Navigate: return "navigate";
-    case Tool::Plan: return "plan";
-    case Tool::Distance: return "distance";
-    case Tool::Angle: return "angle";
+    case Tool::Navigate:
+        return "navigate";
+    case Tool::Plan:
+        return "plan";
+    case Tool::Distance:
+        return "distance";
+    case Tool::Angle:
+        return "angle";
     }
     return "?";
 }
 
-PlanEditor::PlanEditor(Plan initial) : mPlan(std::move(initial)) {}
+PlanEditor::PlanEditor(Plan initial) : mPlan(std::move(initial)) { }
 
 void PlanEditor::setTool(Tool t)
 {
@@ -38,13 +42,15 @@ void PlanEditor::clearMeasurements()
 std::optional<Vec3d> PlanEditor::click(const Vec3d& w)
 {
     switch (mTool) {
-    case Tool::Navigate: return w;
+    case Tool::Navigate:
+        return w;
     case Tool::Plan:
         if (!mPendingEntry) {
             mPendingEntry = w;
             return std::nullopt;
         }
-        if ((w - *mPendingEntry).norm() == 0.0) return std::nullopt; // a path needs a direction: wait for another target
+        if ((w - *mPendingEntry).norm() == 0.0)
+            return std::nullopt; // a path needs a direction: wait for another target
         {
             PlannedPath p;
             p.name = "viewer";
@@ -82,10 +88,18 @@ std::string PlanEditor::status() const
     std::ostringstream os;
     os << std::fixed << std::setprecision(1) << "tool " << toolName(mTool);
     switch (mTool) {
-    case Tool::Navigate: os << ": click to move the slices"; break;
-    case Tool::Plan: os << (mPendingEntry ? ": click the target" : ": click the entry"); break;
-    case Tool::Distance: os << ": click point " << mPoints.size() + 1 << " of 2"; break;
-    case Tool::Angle: os << ": click point " << mPoints.size() + 1 << " of 4"; break;
+    case Tool::Navigate:
+        os << ": click to move the slices";
+        break;
+    case Tool::Plan:
+        os << (mPendingEntry ? ": click the target" : ": click the entry");
+        break;
+    case Tool::Distance:
+        os << ": click point " << mPoints.size() + 1 << " of 2";
+        break;
+    case Tool::Angle:
+        os << ": click point " << mPoints.size() + 1 << " of 4";
+        break;
     }
     if (mEdited) {
         const PlannedPath& p = mPlan.paths[*mEdited];

@@ -21,7 +21,12 @@
 
 namespace voxhap::render {
 
-enum class Tool { Navigate, Plan, Distance, Angle };
+enum class Tool {
+    Navigate,
+    Plan,
+    Distance,
+    Angle
+};
 
 std::string_view toolName(Tool t); ///< "navigate", "plan", "distance", "angle"
 

@@ -48,7 +48,8 @@ vtkSmartPointer<vtkImageData> denseCopy(const Grid& grid, const volume::IndexBox
 /// Resample @p img on the plane of @p f: output pixel (x, y) is the world point
 /// f.toWorld(x, y), mapped into the arrays' data coordinates.
 template <typename T>
-std::vector<T> reslice(vtkImageData* img, const RenderVolume::Impl& v, const ViewFrame& f, bool linear, double background)
+std::vector<T> reslice(
+    vtkImageData* img, const RenderVolume::Impl& v, const ViewFrame& f, bool linear, double background)
 {
     // Data coordinates are millimetres along the index axes: data = D⁻¹ (world − origin).
     const Mat3d toData = v.direction.inverse();
@@ -64,8 +65,10 @@ std::vector<T> reslice(vtkImageData* img, const RenderVolume::Impl& v, const Vie
     reslice->SetOutputOrigin(0.0, 0.0, 0.0);
     reslice->SetOutputSpacing(f.pixelMm, f.pixelMm, 1.0);
     reslice->SetOutputExtent(0, f.width - 1, 0, f.height - 1, 0, 0);
-    if (linear) reslice->SetInterpolationModeToLinear();
-    else reslice->SetInterpolationModeToNearestNeighbor();
+    if (linear)
+        reslice->SetInterpolationModeToLinear();
+    else
+        reslice->SetInterpolationModeToNearestNeighbor();
     reslice->SetBackgroundLevel(background);
     reslice->Update();
     const auto* p = static_cast<const T*>(reslice->GetOutput()->GetScalarPointer());
@@ -93,10 +96,12 @@ std::array<double, 2> activePercentiles(const volume::FloatGrid& grid, double lo
     std::vector<std::int64_t> histogram(kPercentileBins, 0);
     for (auto it = grid.cbeginValueOn(); it; ++it) {
         if (!std::isfinite(*it)) continue;
-        histogram[std::size_t(std::min(kPercentileBins - 1, int((*it - a) * scale)))] += std::int64_t(it.getVoxelCount());
+        histogram[std::size_t(std::min(kPercentileBins - 1, int((*it - a) * scale)))] +=
+            std::int64_t(it.getVoxelCount());
     }
     const auto at = [&](double percent) {
-        const auto rank = std::int64_t(std::floor(percent / 100.0 * double(n - 1))); // 0-based, as a sorted array's index
+        const auto rank =
+            std::int64_t(std::floor(percent / 100.0 * double(n - 1))); // 0-based, as a sorted array's index
         std::int64_t seen = 0;
         for (int bin = 0; bin < kPercentileBins; ++bin) {
             seen += histogram[std::size_t(bin)];
@@ -112,9 +117,12 @@ std::array<double, 2> activePercentiles(const volume::FloatGrid& grid, double lo
 std::string_view scalarUnits(ScalarChannel c)
 {
     switch (c) {
-    case ScalarChannel::Hu: return "HU";
-    case ScalarChannel::T1: return "ms";
-    case ScalarChannel::Intensity: return "a.u.";
+    case ScalarChannel::Hu:
+        return "HU";
+    case ScalarChannel::T1:
+        return "ms";
+    case ScalarChannel::Intensity:
+        return "a.u.";
     }
     return "?";
 }
@@ -128,7 +136,7 @@ std::string windowLegend(ScalarChannel c, const WindowLevel& w)
         return os.str();
     };
     return std::string(name) + " " + number(w.level - 0.5 * w.width) + ".." + number(w.level + 0.5 * w.width) + " " +
-           std::string(scalarUnits(c));
+        std::string(scalarUnits(c));
 }
 
 vtkSmartPointer<vtkMatrix4x4> RenderVolume::Impl::dataToWorld() const
@@ -141,8 +149,7 @@ vtkSmartPointer<vtkMatrix4x4> RenderVolume::Impl::dataToWorld() const
     return m;
 }
 
-RenderVolume::RenderVolume(const volume::Volume& v, bool withLabels)
-    : mImpl(std::make_unique<Impl>())
+RenderVolume::RenderVolume(const volume::Volume& v, bool withLabels) : mImpl(std::make_unique<Impl>())
 {
     volume::initializeOpenVdb();
     Impl& d = *mImpl;
@@ -188,7 +195,8 @@ RenderVolume::RenderVolume(const volume::Volume& v, bool withLabels)
         if (const volume::LabelGrid::ConstPtr labels = volume::labelGrid(v)) {
             const auto ids = openvdb::tools::minMax(labels->tree()); // active values; cheap on a sparse grid
             if (ids.min() < 0 || ids.max() > std::numeric_limits<short>::max()) {
-                throw ValueError("render: tissue labels outside 0.." + std::to_string(std::numeric_limits<short>::max()));
+                throw ValueError(
+                    "render: tissue labels outside 0.." + std::to_string(std::numeric_limits<short>::max()));
             }
             d.labels = denseCopy<vtkShortArray>(*labels, box, g.spacing);
         }

@@ -22,7 +22,8 @@ Image renderSlice(const RenderVolume& v, const ViewFrame& f, const SliceStyle& s
     Image img(f.width, f.height);
     for (int y = 0; y < f.height; ++y) {
         for (int x = 0; x < f.width; ++x) {
-            const std::uint8_t g = windowed(values[std::size_t(y) * std::size_t(f.width) + std::size_t(x)], style.window);
+            const std::uint8_t g =
+                windowed(values[std::size_t(y) * std::size_t(f.width) + std::size_t(x)], style.window);
             img.at(x, y) = {g, g, g};
         }
     }

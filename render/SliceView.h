@@ -18,9 +18,9 @@ namespace voxhap::render {
 class RenderVolume;
 
 struct SliceStyle {
-    WindowLevel window;          ///< grey ramp [HU or the t1 unit]
-    bool labels = true;          ///< blend the tissue colours (if the volume has labels)
-    double labelOpacity = 0.35;  ///< in [0, 1]
+    WindowLevel window;         ///< grey ramp [HU or the t1 unit]
+    bool labels = true;         ///< blend the tissue colours (if the volume has labels)
+    double labelOpacity = 0.35; ///< in [0, 1]
 };
 
 /// @brief The slice of @p v on @p f's plane, without overlays.

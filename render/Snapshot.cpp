@@ -21,7 +21,10 @@ struct Snapshot::View3d {
 
 namespace {
 
-bool has(const std::vector<ViewKind>& views, ViewKind v) { return std::find(views.begin(), views.end(), v) != views.end(); }
+bool has(const std::vector<ViewKind>& views, ViewKind v)
+{
+    return std::find(views.begin(), views.end(), v) != views.end();
+}
 
 } // namespace
 
@@ -30,14 +33,16 @@ Snapshot::Snapshot(const volume::Volume& v, const RenderRequest& request, const 
 {
     if (mRequest.views.empty()) throw ValueError("render: no view requested");
     const bool slices = has(mRequest.views, ViewKind::Axial) || has(mRequest.views, ViewKind::Sagittal) ||
-                        has(mRequest.views, ViewKind::Coronal);
+        has(mRequest.views, ViewKind::Coronal);
     const bool threeD = has(mRequest.views, ViewKind::ThreeD);
     const bool labels = (slices && mRequest.labels) || (threeD && mRequest.criticalSurfaces);
     mVolume = std::make_unique<RenderVolume>(v, labels);
 
     const WorldBounds box = mVolume->worldBounds();
     const Vec3d centre = 0.5 * (box.min + box.max);
-    mPoint = mRequest.point ? *mRequest.point : !mRequest.plan.paths.empty() ? mRequest.plan.paths.front().target : centre;
+    mPoint = mRequest.point            ? *mRequest.point
+        : !mRequest.plan.paths.empty() ? mRequest.plan.paths.front().target
+                                       : centre;
     const double pixel = mRequest.pixelMm > 0.0 ? mRequest.pixelMm : mVolume->finestSpacing();
     for (ViewKind k : mRequest.views) {
         mFrames.emplace_back(k, viewFrame(k, box, k == ViewKind::ThreeD ? centre : mPoint, pixel, mRequest.maxPixels));

@@ -27,8 +27,8 @@ class RenderVolume;
 
 struct RenderRequest {
     std::vector<ViewKind> views{ViewKind::Axial, ViewKind::Sagittal, ViewKind::Coronal, ViewKind::ThreeD};
-    BlendMode mode = BlendMode::Colour;   ///< of the 3D view
-    RayCaster caster = RayCaster::Auto;   ///< of the 3D view
+    BlendMode mode = BlendMode::Colour; ///< of the 3D view
+    RayCaster caster = RayCaster::Auto; ///< of the 3D view
     /// Slices' and 3D window; default RenderVolume::defaultWindow: on CT soft
     /// tissue (MIP: bone), on MR the body's robust range, never a CT preset.
     std::optional<WindowLevel> window;
@@ -37,9 +37,9 @@ struct RenderRequest {
     std::optional<Vec3d> point;
     Plan plan;
     std::optional<NeedlePose> needle;
-    double pixelMm = 0.0;      ///< pixel size [mm]; 0: the finest voxel size
-    int maxPixels = 768;       ///< largest side of a view [px] (the pixel size grows to fit)
-    bool labels = true;        ///< tissue colours on the slices (when the volume has labels)
+    double pixelMm = 0.0;         ///< pixel size [mm]; 0: the finest voxel size
+    int maxPixels = 768;          ///< largest side of a view [px] (the pixel size grows to fit)
+    bool labels = true;           ///< tissue colours on the slices (when the volume has labels)
     bool criticalSurfaces = true; ///< critical structures as surfaces in 3D (when it has labels)
 };
 

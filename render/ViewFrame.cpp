@@ -47,7 +47,7 @@ ViewFrame viewFrame(ViewKind v, const WorldBounds& box, const Vec3d& through, do
     double hi[2] = {-lo[0], -lo[1]};
     for (int c = 0; c < 8; ++c) {
         const Vec3d corner((c & 1) ? box.max.x() : box.min.x(), (c & 2) ? box.max.y() : box.min.y(),
-                           (c & 4) ? box.max.z() : box.min.z());
+            (c & 4) ? box.max.z() : box.min.z());
         const double a[2] = {corner.dot(f.right), corner.dot(f.down)};
         for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], a[k]), hi[k] = std::max(hi[k], a[k]);
     }
@@ -56,7 +56,8 @@ ViewFrame viewFrame(ViewKind v, const WorldBounds& box, const Vec3d& through, do
     f.width = std::max(1, int(std::ceil((hi[0] - lo[0]) / f.pixelMm - 1e-9)));
     f.height = std::max(1, int(std::ceil((hi[1] - lo[1]) / f.pixelMm - 1e-9)));
     // Pixel (0, 0) covers [lo, lo + pixel) along both axes; its centre is half a pixel in.
-    f.origin = (lo[0] + 0.5 * f.pixelMm) * f.right + (lo[1] + 0.5 * f.pixelMm) * f.down + through.dot(f.normal) * f.normal;
+    f.origin =
+        (lo[0] + 0.5 * f.pixelMm) * f.right + (lo[1] + 0.5 * f.pixelMm) * f.down + through.dot(f.normal) * f.normal;
     return f;
 }
 

@@ -32,11 +32,11 @@ struct WorldBounds {
 class ViewFrame {
 public:
     ViewKind kind = ViewKind::Axial;
-    Vec3d origin{0, 0, 0};  ///< world position of pixel (0, 0)'s centre [mm]
-    Vec3d right{1, 0, 0};   ///< unit world direction of increasing x (image right)
-    Vec3d down{0, 1, 0};    ///< unit world direction of increasing y (image down)
-    Vec3d normal{0, 0, 1};  ///< right × down: away from the viewer
-    double pixelMm = 1.0;   ///< pixel size [mm]
+    Vec3d origin{0, 0, 0};     ///< world position of pixel (0, 0)'s centre [mm]
+    Vec3d right{1, 0, 0};      ///< unit world direction of increasing x (image right)
+    Vec3d down{0, 1, 0};       ///< unit world direction of increasing y (image down)
+    Vec3d normal{0, 0, 1};     ///< right × down: away from the viewer
+    double pixelMm = 1.0;      ///< pixel size [mm]
     int width = 1, height = 1; ///< [px]
 
     /// @brief Pixel coordinates of the orthogonal projection of @p world onto the plane.

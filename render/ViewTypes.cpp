@@ -35,9 +35,12 @@ bool parseDouble(std::string_view s, double& out)
 WindowLevel windowLevel(WindowPreset p)
 {
     switch (p) {
-    case WindowPreset::Bone: return {1800.0, 400.0};
-    case WindowPreset::SoftTissue: return {400.0, 40.0};
-    case WindowPreset::Lung: return {1500.0, -600.0};
+    case WindowPreset::Bone:
+        return {1800.0, 400.0};
+    case WindowPreset::SoftTissue:
+        return {400.0, 40.0};
+    case WindowPreset::Lung:
+        return {1500.0, -600.0};
     }
     return {};
 }
@@ -45,10 +48,14 @@ WindowLevel windowLevel(WindowPreset p)
 std::string_view viewName(ViewKind v)
 {
     switch (v) {
-    case ViewKind::Axial: return "axial";
-    case ViewKind::Sagittal: return "sagittal";
-    case ViewKind::Coronal: return "coronal";
-    case ViewKind::ThreeD: return "3d";
+    case ViewKind::Axial:
+        return "axial";
+    case ViewKind::Sagittal:
+        return "sagittal";
+    case ViewKind::Coronal:
+        return "coronal";
+    case ViewKind::ThreeD:
+        return "3d";
     }
     return "?";
 }
@@ -56,10 +63,14 @@ std::string_view viewName(ViewKind v)
 std::string_view blendModeName(BlendMode m)
 {
     switch (m) {
-    case BlendMode::Colour: return "colour";
-    case BlendMode::Grey: return "grey";
-    case BlendMode::Mip: return "mip";
-    case BlendMode::Sum: return "sum";
+    case BlendMode::Colour:
+        return "colour";
+    case BlendMode::Grey:
+        return "grey";
+    case BlendMode::Mip:
+        return "mip";
+    case BlendMode::Sum:
+        return "sum";
     }
     return "?";
 }
@@ -71,8 +82,8 @@ std::vector<ViewKind> parseViews(std::string_view text)
     while (start <= text.size()) {
         const std::size_t comma = std::min(text.find(',', start), text.size());
         const std::string_view name = trim(text.substr(start, comma - start));
-        const auto* it = std::find_if(std::begin(kViewOrder), std::end(kViewOrder),
-                                      [&](ViewKind v) { return viewName(v) == name; });
+        const auto* it =
+            std::find_if(std::begin(kViewOrder), std::end(kViewOrder), [&](ViewKind v) { return viewName(v) == name; });
         if (it == std::end(kViewOrder)) {
             throw ValueError("unknown view '" + std::string(name) + "' (expected axial, sagittal, coronal, 3d)");
         }
@@ -112,7 +123,8 @@ WindowLevel parseWindow(std::string_view text)
     WindowLevel w;
     if (comma == std::string_view::npos || !parseDouble(t.substr(0, comma), w.width) ||
         !parseDouble(t.substr(comma + 1), w.level) || !(w.width > 0.0)) {
-        throw ValueError("window '" + std::string(t) + "': expected bone, soft, lung or WIDTH,LEVEL with a positive width");
+        throw ValueError(
+            "window '" + std::string(t) + "': expected bone, soft, lung or WIDTH,LEVEL with a positive width");
     }
     return w;
 }
@@ -122,10 +134,17 @@ std::string sliceTitle(ViewKind v, const Vec3d& p)
     std::ostringstream os;
     os << std::fixed << std::setprecision(1) << viewName(v);
     switch (v) {
-    case ViewKind::Axial: os << "  z " << p.z() << " mm"; break;
-    case ViewKind::Sagittal: os << "  x " << p.x() << " mm"; break;
-    case ViewKind::Coronal: os << "  y " << p.y() << " mm"; break;
-    case ViewKind::ThreeD: break;
+    case ViewKind::Axial:
+        os << "  z " << p.z() << " mm";
+        break;
+    case ViewKind::Sagittal:
+        os << "  x " << p.x() << " mm";
+        break;
+    case ViewKind::Coronal:
+        os << "  y " << p.y() << " mm";
+        break;
+    case ViewKind::ThreeD:
+        break;
     }
     return os.str();
 }

@@ -12,7 +12,12 @@
 namespace voxhap::render {
 
 /// @brief The four views of the planning layout.
-enum class ViewKind { Axial, Sagittal, Coronal, ThreeD };
+enum class ViewKind {
+    Axial,
+    Sagittal,
+    Coronal,
+    ThreeD
+};
 
 /// @brief How the 3D view turns samples along a ray into a pixel (the four
 /// display modes of the spine-biopsy simulator [K01], physics.md §1.1).
@@ -32,11 +37,15 @@ struct WindowLevel {
 
 /// @brief Common CT display presets (e.g. Radiopaedia "Windowing (CT)"):
 /// bone W 1800 / L 400, soft tissue W 400 / L 40, lung W 1500 / L −600.
-enum class WindowPreset { Bone, SoftTissue, Lung };
+enum class WindowPreset {
+    Bone,
+    SoftTissue,
+    Lung
+};
 
 WindowLevel windowLevel(WindowPreset p);
 
-std::string_view viewName(ViewKind v);      ///< "axial", "sagittal", "coronal", "3d"
+std::string_view viewName(ViewKind v); ///< "axial", "sagittal", "coronal", "3d"
 /// @brief A pane's title: its name and, for a slice, where it cuts ("axial  z 12.5 mm").
 std::string sliceTitle(ViewKind v, const Vec3d& point);
 std::string_view blendModeName(BlendMode m); ///< "colour", "grey", "mip", "sum"

@@ -17,9 +17,9 @@ namespace voxhap::render {
 
 namespace {
 
-constexpr int kViewerStatusPx = 24;          ///< two lines of 5×7 text with their padding
-const Rgb kViewerBackground{30, 30, 30};      ///< panes' margins and the status bar
-const Rgb kMeasureColour{255, 230, 0};        ///< distance and angle segments, picked points
+constexpr int kViewerStatusPx = 24;      ///< two lines of 5×7 text with their padding
+const Rgb kViewerBackground{30, 30, 30}; ///< panes' margins and the status bar
+const Rgb kMeasureColour{255, 230, 0};   ///< distance and angle segments, picked points
 const WindowPreset kViewerPresets[] = {WindowPreset::SoftTissue, WindowPreset::Bone, WindowPreset::Lung};
 
 std::string fixed1(double v)
@@ -129,16 +129,23 @@ bool Viewer::handle(const ViewerEvent& e)
         updateFrames();
         return true;
     }
-    case ViewerEvent::Kind::Key: break;
+    case ViewerEvent::Kind::Key:
+        break;
     }
     const std::string& k = e.key;
     if (k == "q" || k == "Escape") return false;
-    if (k == "n") mEditor.setTool(Tool::Navigate);
-    else if (k == "p") mEditor.setTool(Tool::Plan);
-    else if (k == "d") mEditor.setTool(Tool::Distance);
-    else if (k == "a") mEditor.setTool(Tool::Angle);
-    else if (k == "c") mEditor.clearMeasurements();
-    else if (k == "s") savePlan();
+    if (k == "n")
+        mEditor.setTool(Tool::Navigate);
+    else if (k == "p")
+        mEditor.setTool(Tool::Plan);
+    else if (k == "d")
+        mEditor.setTool(Tool::Distance);
+    else if (k == "a")
+        mEditor.setTool(Tool::Angle);
+    else if (k == "c")
+        mEditor.clearMeasurements();
+    else if (k == "s")
+        savePlan();
     else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) {
         mWindowPreset = (mWindowPreset + 1) % 3;
         mWindow = windowLevel(kViewerPresets[mWindowPreset]);
@@ -221,7 +228,8 @@ Image Viewer::renderSlicePane(ViewKind v)
     drawSliceOverlays(img, f, o, style);
     // What the editor is picking: points so far, then the finished measurements.
     const Stroke measure{kMeasureColour, 1.0, 0.0, 1.0};
-    if (const auto& entry = mEditor.pendingEntry()) drawRing(img, f.toPixel(*entry), 5.0, Stroke{style.entry, 2.0, 0.0, 1.0});
+    if (const auto& entry = mEditor.pendingEntry())
+        drawRing(img, f.toPixel(*entry), 5.0, Stroke{style.entry, 2.0, 0.0, 1.0});
     for (const Vec3d& p : mEditor.pendingPoints()) drawRing(img, f.toPixel(p), 3.0, measure);
     const int scale = 1;
     if (const auto& d = mEditor.distance()) {
@@ -277,7 +285,8 @@ void Viewer::drawOver3d(Image& img) const
         drawLine(img, f.toPixel(p.entry), f.toPixel(p.target), Stroke{style.path, 2.0, 0.0, 1.0});
         fillDisc(img, f.toPixel(p.entry), 4.0, style.entry);
         fillDisc(img, f.toPixel(p.target), 4.0, style.target);
-        if (p.needle) drawLine(img, f.toPixel(p.needle->hub()), f.toPixel(p.needle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
+        if (p.needle)
+            drawLine(img, f.toPixel(p.needle->hub()), f.toPixel(p.needle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
     }
     if (const auto& entry = mEditor.pendingEntry()) fillDisc(img, f.toPixel(*entry), 4.0, style.entry);
     if (mNeedle) drawLine(img, f.toPixel(mNeedle->hub()), f.toPixel(mNeedle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});

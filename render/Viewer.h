@@ -44,21 +44,25 @@ namespace voxhap::render {
 class RenderVolume;
 
 struct ViewerOptions {
-    int width = 1024, height = 1048;   ///< window [px], status bar included
+    int width = 1024, height = 1048;    ///< window [px], status bar included
     BlendMode mode = BlendMode::Colour; ///< of the 3D pane
     RayCaster caster = RayCaster::Auto;
-    std::optional<WindowLevel> window;  ///< slices and 3D; default RenderVolume::defaultWindow (CT presets on CT only)
-    bool labels = true;                 ///< tissue colours on the slices
-    bool threeD = true;                 ///< false: the 3D pane says why not (threeDNote) instead
-    std::string threeDNote;             ///< shown in the 3D pane when threeD is false
-    std::optional<Vec3d> point;         ///< first crosshair [mm, LPS]; default the first target, else the centre
-    Plan plan;                          ///< paths loaded with the volume
+    std::optional<WindowLevel> window; ///< slices and 3D; default RenderVolume::defaultWindow (CT presets on CT only)
+    bool labels = true;                ///< tissue colours on the slices
+    bool threeD = true;                ///< false: the 3D pane says why not (threeDNote) instead
+    std::string threeDNote;            ///< shown in the 3D pane when threeD is false
+    std::optional<Vec3d> point;        ///< first crosshair [mm, LPS]; default the first target, else the centre
+    Plan plan;                         ///< paths loaded with the volume
     std::filesystem::path planOut = "plan.json"; ///< where key s saves
 };
 
 /// @brief One input event, from the window or a script.
 struct ViewerEvent {
-    enum class Kind { Click, Key, Scroll };
+    enum class Kind {
+        Click,
+        Key,
+        Scroll
+    };
     Kind kind = Kind::Key;
     ViewKind pane = ViewKind::Axial; ///< Click, Scroll
     Vec2d px{0, 0};                  ///< Click: in the pane image's pixels
@@ -122,9 +126,9 @@ private:
     double mPixelMm = 1.0, mStepMm = 1.0;
     Vec3d mPoint{0, 0, 0};
     std::array<ViewFrame, 4> mFrames;
-    std::array<Image, 3> mSliceBase;       ///< slices without overlays, until the crosshair or window moves
+    std::array<Image, 3> mSliceBase; ///< slices without overlays, until the crosshair or window moves
     std::array<bool, 3> mSliceStale{true, true, true};
-    Image m3dImage;                        ///< the volume alone; paths and needle go over a copy
+    Image m3dImage; ///< the volume alone; paths and needle go over a copy
     bool m3dStale = true, mDirty = true;
     std::unique_ptr<VolumeView3d> m3d;
     WindowLevel mWindow;

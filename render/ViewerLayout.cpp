@@ -21,7 +21,7 @@ ViewerLayout viewerLayout(int width, int height, int statusPx, int gapPx)
     const int cw = (width - gapPx) / 2, ch = (height - statusPx - gapPx) / 2;
     if (cw < kMinPanePx || ch < kMinPanePx || gapPx < 0 || statusPx < 0) {
         throw ValueError("viewer: a " + std::to_string(width) + " x " + std::to_string(height) +
-                         " window is too small for four panes");
+            " window is too small for four panes");
     }
     // The right column and bottom row take the odd pixel, so the panes fill the window.
     const int cw2 = width - gapPx - cw, ch2 = height - statusPx - gapPx - ch;
@@ -37,7 +37,8 @@ Vec2d imageOrigin(const PaneRect& pane, int imageWidth, int imageHeight)
     return {double(pane.x + (pane.width - imageWidth) / 2), double(pane.y + (pane.height - imageHeight) / 2)};
 }
 
-std::optional<PaneHit> hitPane(const ViewerLayout& layout, int x, int y, const std::array<std::array<int, 2>, 4>& imageSizes)
+std::optional<PaneHit> hitPane(
+    const ViewerLayout& layout, int x, int y, const std::array<std::array<int, 2>, 4>& imageSizes)
 {
     for (std::size_t i = 0; i < layout.panes.size(); ++i) {
         const PaneRect& p = layout.panes[i];

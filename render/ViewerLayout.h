@@ -24,7 +24,7 @@ struct PaneRect {
 };
 
 struct ViewerLayout {
-    int width = 0, height = 0;  ///< window [px]
+    int width = 0, height = 0;     ///< window [px]
     std::array<PaneRect, 4> panes; ///< axial, sagittal, coronal, 3d
     const PaneRect& pane(ViewKind v) const;
 };
@@ -45,6 +45,7 @@ struct PaneHit {
 
 /// @brief The pane under window pixel (@p x, @p y) and the position in its image
 /// (placed by imageOrigin); nullopt on a gap or the status bar.
-std::optional<PaneHit> hitPane(const ViewerLayout& layout, int x, int y, const std::array<std::array<int, 2>, 4>& imageSizes);
+std::optional<PaneHit> hitPane(
+    const ViewerLayout& layout, int x, int y, const std::array<std::array<int, 2>, 4>& imageSizes);
 
 } // namespace voxhap::render

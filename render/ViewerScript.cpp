@@ -70,7 +70,8 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
             s.event.kind = ViewerEvent::Kind::Scroll;
             s.event.pane = scriptPane(pane, where);
             const double count = scriptNumber(in, "steps", where);
-            if (count != std::round(count) || std::abs(count) > 1e6) throw ValueError(where + "scroll: steps must be an integer");
+            if (count != std::round(count) || std::abs(count) > 1e6)
+                throw ValueError(where + "scroll: steps must be an integer");
             s.event.steps = int(count);
         } else if (verb == "wait-pose" || verb == "sleep") {
             s.kind = verb == "sleep" ? ScriptStep::Kind::Sleep : ScriptStep::Kind::WaitPose;

@@ -23,11 +23,15 @@
 namespace voxhap::render {
 
 struct ScriptStep {
-    enum class Kind { Event, WaitPose, Sleep };
+    enum class Kind {
+        Event,
+        WaitPose,
+        Sleep
+    };
     Kind kind = Kind::Event;
-    ViewerEvent event;    ///< Kind::Event
-    double seconds = 0;   ///< WaitPose (the limit), Sleep
-    int line = 0;         ///< in the script, for messages
+    ViewerEvent event;  ///< Kind::Event
+    double seconds = 0; ///< WaitPose (the limit), Sleep
+    int line = 0;       ///< in the script, for messages
 };
 
 /// @brief Parse a script; @p origin names it in error messages.

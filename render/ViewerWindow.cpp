@@ -50,7 +50,7 @@ ViewerWindow::ViewerWindow(int width, int height, const std::string& title) : mI
     a.border_pixel = 0;
     a.event_mask = ExposureMask | ButtonPressMask | KeyPressMask | StructureNotifyMask;
     m.window = XCreateWindow(m.display, RootWindow(m.display, screen), 0, 0, unsigned(width), unsigned(height), 0, 24,
-                             InputOutput, m.visual, CWColormap | CWBackPixel | CWBorderPixel | CWEventMask, &a);
+        InputOutput, m.visual, CWColormap | CWBackPixel | CWBorderPixel | CWEventMask, &a);
     XStoreName(m.display, m.window, title.c_str());
     // Fixed size: the panes are laid out once for it.
     XSizeHints* hints = XAllocSizeHints();
@@ -63,8 +63,8 @@ ViewerWindow::ViewerWindow(int width, int height, const std::string& title) : mI
     XSetWMProtocols(m.display, m.window, &m.deleteWindow, 1);
     m.gc = XCreateGC(m.display, m.window, 0, nullptr);
     m.pixels.assign(std::size_t(width) * std::size_t(height), 0);
-    m.image = XCreateImage(m.display, m.visual, 24, ZPixmap, 0, reinterpret_cast<char*>(m.pixels.data()), unsigned(width),
-                           unsigned(height), 32, 0);
+    m.image = XCreateImage(m.display, m.visual, 24, ZPixmap, 0, reinterpret_cast<char*>(m.pixels.data()),
+        unsigned(width), unsigned(height), 32, 0);
     XMapWindow(m.display, m.window);
     XFlush(m.display);
 }
@@ -114,7 +114,9 @@ std::vector<WindowInput> ViewerWindow::poll(int timeoutMs)
         XEvent e;
         XNextEvent(m.display, &e);
         switch (e.type) {
-        case MapNotify: m.mapped = true; break;
+        case MapNotify:
+            m.mapped = true;
+            break;
         case Expose:
             if (e.xexpose.count == 0) {
                 XPutImage(m.display, m.window, m.gc, m.image, 0, 0, 0, 0, unsigned(m.width), unsigned(m.height));
@@ -138,13 +140,16 @@ std::vector<WindowInput> ViewerWindow::poll(int timeoutMs)
             char buf[8];
             KeySym sym = 0;
             XLookupString(&e.xkey, buf, sizeof buf, &sym, nullptr);
-            if (const char* name = XKeysymToString(sym)) out.push_back(WindowInput{WindowInput::Kind::Key, 0, 0, 0, name});
+            if (const char* name = XKeysymToString(sym))
+                out.push_back(WindowInput{WindowInput::Kind::Key, 0, 0, 0, name});
             break;
         }
         case ClientMessage:
-            if (Atom(e.xclient.data.l[0]) == m.deleteWindow) out.push_back(WindowInput{WindowInput::Kind::Close, 0, 0, 0, ""});
+            if (Atom(e.xclient.data.l[0]) == m.deleteWindow)
+                out.push_back(WindowInput{WindowInput::Kind::Close, 0, 0, 0, ""});
             break;
-        default: break;
+        default:
+            break;
         }
     }
     XFlush(m.display);

@@ -19,11 +19,16 @@ namespace voxhap::render {
 
 /// @brief One input from the window.
 struct WindowInput {
-    enum class Kind { Click, Scroll, Key, Close };
+    enum class Kind {
+        Click,
+        Scroll,
+        Key,
+        Close
+    };
     Kind kind = Kind::Key;
-    int x = 0, y = 0;  ///< Click, Scroll: window pixels
-    int steps = 0;     ///< Scroll: +1 wheel up, −1 wheel down
-    std::string key;   ///< Key: X keysym name ("q", "Up", "Escape")
+    int x = 0, y = 0; ///< Click, Scroll: window pixels
+    int steps = 0;    ///< Scroll: +1 wheel up, −1 wheel down
+    std::string key;  ///< Key: X keysym name ("q", "Up", "Escape")
 };
 
 class ViewerWindow {

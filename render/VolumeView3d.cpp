@@ -51,7 +51,7 @@ constexpr double kAirLikeHu = -400.0;
 constexpr double kSumDepthGrey = 0.8;
 
 void colourTransfer(const volume::TissueTable& table, const RenderVolume::Impl& v, vtkColorTransferFunction* colour,
-                    vtkPiecewiseFunction* opacity)
+    vtkPiecewiseFunction* opacity)
 {
     // One control point per tissue at its typical CT number; tissues sharing a
     // number keep the first (bone before soft tissue, as the table lists them).
@@ -63,7 +63,10 @@ void colourTransfer(const volume::TissueTable& table, const RenderVolume::Impl& 
     opacity->AddPoint(std::max(v.lo, v.background) + 1.0, 0.0);
     for (const auto& [hu, t] : byHu) {
         colour->AddRGBPoint(hu, t->colour[0] / 255.0, t->colour[1] / 255.0, t->colour[2] / 255.0);
-        const double a = hu < kAirLikeHu ? 0.0 : t->rigid ? kBoneOpacity : t->critical ? kCriticalOpacity : kSoftOpacity;
+        const double a = hu < kAirLikeHu ? 0.0
+            : t->rigid                   ? kBoneOpacity
+            : t->critical                ? kCriticalOpacity
+                                         : kSoftOpacity;
         opacity->AddPoint(hu, a);
     }
 }
@@ -130,7 +133,7 @@ struct VolumeView3d::Impl {
 };
 
 VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style,
-                           const volume::TissueTable& table, const Overlays& overlays)
+    const volume::TissueTable& table, const Overlays& overlays)
     : mImpl(std::make_unique<Impl>())
 {
     // VTK's X11 window aborts the process when it cannot connect: check first.

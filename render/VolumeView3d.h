@@ -33,9 +33,9 @@ enum class RayCaster {
 struct View3dStyle {
     BlendMode mode = BlendMode::Colour;
     RayCaster caster = RayCaster::Auto;
-    WindowLevel window;             ///< grey ramp of the grey and MIP modes, and of MR's colour mode
-    bool criticalSurfaces = true;   ///< surfaces of the table's critical tissues (needs labels)
-    double sampleVoxels = 1.0;      ///< ray step in units of the finest voxel size
+    WindowLevel window;           ///< grey ramp of the grey and MIP modes, and of MR's colour mode
+    bool criticalSurfaces = true; ///< surfaces of the table's critical tissues (needs labels)
+    double sampleVoxels = 1.0;    ///< ray step in units of the finest voxel size
 };
 
 class VolumeView3d {
@@ -43,8 +43,8 @@ public:
     /// @param frame     the image plane (ViewKind::ThreeD): the camera looks along its normal
     /// @param overlays  paths, needle (as 3D lines) and the annotations
     /// @throw ValueError if no X display is reachable
-    VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style, const volume::TissueTable& table,
-                 const Overlays& overlays);
+    VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style,
+        const volume::TissueTable& table, const Overlays& overlays);
     ~VolumeView3d();
     VolumeView3d(const VolumeView3d&) = delete;
     VolumeView3d& operator=(const VolumeView3d&) = delete;

@@ -16,8 +16,7 @@ namespace {
 
 /// Calls f(neighbour) for the face neighbours of @p p that lie in the lattice
 /// and in the span (in-plane only for Span::Slice).
-template <class F>
-void forNeighbours(const Lattice& lat, const Vec3i& p, std::size_t n, Span span, F&& f)
+template <class F> void forNeighbours(const Lattice& lat, const Vec3i& p, std::size_t n, Span span, F&& f)
 {
     const auto strides = lat.strides();
     for (int a = 0; a < 3; ++a) {
@@ -65,8 +64,8 @@ Mask largestComponent(const Lattice& lat, const Mask& m)
     const Components cc = connectedComponents(lat, m, Span::Volume);
     Mask out(m.size(), 0);
     if (cc.list.empty()) return out;
-    const auto best = std::max_element(cc.list.begin(), cc.list.end(),
-                                       [](const Component& a, const Component& b) { return a.voxels < b.voxels; });
+    const auto best = std::max_element(
+        cc.list.begin(), cc.list.end(), [](const Component& a, const Component& b) { return a.voxels < b.voxels; });
     const auto label = std::int32_t(best - cc.list.begin() + 1);
     for (std::size_t n = 0; n < m.size(); ++n) out[n] = cc.id[n] == label ? 1 : 0;
     return out;

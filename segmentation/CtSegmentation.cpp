@@ -43,8 +43,8 @@ constexpr double kSmoothingMm = 1.0;
 
 // Step 2, lung: gas is below −400 HU (lung −550 to −950, physics.md §5.2).
 constexpr float kGasHu = -400.0f;
-constexpr double kLungMinMl = 50.0;          // bowel gas pockets are smaller here; lung bases larger [chosen]
-constexpr float kPureAirHu = -950.0f;        // parenchyma rarely reaches it (§5.2: down to −950)
+constexpr double kLungMinMl = 50.0;             // bowel gas pockets are smaller here; lung bases larger [chosen]
+constexpr float kPureAirHu = -950.0f;           // parenchyma rarely reaches it (§5.2: down to −950)
 constexpr double kLungMaxPureAirFraction = 0.2; // bowel gas: 25–40 % of its voxels below −950 HU [chosen]
 
 // Step 3, enhanced structures. 120 HU, after smoothing, sits between muscle
@@ -55,8 +55,8 @@ constexpr float kBoneHu = 150.0f;
 // Eroding 2.5 mm separates the vertebrae from the aorta and the kidneys, which
 // touch them through fat planes a few millimetres thick [chosen].
 constexpr double kCoreErosionMm = 2.5;
-constexpr float kDenseBoneHu = 600.0f;        // cortex; vessels and organs stay below (§5.2 aorta ≤ 450)
-constexpr double kBoneDenseFraction = 0.05;   // vertebrae 15 %, ribs 3–18 % in the test CT; 0 for organs [chosen]
+constexpr float kDenseBoneHu = 600.0f;      // cortex; vessels and organs stay below (§5.2 aorta ≤ 450)
+constexpr double kBoneDenseFraction = 0.05; // vertebrae 15 %, ribs 3–18 % in the test CT; 0 for organs [chosen]
 // Aorta: a tube along the body [chosen]; diameter 14–39 mm.
 constexpr double kAortaMinLengthMm = 60.0;
 constexpr double kAortaMinAreaMm2 = 150.0, kAortaMaxAreaMm2 = 1200.0;
@@ -114,7 +114,7 @@ namespace {
 /// Per-region figures for the classification of step 3.
 struct RegionStats {
     std::int64_t voxels = 0, dense = 0;
-    double sumX = 0, sumY = 0;         // world x (patient left +) and y (posterior +) of the voxels [mm]
+    double sumX = 0, sumY = 0; // world x (patient left +) and y (posterior +) of the voxels [mm]
     int sliceMin = 1 << 30, sliceMax = -1;
     std::array<std::int64_t, 128> histogram{}; // 25 HU bins from −400 HU
     double ml(const Lattice& lat) const { return double(voxels) * lat.voxelMl(); }
@@ -133,8 +133,8 @@ struct RegionStats {
     }
 };
 
-std::vector<RegionStats> regionStats(const volume::Volume& v, const Lattice& lat, const std::vector<std::int32_t>& region,
-                                     int regions, const std::vector<float>& hu)
+std::vector<RegionStats> regionStats(const volume::Volume& v, const Lattice& lat,
+    const std::vector<std::int32_t>& region, int regions, const std::vector<float>& hu)
 {
     std::vector<RegionStats> s(std::size_t(regions) + 1);
     for (std::size_t n = 0; n < region.size(); ++n) {
@@ -166,7 +166,8 @@ void bridgeAlongSliceAxis(const Lattice& lat, Mask& m, const Mask& allowed, doub
     const int maxGap = int(std::floor(gapMm / lat.spacing[lat.sliceAxis]));
     tbb::parallel_for(0, lat.dims[a1], [&](int w) {
         for (int u = 0; u < lat.dims[a0]; ++u) {
-            const std::size_t base = std::size_t(u) * strides[std::size_t(a0)] + std::size_t(w) * strides[std::size_t(a1)];
+            const std::size_t base =
+                std::size_t(u) * strides[std::size_t(a0)] + std::size_t(w) * strides[std::size_t(a1)];
             int last = -1;
             for (int q = 0; q < n; ++q) {
                 if (!m[base + std::size_t(q) * step]) continue;
@@ -200,8 +201,8 @@ Mask bodyMask(const Lattice& lat, const Mask& dense)
     return body;
 }
 
-void markSkin(const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId,
-              std::vector<std::int32_t>& labels)
+void markSkin(
+    const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId, std::vector<std::int32_t>& labels)
 {
     Mask outside(body.size());
     forEachVoxel(body.size(), [&](std::size_t i) { outside[i] = body[i] ? 0 : 1; });
@@ -216,15 +217,15 @@ void markSkin(const Lattice& lat, const Mask& body, double thicknessMm, std::int
     });
 }
 
-AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
-                          const volume::TissueTable& table)
+AutomaticLabels segmentCt(
+    const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu, const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
     const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), lung = id("lung");
     const std::int32_t kidney = id("kidney"), aorta = id("aorta"), cortical = id("cortical_bone");
     const std::int32_t cancellous = id("cancellous_bone"), soft = id("soft_tissue"), canal = id("spinal_cord");
     const float corticalHu = float(table.at("cortical_bone").huMin); // 700 HU
-    const float fatMaxHu = float(table.at("fat").huMax);            // −30 HU
+    const float fatMaxHu = float(table.at("fat").huMax);             // −30 HU
     const double skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
 
     const std::vector<float> smooth = gaussianSmooth(lat, hu, kSmoothingMm);
@@ -253,9 +254,8 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
     }
 
     // Step 3: enhanced structures, split by erosion, grown back, classified.
-    const Mask enhanced = maskWhere(lat.size(), [&](std::size_t i) {
-        return body[i] && !lungMask[i] && (smooth[i] >= kEnhancedHu || hu[i] >= kBoneHu);
-    });
+    const Mask enhanced = maskWhere(lat.size(),
+        [&](std::size_t i) { return body[i] && !lungMask[i] && (smooth[i] >= kEnhancedHu || hu[i] >= kBoneHu); });
     // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
     // planes between organs, and the erosion would no longer split them.
     const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
@@ -274,7 +274,13 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
     const int regions = int(cores.list.size() + thin.list.size());
     const std::vector<RegionStats> stats = regionStats(v, lat, region, regions, hu);
 
-    enum class Kind : std::uint8_t { None, Bone, Aorta, Kidney, Other };
+    enum class Kind : std::uint8_t {
+        None,
+        Bone,
+        Aorta,
+        Kidney,
+        Other
+    };
     std::vector<Kind> kind(std::size_t(regions) + 1, Kind::None);
     int largestBone = 0;
     for (int r = 1; r <= regions; ++r) {
@@ -298,8 +304,8 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
             // Of several tubes (the vena cava in a venous phase), the aorta is the longest.
             if (!bestAorta || s.voxels > stats[std::size_t(bestAorta)].voxels) bestAorta = r;
         } else if (ml >= kKidneyMinMl && ml <= kKidneyMaxMl && median >= kKidneyMinHu && median <= kKidneyMaxHu &&
-                   lateral >= kKidneyMinLateralMm && lateral <= kKidneyMaxLateralMm &&
-                   std::abs(s.centreY() - spineY) <= kKidneyMaxAnteriorMm) {
+            lateral >= kKidneyMinLateralMm && lateral <= kKidneyMaxLateralMm &&
+            std::abs(s.centreY() - spineY) <= kKidneyMaxAnteriorMm) {
             kind[std::size_t(r)] = Kind::Kidney;
         }
     }
@@ -318,11 +324,21 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
             return;
         }
         switch (kind[std::size_t(region[i])]) {
-        case Kind::Bone: labels[i] = hu[i] >= kBoneHu ? (hu[i] >= corticalHu ? cortical : cancellous) : byHu(); break;
-        case Kind::Aorta: labels[i] = aorta; break;
-        case Kind::Kidney: labels[i] = kidney; break;
-        case Kind::Other: labels[i] = soft; break;
-        case Kind::None: labels[i] = byHu(); break;
+        case Kind::Bone:
+            labels[i] = hu[i] >= kBoneHu ? (hu[i] >= corticalHu ? cortical : cancellous) : byHu();
+            break;
+        case Kind::Aorta:
+            labels[i] = aorta;
+            break;
+        case Kind::Kidney:
+            labels[i] = kidney;
+            break;
+        case Kind::Other:
+            labels[i] = soft;
+            break;
+        case Kind::None:
+            labels[i] = byHu();
+            break;
         }
     });
 
@@ -342,7 +358,8 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
 
     // Step 6: the spinal canal.
     {
-        const Mask bone = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == cortical || labels[i] == cancellous; });
+        const Mask bone =
+            maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == cortical || labels[i] == cancellous; });
         const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
         Mask filled = ring;
         fillHolesPerSlice(lat, filled);
@@ -376,9 +393,9 @@ AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std
         });
     }
     if (std::string note = torsoNote(v, lat, out.extent, "CT torso rules",
-                                     "there muscle, kidney, aorta and spinal canal are not labelled (what those rules "
-                                     "would call them is soft_tissue); skin, fat, bone, gas and lung are labelled from "
-                                     "their CT numbers");
+            "there muscle, kidney, aorta and spinal canal are not labelled (what those rules "
+            "would call them is soft_tissue); skin, fat, bone, gas and lung are labelled from "
+            "their CT numbers");
         !note.empty()) {
         out.notes.push_back(std::move(note));
     }

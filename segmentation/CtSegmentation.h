@@ -42,8 +42,8 @@ namespace voxhap::segmentation {
 /// torso range, and a note where the torso rules did not apply everywhere.
 /// @param v gives the world geometry (left-right for the kidney rule, widths)
 /// @throw ValueError if the table lacks a tissue the rules label
-AutomaticLabels segmentCt(const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu,
-                                    const volume::TissueTable& table);
+AutomaticLabels segmentCt(
+    const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu, const volume::TissueTable& table);
 
 /// @brief The body mask of step 1 alone (HU ≥ −500, table and rails removed).
 Mask ctBodyMask(const Lattice& lat, const std::vector<float>& smoothedHu);
@@ -58,7 +58,7 @@ Mask filterSliceIslands(const Lattice& lat, const Mask& m, double minMm2, double
 
 /// @brief Mark as @p skinId every body voxel whose centre lies less than
 /// @p thicknessMm under the body surface, measured in-plane.
-void markSkin(const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId,
-              std::vector<std::int32_t>& labels);
+void markSkin(
+    const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId, std::vector<std::int32_t>& labels);
 
 } // namespace voxhap::segmentation

@@ -17,8 +17,7 @@ openvdb::CoordBBox boxOf(const Lattice& lat)
     return {volume::toCoord(lat.origin), volume::toCoord(max)};
 }
 
-template <class T, class GridT>
-std::vector<T> readDense(const Lattice& lat, const GridT& grid)
+template <class T, class GridT> std::vector<T> readDense(const Lattice& lat, const GridT& grid)
 {
     std::vector<T> out(lat.size());
     if (out.empty()) return out;

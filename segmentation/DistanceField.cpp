@@ -17,16 +17,17 @@ namespace voxhap::segmentation {
 
 std::string distanceFieldName(const std::string& tissue) { return "sdf." + tissue; }
 
-volume::FloatGrid::Ptr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id,
-                                           double bandMm)
+volume::FloatGrid::Ptr signedDistanceField(
+    const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm)
 {
     Mask inside(labels.size()), outside(labels.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, labels.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            inside[i] = labels[i] == id ? 1 : 0;
-            outside[i] = 1 - inside[i];
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, labels.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                inside[i] = labels[i] == id ? 1 : 0;
+                outside[i] = 1 - inside[i];
+            }
+        });
     const std::vector<float> toInside = squaredDistance(lat, inside, Span::Volume);
     const std::vector<float> toOutside = squaredDistance(lat, outside, Span::Volume);
     // Half the finest spacing: exact in the bound for cubic voxels; on anisotropic
@@ -34,13 +35,15 @@ volume::FloatGrid::Ptr signedDistanceField(const Lattice& lat, const std::vector
     const double half = 0.5 * lat.spacing.minCoeff();
     const auto band = float(bandMm);
     std::vector<float> sdf(labels.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, labels.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const double d = inside[i] ? -(std::sqrt(double(toOutside[i])) - half) : std::sqrt(double(toInside[i])) - half;
-            // No outside voxel in the box (a structure filling it): deep inside.
-            sdf[i] = std::isfinite(d) ? std::clamp(float(d), -band, band) : (inside[i] ? -band : band);
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, labels.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const double d =
+                    inside[i] ? -(std::sqrt(double(toOutside[i])) - half) : std::sqrt(double(toInside[i])) - half;
+                // No outside voxel in the box (a structure filling it): deep inside.
+                sdf[i] = std::isfinite(d) ? std::clamp(float(d), -band, band) : (inside[i] ? -band : band);
+            }
+        });
     return floatGridFrom(lat, sdf, band);
 }
 

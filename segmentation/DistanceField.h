@@ -26,7 +26,7 @@ std::string distanceFieldName(const std::string& tissue);
 /// @brief Signed distance [mm] to the surface of the voxels where @p labels == @p id:
 /// negative inside, positive outside; voxels farther out than @p bandMm are inactive
 /// and read as the background +@p bandMm; inside values are clamped at −@p bandMm.
-volume::FloatGrid::Ptr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id,
-                                           double bandMm);
+volume::FloatGrid::Ptr signedDistanceField(
+    const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm);
 
 } // namespace voxhap::segmentation

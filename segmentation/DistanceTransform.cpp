@@ -20,7 +20,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 struct EnvelopeBuffers {
     std::vector<double> f, d, z;
     std::vector<int> v;
-    explicit EnvelopeBuffers(int n) : f(std::size_t(n)), d(std::size_t(n)), z(std::size_t(n) + 1), v(std::size_t(n)) {}
+    explicit EnvelopeBuffers(int n) : f(std::size_t(n)), d(std::size_t(n)), z(std::size_t(n) + 1), v(std::size_t(n)) { }
 };
 
 /// d[q] = min_p ((q - p)·h)² + f[p]: the lower envelope of the parabolas rooted
@@ -93,9 +93,10 @@ std::vector<float> squaredDistance(const Lattice& lat, const Mask& feature, Span
 {
     std::vector<float> dist(lat.size());
     const float inf = std::numeric_limits<float>::infinity();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dist.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t n = r.begin(); n != r.end(); ++n) dist[n] = feature[n] ? 0.0f : inf;
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, dist.size(), 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n != r.end(); ++n) dist[n] = feature[n] ? 0.0f : inf;
+        });
     for (int axis = 0; axis < 3; ++axis) {
         if (span == Span::Slice && axis == lat.sliceAxis) continue;
         if (lat.dims[axis] > 1) passAlong(lat, dist, axis);

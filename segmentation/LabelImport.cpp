@@ -34,7 +34,8 @@ LabelMapping parseLabelMapping(const std::string& text, const std::string& origi
         f.fail("schema", "must be \"voxhap.label-mapping/1\"");
     }
     if (f.has("file")) {
-        if (!f.raw("file").is_string() || f.raw("file").get<std::string>().empty()) f.fail("file", "must be a file name");
+        if (!f.raw("file").is_string() || f.raw("file").get<std::string>().empty())
+            f.fail("file", "must be a file name");
         m.file = f.raw("file").get<std::string>();
     }
     if (!f.has("labels") || !f.raw("labels").is_object() || f.raw("labels").empty()) {
@@ -49,12 +50,16 @@ LabelMapping parseLabelMapping(const std::string& text, const std::string& origi
         } catch (const std::exception&) {
             used = 0;
         }
-        if (used != key.size() || key.empty()) throw ValueError(origin + ": " + field + ": the key must be an integer label value");
+        if (used != key.size() || key.empty())
+            throw ValueError(origin + ": " + field + ": the key must be an integer label value");
         if (v == 0) throw ValueError(origin + ": " + field + ": 0 means unlabelled and cannot be mapped");
         const volume::Tissue* t = nullptr;
-        if (value.is_string()) t = table.find(value.get<std::string>());
-        else if (value.is_number_integer()) t = table.find(int(value.get<std::int64_t>()));
-        if (!t) throw ValueError(origin + ": " + field + ": " + value.dump() + " is not a tissue name or id of the table");
+        if (value.is_string())
+            t = table.find(value.get<std::string>());
+        else if (value.is_number_integer())
+            t = table.find(int(value.get<std::int64_t>()));
+        if (!t)
+            throw ValueError(origin + ": " + field + ": " + value.dump() + " is not a tissue name or id of the table");
         m.tissueOf[v] = std::int32_t(t->id);
     }
     return m;
@@ -72,7 +77,7 @@ LabelMapping loadLabelMapping(const std::filesystem::path& file, const volume::T
 }
 
 std::vector<std::int32_t> resampleLabels(const volume::Volume& labels, const LabelMapping& mapping,
-                                         const volume::Volume& target, const Lattice& lat, const std::string& file)
+    const volume::Volume& target, const Lattice& lat, const std::string& file)
 {
     // A voxhap label grid, else the values of whatever one channel the reader filled.
     volume::FloatGrid::ConstPtr values;
@@ -102,7 +107,7 @@ std::vector<std::int32_t> resampleLabels(const volume::Volume& labels, const Lab
                     if (!std::isfinite(x) || x != std::round(x)) {
                         std::lock_guard lock(errorMutex);
                         error = "data: value " + std::to_string(x) + " at voxel " + std::to_string(c.x()) + "," +
-                                std::to_string(c.y()) + "," + std::to_string(c.z()) + " is not an integer label";
+                            std::to_string(c.y()) + "," + std::to_string(c.z()) + " is not an integer label";
                         failed = true;
                         break;
                     }

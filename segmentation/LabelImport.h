@@ -31,7 +31,7 @@ namespace voxhap::segmentation {
 /// @brief Label-map value → tissue id.
 struct LabelMapping {
     std::map<std::int64_t, std::int32_t> tissueOf;
-    std::string origin; ///< the file, for messages
+    std::string origin;         ///< the file, for messages
     std::filesystem::path file; ///< the label map the mapping names, resolved; empty if none
 };
 
@@ -47,7 +47,7 @@ LabelMapping parseLabelMapping(const std::string& json, const std::string& origi
 /// @param file names the label map in messages
 /// @throw ValueError naming @p file if a value is not an integer or not in the mapping
 std::vector<std::int32_t> resampleLabels(const volume::Volume& labels, const LabelMapping& mapping,
-                                         const volume::Volume& target, const Lattice& lat, const std::string& file);
+    const volume::Volume& target, const Lattice& lat, const std::string& file);
 
 /// @brief Overwrite @p ids with the imported ids where they are set (≥ 0).
 /// @return how many voxels changed label

@@ -27,10 +27,10 @@ using voxhap::Vec3i;
 
 /// @brief The box's voxels in memory order: i fastest, then j, then k.
 struct Lattice {
-    Vec3i dims{0, 0, 0};           ///< voxels along i, j, k
-    Vec3d spacing{1.0, 1.0, 1.0};  ///< voxel size along i, j, k [mm]
-    Vec3i origin{0, 0, 0};         ///< index coordinate of element 0 (the box's min corner)
-    int sliceAxis = 2;             ///< the index axis closest to the patient's cranio-caudal axis
+    Vec3i dims{0, 0, 0};          ///< voxels along i, j, k
+    Vec3d spacing{1.0, 1.0, 1.0}; ///< voxel size along i, j, k [mm]
+    Vec3i origin{0, 0, 0};        ///< index coordinate of element 0 (the box's min corner)
+    int sliceAxis = 2;            ///< the index axis closest to the patient's cranio-caudal axis
 
     /// @brief The lattice of @p v's index box; the slice axis from its direction cosines.
     static Lattice of(const volume::Volume& v);
@@ -53,16 +53,16 @@ struct Lattice {
     /// @brief Volume of one voxel [ml].
     double voxelMl() const { return spacing.prod() * 1e-3; }
     /// @brief The two in-plane axes (the axes other than the slice axis).
-    std::array<int, 2> planeAxes() const
-    {
-        return {sliceAxis == 0 ? 1 : 0, sliceAxis == 2 ? 1 : 2};
-    }
+    std::array<int, 2> planeAxes() const { return {sliceAxis == 0 ? 1 : 0, sliceAxis == 2 ? 1 : 2}; }
 };
 
 /// @brief A binary mask over a lattice: 1 in, 0 out.
 using Mask = std::vector<std::uint8_t>;
 
 /// @brief Which axes an operation spans: all three, or the two in-plane axes (per slice).
-enum class Span { Volume, Slice };
+enum class Span {
+    Volume,
+    Slice
+};
 
 } // namespace voxhap::segmentation

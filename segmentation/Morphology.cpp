@@ -19,8 +19,7 @@ namespace {
 
 using detail::forEachVoxel;
 
-template <class Op>
-Mask combine(const Mask& a, const Mask& b, Op op)
+template <class Op> Mask combine(const Mask& a, const Mask& b, Op op)
 {
     Mask out(a.size());
     forEachVoxel(a.size(), [&](std::size_t i) { out[i] = op(a[i], b[i]) ? 1 : 0; });
@@ -108,7 +107,8 @@ std::vector<float> gaussianSmooth(const Lattice& lat, const std::vector<float>& 
         const int radius = int(std::ceil(3.0 * sigma));
         std::vector<double> w(std::size_t(2 * radius + 1));
         double sum = 0;
-        for (int t = -radius; t <= radius; ++t) sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
+        for (int t = -radius; t <= radius; ++t)
+            sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
         for (double& x : w) x /= sum;
         const int n = lat.dims[axis];
         const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
@@ -133,8 +133,17 @@ std::vector<float> gaussianSmooth(const Lattice& lat, const std::vector<float>& 
     return cur;
 }
 
-Mask maskAnd(const Mask& a, const Mask& b) { return combine(a, b, [](auto x, auto y) { return x && y; }); }
-Mask maskAndNot(const Mask& a, const Mask& b) { return combine(a, b, [](auto x, auto y) { return x && !y; }); }
-Mask maskOr(const Mask& a, const Mask& b) { return combine(a, b, [](auto x, auto y) { return x || y; }); }
+Mask maskAnd(const Mask& a, const Mask& b)
+{
+    return combine(a, b, [](auto x, auto y) { return x && y; });
+}
+Mask maskAndNot(const Mask& a, const Mask& b)
+{
+    return combine(a, b, [](auto x, auto y) { return x && !y; });
+}
+Mask maskOr(const Mask& a, const Mask& b)
+{
+    return combine(a, b, [](auto x, auto y) { return x || y; });
+}
 
 } // namespace voxhap::segmentation

@@ -70,8 +70,8 @@ double otsuThreshold(const std::vector<float>& values)
     return a + (b - a) * double(split + 1) / kOtsuBins; // upper edge of the last bin of the lower class
 }
 
-AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values, MrContrast contrast,
-                          const volume::TissueTable& table)
+AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values,
+    MrContrast contrast, const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
     const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), soft = id("soft_tissue");
@@ -88,8 +88,8 @@ AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std
         });
         const std::string& w = v.metadata().mrWeighting;
         out.notes.push_back("MR intensity grid, not T1 (weighting: " + (w.empty() ? std::string("unknown") : w) +
-                            "): its contrast does not tell fat from muscle, so the body is labelled soft_tissue only; "
-                            "import a label map for more classes");
+            "): its contrast does not tell fat from muscle, so the body is labelled soft_tissue only; "
+            "import a label map for more classes");
         return out;
     }
     const bool t1InMs = contrast == MrContrast::T1Ms;
@@ -121,7 +121,9 @@ AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std
         if (!isFat(x)) lean.push_back(x);
     }
     const double muscleMedian = medianOf(lean);
-    const auto isFluid = [&](float x) { return t1InMs ? x > kFluidFactor * muscleMedian : x < muscleMedian / kFluidFactor; };
+    const auto isFluid = [&](float x) {
+        return t1InMs ? x > kFluidFactor * muscleMedian : x < muscleMedian / kFluidFactor;
+    };
     std::vector<float> solid;
     for (float x : inside) {
         if (!isFluid(x)) solid.push_back(x);
@@ -132,15 +134,18 @@ AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std
         const float x = values[i];
         // No signal inside the body (bone, gas in the gut), fluid, and what the rule
         // does not read are soft tissue: T1 cannot tell.
-        if (x <= 0.0f || !read[i] || isFluid(x)) labels[i] = soft;
-        else if (isFat(x)) labels[i] = fat;
-        else labels[i] = inTorso(i) ? muscle : soft;
+        if (x <= 0.0f || !read[i] || isFluid(x))
+            labels[i] = soft;
+        else if (isFat(x))
+            labels[i] = fat;
+        else
+            labels[i] = inTorso(i) ? muscle : soft;
     });
     markSkin(lat, body, skinMm, skin, labels);
     std::string note = torsoNote(v, lat, out.extent, "MR fat | muscle split",
-                                 "there fat is labelled only within " + std::to_string(int(kSubcutaneousMm)) +
-                                     " mm of the skin (the scalp's; a brain's white matter is as bright), and the rest is "
-                                     "soft_tissue, never muscle");
+        "there fat is labelled only within " + std::to_string(int(kSubcutaneousMm)) +
+            " mm of the skin (the scalp's; a brain's white matter is as bright), and the rest is "
+            "soft_tissue, never muscle");
     if (!note.empty()) out.notes.push_back(std::move(note));
     return out;
 }

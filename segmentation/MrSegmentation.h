@@ -50,7 +50,7 @@ enum class MrContrast {
 /// @param v        world geometry (TorsoExtent.h) and metadata (mrWeighting, for the notes)
 /// @param values   the t1 or intensity grid's values over @p lat
 /// @param contrast what the values say about fat
-AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values, MrContrast contrast,
-                          const volume::TissueTable& table);
+AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std::vector<float>& values,
+    MrContrast contrast, const volume::TissueTable& table);
 
 } // namespace voxhap::segmentation

@@ -59,13 +59,15 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
         report.method = "imported";
         labels.assign(lat.size(), volume::kAirLabel);
     } else {
-        throw ValueError(v.metadata().source +
-                         ": nothing to segment: no hu, t1, intensity or label grid and no imported label map");
+        throw ValueError(
+            v.metadata().source + ": nothing to segment: no hu, t1, intensity or label grid and no imported label map");
     }
     if (o.imported) {
         step("imported labels");
-        const std::vector<std::int32_t> imported = resampleLabels(*o.imported->labels, o.imported->mapping, v, lat, o.imported->file);
-        report.importedVoxels = std::int64_t(std::count_if(imported.begin(), imported.end(), [](std::int32_t x) { return x >= 0; }));
+        const std::vector<std::int32_t> imported =
+            resampleLabels(*o.imported->labels, o.imported->mapping, v, lat, o.imported->file);
+        report.importedVoxels =
+            std::int64_t(std::count_if(imported.begin(), imported.end(), [](std::int32_t x) { return x >= 0; }));
         applyImported(labels, imported);
         if (report.method == "existing") report.method = "imported";
     }
@@ -122,7 +124,7 @@ std::vector<LabelSummary> summarizeLabels(const volume::Volume& v, const volume:
         Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
         for (int c = 0; c < 8; ++c) {
             const Vec3d ijk((c & 1 ? a.box.max() : a.box.min()).x(), (c & 2 ? a.box.max() : a.box.min()).y(),
-                                    (c & 4 ? a.box.max() : a.box.min()).z());
+                (c & 4 ? a.box.max() : a.box.min()).z());
             const Vec3d w = v.indexToWorld(ijk);
             lo = lo.cwiseMin(w);
             hi = hi.cwiseMax(w);

@@ -100,31 +100,30 @@ double sliceZ(const volume::Volume& v, const Lattice& lat, int slice)
 }
 
 std::string torsoNote(const volume::Volume& v, const Lattice& lat, const TorsoExtent& e, const std::string& rules,
-                      const std::string& instead)
+    const std::string& instead)
 {
     if (e.bodySlices == 0) return {};
     char buf[512];
     if (e.undetermined) {
         std::snprintf(buf, sizeof buf,
-                      "%s applied without a check of the anatomy: the body is cut by the field of view left or right "
-                      "in every slice (at least %.0f mm across), so a torso (at least %.0f mm) cannot be told from a "
-                      "head or limb",
-                      rules.c_str(), e.widestMm(), kMinTorsoWidthMm);
+            "%s applied without a check of the anatomy: the body is cut by the field of view left or right "
+            "in every slice (at least %.0f mm across), so a torso (at least %.0f mm) cannot be told from a "
+            "head or limb",
+            rules.c_str(), e.widestMm(), kMinTorsoWidthMm);
         return buf;
     }
     if (e.all()) return {};
     if (e.none()) {
         std::snprintf(buf, sizeof buf,
-                      "%s not applied: the body is at most %.0f mm across (LPS x), narrower than an adult torso "
-                      "(at least %.0f mm): a head, neck or limb; %s",
-                      rules.c_str(), e.widestMm(), kMinTorsoWidthMm, instead.c_str());
+            "%s not applied: the body is at most %.0f mm across (LPS x), narrower than an adult torso "
+            "(at least %.0f mm): a head, neck or limb; %s",
+            rules.c_str(), e.widestMm(), kMinTorsoWidthMm, instead.c_str());
     } else {
         const double z0 = sliceZ(v, lat, e.first), z1 = sliceZ(v, lat, e.last);
         std::snprintf(buf, sizeof buf,
-                      "%s applied only from z %.0f to %.0f mm, where the body is torso-wide (at least %.0f mm across); "
-                      "elsewhere it is at most %.0f mm across (a head, neck or limb): %s",
-                      rules.c_str(), std::min(z0, z1), std::max(z0, z1), kMinTorsoWidthMm, e.widestOutsideMm(),
-                      instead.c_str());
+            "%s applied only from z %.0f to %.0f mm, where the body is torso-wide (at least %.0f mm across); "
+            "elsewhere it is at most %.0f mm across (a head, neck or limb): %s",
+            rules.c_str(), std::min(z0, z1), std::max(z0, z1), kMinTorsoWidthMm, e.widestOutsideMm(), instead.c_str());
     }
     return buf;
 }

@@ -87,7 +87,7 @@ struct TorsoExtent {
 struct AutomaticLabels {
     std::vector<std::int32_t> labels; ///< tissue id per lattice voxel
     TorsoExtent extent;
-    std::vector<std::string> notes;   ///< one line each
+    std::vector<std::string> notes; ///< one line each
 };
 
 /// @brief Measure the cross-sections of @p body.
@@ -102,6 +102,6 @@ double sliceZ(const volume::Volume& v, const Lattice& lat, int slice);
 /// @param rules    what was not applied, e.g. "CT torso rules"
 /// @param instead  what the voxels outside the torso range got instead
 std::string torsoNote(const volume::Volume& v, const Lattice& lat, const TorsoExtent& e, const std::string& rules,
-                      const std::string& instead);
+    const std::string& instead);
 
 } // namespace voxhap::segmentation

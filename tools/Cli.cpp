@@ -47,7 +47,8 @@ Vec3d parseSpacing(const std::string& text, const std::string& option)
     if (text.find(',') == std::string::npos) {
         std::istringstream in(text);
         double d = 0;
-        if (!(in >> d) || !(in >> std::ws).eof()) throw UsageError(option + ": expected a number or sx,sy,sz, got '" + text + "'");
+        if (!(in >> d) || !(in >> std::ws).eof())
+            throw UsageError(option + ": expected a number or sx,sy,sz, got '" + text + "'");
         s = Vec3d::Constant(d);
     } else {
         s = parseVec3(text, option);
@@ -64,7 +65,7 @@ Mat3d rotationFromDegrees(const Vec3d& degrees)
 {
     using Eigen::AngleAxisd;
     return (AngleAxisd(degToRad(degrees.z()), Vec3d::UnitZ()) * AngleAxisd(degToRad(degrees.y()), Vec3d::UnitY()) *
-            AngleAxisd(degToRad(degrees.x()), Vec3d::UnitX()))
+        AngleAxisd(degToRad(degrees.x()), Vec3d::UnitX()))
         .toRotationMatrix();
 }
 

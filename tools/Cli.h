@@ -37,8 +37,8 @@ public:
 
 /// @brief Options every subcommand accepts.
 struct CommonOptions {
-    std::string tissues;  ///< tissue table file; empty: the built-in table
-    bool json = false;    ///< machine-readable output on stdout
+    std::string tissues; ///< tissue table file; empty: the built-in table
+    bool json = false;   ///< machine-readable output on stdout
 };
 
 /// @brief Add --tissues and --json to a subcommand.
@@ -98,7 +98,7 @@ struct PlanFiles {
 /// @brief report.json, paths.mrk.json, views.png (slices with the paths, when @p views)
 /// and force-depth.png (the first path's predicted profile) in @p outDir.
 PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
-                           const nlohmann::json& report, const std::string& outDir, bool views);
+    const nlohmann::json& report, const std::string& outDir, bool views);
 void printPlanFiles(std::ostream& os, const PlanFiles& f);
 
 } // namespace voxhap::tools

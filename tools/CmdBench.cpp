@@ -98,25 +98,31 @@ Action registerBench(CLI::App& app)
     auto o = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench", "Measure speed against error (docs: benchmarks.md)");
     cmd->require_subcommand(1);
-    CLI::App* sampler = cmd->add_subcommand(
-        "sampler", "Shaft integration: every strategy and step against closed forms, with dense-array and VTK baselines");
+    CLI::App* sampler = cmd->add_subcommand("sampler",
+        "Shaft integration: every strategy and step against closed forms, with dense-array and VTK baselines");
     sampler->footer("Workloads: the R1 layered slab (closed form) and the torso phantom, 0.5 mm voxels; shafts up to\n"
                     "100 mm tilted 0-60 degrees. Ratios are measured in one run, configurations interleaved.");
     sampler->add_flag("--quick", o->quick, "Fewer paths, depths and rounds (seconds instead of a minute)");
-    sampler->add_option("--paths", o->sampler.paths, "Shaft directions per workload (default 48)")->check(CLI::Range(1, 10000));
-    sampler->add_option("--depths", o->sampler.depths, "Insertion depths per path (default 40)")->check(CLI::Range(1, 10000));
-    sampler->add_option("--repetitions", o->sampler.repetitions, "Interleaved rounds (default 5)")->check(CLI::Range(1, 1000));
+    sampler->add_option("--paths", o->sampler.paths, "Shaft directions per workload (default 48)")
+        ->check(CLI::Range(1, 10000));
+    sampler->add_option("--depths", o->sampler.depths, "Insertion depths per path (default 40)")
+        ->check(CLI::Range(1, 10000));
+    sampler->add_option("--repetitions", o->sampler.repetitions, "Interleaved rounds (default 5)")
+        ->check(CLI::Range(1, 1000));
     sampler->add_option("--speed", o->sampler.speedMmPerS, "Insertion speed for force errors, mm/s (default 10)")
         ->check(CLI::Range(0.001, 10000.0));
-    sampler->add_option("--spacing", o->sampler.spacingMm, "Phantom voxel size, mm (default 0.5)")->check(CLI::Range(0.1, 5.0));
+    sampler->add_option("--spacing", o->sampler.spacingMm, "Phantom voxel size, mm (default 0.5)")
+        ->check(CLI::Range(0.1, 5.0));
     sampler->add_flag("--no-vtk", o->noVtk, "Skip the (slow) vtkProbeFilter baseline");
     sampler->add_option("--json", o->json, "Also write the table as JSON");
     sampler->add_option("--png", o->png, "Also draw time against error, log-log (needs gnuplot)");
     CLI::App* servo = cmd->add_subcommand(
         "servo", "The servo loop in real time with the simulated hand: tick compute, jitter, overruns, sustained rate");
-    servo->footer("Scenes senac-average (labels, lock, LOR) and kyung (voxel damping, pivot, bone). A 1 kHz run, then a\n"
-                  "rate ladder 1-100 kHz; periods up to 100 us are spun, not slept.");
-    servo->add_option("--seconds", o->servo.seconds, "Length of the 1 kHz run (default 30)")->check(CLI::Range(0.5, 3600.0));
+    servo->footer(
+        "Scenes senac-average (labels, lock, LOR) and kyung (voxel damping, pivot, bone). A 1 kHz run, then a\n"
+        "rate ladder 1-100 kHz; periods up to 100 us are spun, not slept.");
+    servo->add_option("--seconds", o->servo.seconds, "Length of the 1 kHz run (default 30)")
+        ->check(CLI::Range(0.5, 3600.0));
     servo->add_flag("--quick", o->quick, "5 s at 1 kHz and 1 s per ladder rate");
     servo->add_option("--json", o->json, "Also write the figures as JSON");
     CLI::App* render = cmd->add_subcommand(
@@ -125,7 +131,8 @@ Action registerBench(CLI::App& app)
         ->check(CLI::ExistingPath);
     render->add_option("--first", o->render.firstFrames, "Fresh viewers timed on their first frame (default 2)")
         ->check(CLI::Range(1, 100));
-    render->add_option("--steady", o->render.steadyFrames, "Steady frames per volume (default 5)")->check(CLI::Range(1, 1000));
+    render->add_option("--steady", o->render.steadyFrames, "Steady frames per volume (default 5)")
+        ->check(CLI::Range(1, 1000));
     render->add_flag("--quick", o->quick, "One first frame and two steady frames");
     render->add_option("--json", o->json, "Also write the figures as JSON");
     return [o, servo, render] {

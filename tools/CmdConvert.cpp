@@ -69,17 +69,19 @@ int run(const ConvertOptions& o)
             j["skipped_bad_files"] = dicom.skippedBad.size();
         }
         if (!v.metadata().mrWeighting.empty()) j["mr_weighting"] = v.metadata().mrWeighting;
-        if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end()) j["modality_source"] = it->second;
+        if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end())
+            j["modality_source"] = it->second;
         std::cout << j.dump(2) << '\n';
         return 0;
     }
     std::cout << std::fixed << std::setprecision(3);
-    std::cout << "read   " << o.in << " (" << volume::formatName(volume::formatOf(o.in)) << ") in " << loadSeconds << " s\n";
+    std::cout << "read   " << o.in << " (" << volume::formatName(volume::formatOf(o.in)) << ") in " << loadSeconds
+              << " s\n";
     if (!dicom.series.uid.empty()) {
-        std::cout << "series #" << dicom.series.index << " " << dicom.series.uid << " (" << dicom.series.modality << ", "
-                  << dicom.series.slices << " slices" << (dicom.volume ? ", volume " + std::to_string(dicom.volume) : "")
-                  << "; " << dicom.allSeries.size() << " series in the input, " << dicom.skipped.size()
-                  << " file(s) set aside)\n";
+        std::cout << "series #" << dicom.series.index << " " << dicom.series.uid << " (" << dicom.series.modality
+                  << ", " << dicom.series.slices << " slices"
+                  << (dicom.volume ? ", volume " + std::to_string(dicom.volume) : "") << "; " << dicom.allSeries.size()
+                  << " series in the input, " << dicom.skipped.size() << " file(s) set aside)\n";
         if (dicom.resampled) {
             std::cout << "resampled: " << dicom.irregularity << "\n          " << dicom.interpolation
                       << "; source voxels outside the grid: " << dicom.sourceVoxelsOutside << "\n";
@@ -87,17 +89,18 @@ int run(const ConvertOptions& o)
         for (const auto& s : dicom.skippedBad) std::cout << "left out (--skip-bad): " << s.reason << "\n";
     }
     if (!v.metadata().mrWeighting.empty()) {
-        std::cout << "MR     " << v.metadata().mrWeighting << " -> " << (v.has(volume::Channel::T1) ? "t1 [ms]" : "intensity (not T1)")
-                  << "\n";
+        std::cout << "MR     " << v.metadata().mrWeighting << " -> "
+                  << (v.has(volume::Channel::T1) ? "t1 [ms]" : "intensity (not T1)") << "\n";
     }
     if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end()) {
         std::cout << "modality " << v.metadata().modality << ": " << it->second << "\n";
     }
-    std::cout << "grid   " << d.x() << " x " << d.y() << " x " << d.z() << " voxels, spacing " << info.geometry.spacing.x()
-              << " x " << info.geometry.spacing.y() << " x " << info.geometry.spacing.z() << " mm\n";
+    std::cout << "grid   " << d.x() << " x " << d.y() << " x " << d.z() << " voxels, spacing "
+              << info.geometry.spacing.x() << " x " << info.geometry.spacing.y() << " x " << info.geometry.spacing.z()
+              << " mm\n";
     std::cout << std::setprecision(1) << "active " << 100.0 * activeFraction << " % of the voxels; grid memory "
-              << double(info.memoryBytes) / double(1 << 20) << " MiB (a dense float array: " << denseFloatBytes / double(1 << 20)
-              << " MiB)\n";
+              << double(info.memoryBytes) / double(1 << 20)
+              << " MiB (a dense float array: " << denseFloatBytes / double(1 << 20) << " MiB)\n";
     std::cout << "wrote  " << o.out << "\n";
     return 0;
 }
@@ -107,8 +110,10 @@ int run(const ConvertOptions& o)
 Action registerConvert(CLI::App& app)
 {
     auto o = std::make_shared<ConvertOptions>();
-    CLI::App* cmd = app.add_subcommand("convert", "Convert a volume (DICOM series, NIfTI, NRRD, MetaImage, .vdb) to a sparse .vdb or a .nrrd for 3D Slicer");
-    cmd->add_option("in", o->in, "Input: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")->required();
+    CLI::App* cmd = app.add_subcommand("convert",
+        "Convert a volume (DICOM series, NIfTI, NRRD, MetaImage, .vdb) to a sparse .vdb or a .nrrd for 3D Slicer");
+    cmd->add_option("in", o->in, "Input: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")
+        ->required();
     cmd->add_option("out", o->out, "Output file: .vdb (all grids) or .nrrd (hu, else t1, else label)")->required();
     addReaderOptions(*cmd, o->reader);
     addCommonOptions(*cmd, o->common);

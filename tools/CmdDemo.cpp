@@ -115,11 +115,13 @@ int run(const DemoOptions& o)
     say("plan outputs");
     nlohmann::json report = planning::reportHeader(planner, "builtin:torso");
     report["paths"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < found.ranked.size(); ++i) report["paths"].push_back(planning::pathJson(found.ranked[i], int(i) + 1));
+    for (std::size_t i = 0; i < found.ranked.size(); ++i)
+        report["paths"].push_back(planning::pathJson(found.ranked[i], int(i) + 1));
     report["pareto"] = nlohmann::json::array();
     for (const auto& p : found.pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     report["search"] = planning::searchJson(planner, found, k, sopt);
-    const PlanFiles plan = writePlanOutputs(planner, found.ranked, report, (fs::path(o.outDir) / "plan").string(), true);
+    const PlanFiles plan =
+        writePlanOutputs(planner, found.ranked, report, (fs::path(o.outDir) / "plan").string(), true);
 
     // 5. The simulated insertion along the best path, at the scene's speed, to the
     //    first bone contact (the model renders bone as contact: §1.3).
@@ -136,28 +138,28 @@ int run(const DemoOptions& o)
     const double seconds = since(start);
 
     if (o.common.json) {
-        std::cout << nlohmann::json{{"volume", vdb},
-                                    {"segmentation_seconds", seg.seconds},
-                                    {"plan", report},
-                                    {"plan_files", {{"report", plan.report}, {"markups", plan.markups}, {"views", plan.views}, {"plot", plan.plot}}},
-                                    {"insertion", sim.summary},
-                                    {"seconds", seconds}}
+        std::cout << nlohmann::json{{"volume", vdb}, {"segmentation_seconds", seg.seconds}, {"plan", report},
+                         {"plan_files",
+                             {{"report", plan.report}, {"markups", plan.markups}, {"views", plan.views},
+                                 {"plot", plan.plot}}},
+                         {"insertion", sim.summary}, {"seconds", seconds}}
                          .dump(2)
                   << '\n';
         return 0;
     }
     std::cout << std::fixed << std::setprecision(1);
-    std::cout << "voxhap demo: spine biopsy on the torso phantom (" << o.spacingMm << " x " << o.spacingMm << " x " << kSliceMm
-              << " mm voxels)\n\n"
+    std::cout << "voxhap demo: spine biopsy on the torso phantom (" << o.spacingMm << " x " << o.spacingMm << " x "
+              << kSliceMm << " mm voxels)\n\n"
               << "segmented " << seg.labels.size() << " labels in " << seg.seconds << " s; distance fields:";
     for (const auto& d : seg.distanceFields) std::cout << ' ' << d;
-    if (seg.importedVoxels) std::cout << " (spinal canal imported from the phantom: " << seg.importedVoxels << " voxels)";
-    std::cout << "\nsearched " << found.counts.directions << " directions to the lesion at (" << lesion.x() << ", " << lesion.y()
-              << ", " << lesion.z() << "): " << found.counts.analysed << " analysed, " << found.counts.feasible << " safe, in "
-              << std::setprecision(3) << found.seconds << " s\n"
-              << std::setprecision(1) << "best path: " << best.lengthMm << " mm, clearance " << best.minClearanceMm << " mm to the "
-              << best.nearestStructure << ", predicted peak " << std::setprecision(2) << best.peakForceN << " N, risk "
-              << best.risk.total << "\n           ";
+    if (seg.importedVoxels)
+        std::cout << " (spinal canal imported from the phantom: " << seg.importedVoxels << " voxels)";
+    std::cout << "\nsearched " << found.counts.directions << " directions to the lesion at (" << lesion.x() << ", "
+              << lesion.y() << ", " << lesion.z() << "): " << found.counts.analysed << " analysed, "
+              << found.counts.feasible << " safe, in " << std::setprecision(3) << found.seconds << " s\n"
+              << std::setprecision(1) << "best path: " << best.lengthMm << " mm, clearance " << best.minClearanceMm
+              << " mm to the " << best.nearestStructure << ", predicted peak " << std::setprecision(2)
+              << best.peakForceN << " N, risk " << best.risk.total << "\n           ";
     for (std::size_t i = 0; i < best.segments.size(); ++i) std::cout << (i ? " > " : "") << best.segments[i].tissue;
     std::cout << "\n\nsimulated insertion, scene " << scene.name << " (" << std::setprecision(0) << scene.speedMmPerS
               << " mm/s along the best path):\n"
@@ -175,10 +177,11 @@ int run(const DemoOptions& o)
 Action registerDemo(CLI::App& app)
 {
     auto o = std::make_shared<DemoOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "demo", "Spine biopsy end to end on the torso phantom: segment, plan, simulate, render; say where the outputs are");
+    CLI::App* cmd = app.add_subcommand("demo",
+        "Spine biopsy end to end on the torso phantom: segment, plan, simulate, render; say where the outputs are");
     cmd->add_option("--out,-o", o->outDir, "Output directory (default voxhap-demo)");
-    cmd->add_option("--spacing", o->spacingMm, "Phantom pixel size in-plane [mm] (default 1; slices are 3 mm)")->check(CLI::Range(0.5, 3.0));
+    cmd->add_option("--spacing", o->spacingMm, "Phantom pixel size in-plane [mm] (default 1; slices are 3 mm)")
+        ->check(CLI::Range(0.5, 3.0));
     addCommonOptions(*cmd, o->common);
     return [o] { return run(*o); };
 }

@@ -33,8 +33,10 @@ std::string spacingText(const Vec3d& s)
 {
     std::ostringstream os;
     os << std::setprecision(4) << s.x() << " x " << s.y() << " x ";
-    if (s.z() > 0) os << s.z();
-    else os << "?";
+    if (s.z() > 0)
+        os << s.z();
+    else
+        os << "?";
     os << " mm";
     return os.str();
 }
@@ -43,20 +45,11 @@ nlohmann::json seriesJson(const std::vector<volume::DicomSeriesInfo>& all)
 {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& s : all) {
-        nlohmann::json j = {{"index", s.index},
-                            {"uid", s.uid},
-                            {"number", s.number},
-                            {"modality", s.modality},
-                            {"description", s.description},
-                            {"rows", s.rows},
-                            {"columns", s.columns},
-                            {"slices", s.slices},
-                            {"files", s.files.size()},
-                            {"orientation", s.orientation},
-                            {"spacing_mm", {s.spacing.x(), s.spacing.y(), s.spacing.z()}},
-                            {"volumes", s.volumes},
-                            {"volume_shape", s.volumeShape},
-                            {"loadable", s.problem.empty()}};
+        nlohmann::json j = {{"index", s.index}, {"uid", s.uid}, {"number", s.number}, {"modality", s.modality},
+            {"description", s.description}, {"rows", s.rows}, {"columns", s.columns}, {"slices", s.slices},
+            {"files", s.files.size()}, {"orientation", s.orientation},
+            {"spacing_mm", {s.spacing.x(), s.spacing.y(), s.spacing.z()}}, {"volumes", s.volumes},
+            {"volume_shape", s.volumeShape}, {"loadable", s.problem.empty()}};
         if (s.volumes > 1) {
             j["volumes_by"] = s.separatedBy;
             j["volume_labels"] = s.volumeSummary;
@@ -83,17 +76,21 @@ void printSeriesTable(std::ostream& os, const volume::DicomCatalog& c, const std
 {
     os << "DICOM series (choose with --series UID, SeriesNumber or #index; * loaded):\n";
     os << "  " << std::left << std::setw(5) << "#" << std::setw(8) << "number" << std::setw(5) << "mod" << std::setw(13)
-       << "size" << std::setw(18) << "volumes" << std::setw(19) << "orientation" << std::setw(28) << "spacing" << "description\n";
+       << "size" << std::setw(18) << "volumes" << std::setw(19) << "orientation" << std::setw(28) << "spacing"
+       << "description\n";
     for (const auto& s : c.series) {
         std::ostringstream size, vols;
         size << s.columns << 'x' << s.rows << 'x' << s.slices;
-        if (s.volumes > 1) vols << s.volumes << " x " << (s.slices / std::int64_t(s.volumes)) << " sl";
-        else if (s.volumes == 1) vols << "1";
-        else vols << "?";
+        if (s.volumes > 1)
+            vols << s.volumes << " x " << (s.slices / std::int64_t(s.volumes)) << " sl";
+        else if (s.volumes == 1)
+            vols << "1";
+        else
+            vols << "?";
         os << (s.uid == loadedUid ? "* " : "  ") << std::left << std::setw(5) << s.index << std::setw(8)
-           << (s.number.empty() ? "-" : s.number) << std::setw(5) << s.modality << std::setw(13) << size.str() << std::setw(18)
-           << vols.str() << std::setw(19) << s.orientation << std::setw(28) << spacingText(s.spacing) << s.description
-           << (s.weighting.empty() ? "" : " [" + s.weighting + "]") << '\n';
+           << (s.number.empty() ? "-" : s.number) << std::setw(5) << s.modality << std::setw(13) << size.str()
+           << std::setw(18) << vols.str() << std::setw(19) << s.orientation << std::setw(28) << spacingText(s.spacing)
+           << s.description << (s.weighting.empty() ? "" : " [" + s.weighting + "]") << '\n';
         os << "        uid " << s.uid << ", " << s.files.size() << " file(s)\n";
         if (s.volumes > 1) os << "        volumes by " << s.separatedBy << ": " << s.volumeSummary << '\n';
         if (!s.problem.empty() && s.uid != loadedUid) os << "        not loaded as is: " << s.problem << '\n';
@@ -153,10 +150,12 @@ int run(const InfoOptions& o)
         printSeriesTable(std::cout, *catalog, v ? report.series.uid : std::string());
         printSkipped(std::cout, catalog->skipped, o.verbose);
         if (v) {
-            std::cout << "loaded #" << report.series.index << (report.volume ? ", volume " + std::to_string(report.volume) : "")
-                      << ": " << report.chosenBecause << '\n';
+            std::cout << "loaded #" << report.series.index
+                      << (report.volume ? ", volume " + std::to_string(report.volume) : "") << ": "
+                      << report.chosenBecause << '\n';
             if (!report.skippedBad.empty()) {
-                std::cout << "left out " << report.skippedBad.size() << " unreadable file(s) of the series (--skip-bad):\n";
+                std::cout << "left out " << report.skippedBad.size()
+                          << " unreadable file(s) of the series (--skip-bad):\n";
                 for (const auto& s : report.skippedBad) std::cout << "  " << s.reason << '\n';
             }
             if (report.paddedFiles) {
@@ -175,9 +174,11 @@ int run(const InfoOptions& o)
 Action registerInfo(CLI::App& app)
 {
     auto o = std::make_shared<InfoOptions>();
-    CLI::App* cmd = app.add_subcommand("info", "Describe a volume: grids, geometry, sparsity, memory, values, labels, layers; "
-                                               "on DICOM, the series table and the files set aside");
-    cmd->add_option("file", o->file, "Volume: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")->required();
+    CLI::App* cmd = app.add_subcommand("info",
+        "Describe a volume: grids, geometry, sparsity, memory, values, labels, layers; "
+        "on DICOM, the series table and the files set aside");
+    cmd->add_option("file", o->file, "Volume: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")
+        ->required();
     cmd->add_flag("--verbose", o->verbose, "DICOM: name every file set aside, with its reason");
     addReaderOptions(*cmd, o->reader);
     addCommonOptions(*cmd, o->common);

@@ -43,7 +43,8 @@ std::vector<volume::SlabLayer> parseLayers(const std::string& text)
     std::string item;
     while (std::getline(in, item, ',')) {
         const auto colon = item.find(':');
-        if (colon == std::string::npos) throw UsageError("--layers: expected tissue:mm[,tissue:mm...], got '" + item + "'");
+        if (colon == std::string::npos)
+            throw UsageError("--layers: expected tissue:mm[,tissue:mm...], got '" + item + "'");
         volume::SlabLayer layer;
         layer.tissue = item.substr(0, colon);
         try {
@@ -79,9 +80,12 @@ int run(const PhantomOptions& o, const CLI::App& cmd)
     volume::GridSpec grid;
     grid.spacing = parseSpacing(o.spacing, "--spacing");
     grid.direction = rotationFromDegrees(parseVec3(o.rotate, "--rotate"));
-    if (o.field == "1.5" || o.field == "1.5T") grid.field = volume::FieldStrength::T1_5;
-    else if (o.field == "3" || o.field == "3T") grid.field = volume::FieldStrength::T3;
-    else throw UsageError("--field: expected 1.5 or 3, got '" + o.field + "'");
+    if (o.field == "1.5" || o.field == "1.5T")
+        grid.field = volume::FieldStrength::T1_5;
+    else if (o.field == "3" || o.field == "3T")
+        grid.field = volume::FieldStrength::T3;
+    else
+        throw UsageError("--field: expected 1.5 or 3, got '" + o.field + "'");
 
     volume::PhantomModel model;
     if (o.kind == "slab") {
@@ -108,7 +112,8 @@ int run(const PhantomOptions& o, const CLI::App& cmd)
     }
 
     const std::string out = o.out.empty() ? o.kind + ".vdb" : o.out;
-    if (stderrIsTerminal() && !o.common.json) std::cerr << "voxhap: generating the " << o.kind << " phantom...\r" << std::flush;
+    if (stderrIsTerminal() && !o.common.json)
+        std::cerr << "voxhap: generating the " << o.kind << " phantom...\r" << std::flush;
     const volume::Volume v = volume::makePhantom(model, grid, table);
     volume::saveVdb(v, out);
     const auto info = volume::describe(v, table);
@@ -147,8 +152,10 @@ Action registerPhantom(CLI::App& app)
         ->check(CLI::IsMember({"average", "overweight", "calcified"}));
     cmd->add_option("--bmi", o->bmi, "lumbar: body-mass index in kg/m^2; scales the layers above the epidural space")
         ->check(CLI::Range(10.0, 80.0));
-    cmd->add_option("--layers", o->layers, "slab: tissue:mm,... from the surface down (default skin:2,fat:8,muscle:20)");
-    cmd->add_option("--tilt", o->tilt, "slab: tilt of the layers about x in degrees (default 0)")->check(CLI::Range(-75.0, 75.0));
+    cmd->add_option(
+        "--layers", o->layers, "slab: tissue:mm,... from the surface down (default skin:2,fat:8,muscle:20)");
+    cmd->add_option("--tilt", o->tilt, "slab: tilt of the layers about x in degrees (default 0)")
+        ->check(CLI::Range(-75.0, 75.0));
     cmd->add_option("--radius", o->radius, "sphere: radius in mm (default 10)");
     cmd->add_option("--thickness", o->thickness, "sphere: slab thickness in mm (default 40)");
     cmd->add_option("--slab-tissue", o->slabTissue, "sphere: tissue of the slab (default fat)");

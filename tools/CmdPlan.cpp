@@ -57,7 +57,8 @@ planning::Box parseBox(const std::string& text)
     }
     if (v.size() != 6) throw UsageError("--entry-box '" + text + "': expected six numbers x0,y0,z0,x1,y1,z1 [mm]");
     planning::Box b{Vec3d(v[0], v[1], v[2]), Vec3d(v[3], v[4], v[5])};
-    if ((b.min.array() > b.max.array()).any()) throw UsageError("--entry-box: each minimum must not exceed its maximum");
+    if ((b.min.array() > b.max.array()).any())
+        throw UsageError("--entry-box: each minimum must not exceed its maximum");
     return b;
 }
 
@@ -65,7 +66,8 @@ planning::Box parseBox(const std::string& text)
 void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool progress)
 {
     bool anyField = false;
-    for (const auto& t : table.tissues()) anyField = anyField || (t.critical && v.derived(segmentation::distanceFieldName(t.name)));
+    for (const auto& t : table.tissues())
+        anyField = anyField || (t.critical && v.derived(segmentation::distanceFieldName(t.name)));
     if (v.has(volume::Channel::Label) && anyField) return;
     segmentation::SegmentOptions so;
     so.automatic = !v.has(volume::Channel::Label); // keep given labels; only add their distance fields
@@ -75,8 +77,8 @@ void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool p
 
 void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
 {
-    os << "#" << rank << "  risk " << fixed(r.risk.total, 2) << "  entry (" << fixed(r.entry.x()) << ", " << fixed(r.entry.y())
-       << ", " << fixed(r.entry.z()) << ")  length " << fixed(r.lengthMm) << " mm  clearance "
+    os << "#" << rank << "  risk " << fixed(r.risk.total, 2) << "  entry (" << fixed(r.entry.x()) << ", "
+       << fixed(r.entry.y()) << ", " << fixed(r.entry.z()) << ")  length " << fixed(r.lengthMm) << " mm  clearance "
        << (std::isfinite(r.minClearanceMm) ? fixed(r.minClearanceMm) + " mm" : std::string("n/a"));
     if (!r.nearestStructure.empty()) os << " (" << r.nearestStructure << ")";
     os << "  peak " << fixed(r.peakForceN, 2) << " N\n     ";
@@ -90,7 +92,7 @@ void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
 } // namespace
 
 PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
-                           const nlohmann::json& report, const std::string& outDir, bool views)
+    const nlohmann::json& report, const std::string& outDir, bool views)
 {
     PlanFiles f;
     fs::create_directories(outDir);
@@ -99,7 +101,8 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
     planning::writeReport(report, f.report);
 
     std::vector<planning::MarkupLine> lines;
-    for (std::size_t i = 0; i < paths.size(); ++i) lines.push_back({"path " + std::to_string(i + 1), paths[i].entry, paths[i].target});
+    for (std::size_t i = 0; i < paths.size(); ++i)
+        lines.push_back({"path " + std::to_string(i + 1), paths[i].entry, paths[i].target});
     f.markups = (dir / "paths.mrk.json").string();
     planning::writeMarkups(lines, f.markups);
     if (paths.empty()) return f;
@@ -132,7 +135,8 @@ void printPlanFiles(std::ostream& os, const PlanFiles& f)
 {
     os << "  " << f.report << "  (report: segments, clearances, force profile, warnings, risk)\n";
     os << "  " << f.markups << "  (3D Slicer markups: one Line per path, LPS mm)\n";
-    if (!f.views.empty()) os << "  " << f.views << "  (axial, sagittal, coronal slices through the target, paths drawn)\n";
+    if (!f.views.empty())
+        os << "  " << f.views << "  (axial, sagittal, coronal slices through the target, paths drawn)\n";
     if (!f.plot.empty()) os << "  " << f.plot << "  (predicted force against depth, path 1)\n";
 }
 
@@ -142,7 +146,8 @@ int run(const PlanCliOptions& o)
 {
     // Cheap checks first: bad values fail before the volume loads.
     // The Lines of a markups file carry their own targets: --target is for the others.
-    if (o.entries.empty() && o.target.empty()) throw UsageError("--target is required (unless --entries gives the paths)");
+    if (o.entries.empty() && o.target.empty())
+        throw UsageError("--target is required (unless --entries gives the paths)");
     if (!o.entries.empty() && !o.target.empty()) {
         throw UsageError("--target and --entries exclude each other: the markups' Lines give the targets");
     }
@@ -201,15 +206,17 @@ int run(const PlanCliOptions& o)
     const PlanFiles files = writePlanOutputs(planner, paths, report, o.out, !o.noViews);
     if (o.common.json) {
         nlohmann::json j = report;
-        j["outputs"] = {{"report", files.report}, {"markups", files.markups}, {"views", files.views}, {"plot", files.plot}};
+        j["outputs"] = {
+            {"report", files.report}, {"markups", files.markups}, {"views", files.views}, {"plot", files.plot}};
         std::cout << j.dump(2) << '\n';
     } else {
-        std::cout << "plan to (" << fixed(target.x()) << ", " << fixed(target.y()) << ", " << fixed(target.z()) << ") in " << o.in
-                  << ", scene " << scene.name << ", " << fixed(planner.speedMmPerS(), 0) << " mm/s\n";
+        std::cout << "plan to (" << fixed(target.x()) << ", " << fixed(target.y()) << ", " << fixed(target.z())
+                  << ") in " << o.in << ", scene " << scene.name << ", " << fixed(planner.speedMmPerS(), 0)
+                  << " mm/s\n";
         if (found) {
-            std::cout << "searched " << found->counts.directions << " directions: " << found->counts.analysed << " analysed, "
-                      << found->counts.feasible << " feasible, " << found->pareto.size() << " on the Pareto front, in "
-                      << fixed(found->seconds, 3) << " s\n";
+            std::cout << "searched " << found->counts.directions << " directions: " << found->counts.analysed
+                      << " analysed, " << found->counts.feasible << " feasible, " << found->pareto.size()
+                      << " on the Pareto front, in " << fixed(found->seconds, 3) << " s\n";
         }
         std::cout << "\n";
         for (std::size_t i = 0; i < paths.size(); ++i) printPath(std::cout, paths[i], int(i) + 1);
@@ -226,10 +233,11 @@ int run(const PlanCliOptions& o)
 Action registerPlan(CLI::App& app)
 {
     auto o = std::make_shared<PlanCliOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "plan", "Biopsy path planning: analyse a path (--entry) or search entries to a target; report, Slicer markups, "
-                "views and the predicted force-depth plot");
-    cmd->add_option("volume", o->in, "Volume: DICOM, .nii, .nrrd, .mha or .vdb (segmented if it has no labels and distance fields)")
+    CLI::App* cmd = app.add_subcommand("plan",
+        "Biopsy path planning: analyse a path (--entry) or search entries to a target; report, Slicer markups, "
+        "views and the predicted force-depth plot");
+    cmd->add_option("volume", o->in,
+           "Volume: DICOM, .nii, .nrrd, .mha or .vdb (segmented if it has no labels and distance fields)")
         ->required();
     cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS] (required unless --entries)");
     cmd->add_option("--entry", o->entry, "Entry x,y,z [mm, LPS]: analyse this path instead of searching");
@@ -239,14 +247,22 @@ Action registerPlan(CLI::App& app)
     cmd->add_option("--scene", o->scene, "Scene whose force model, needle and device are used (default kyung)");
     cmd->add_option("--speed", o->speed, "Insertion speed of the force prediction [mm/s]; default the scene's")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--reference", o->reference, "Search: outward reference direction x,y,z (default 0,1,0: posterior)");
-    cmd->add_option("--max-angle", o->maxAngle, "Search: largest angle from the reference [deg]")->check(CLI::Range(0.0, 180.0))->default_val(45);
-    cmd->add_option("--max-length", o->maxLength, "Search: longest path [mm]; default the needle's length")->check(CLI::PositiveNumber);
+    cmd->add_option(
+        "--reference", o->reference, "Search: outward reference direction x,y,z (default 0,1,0: posterior)");
+    cmd->add_option("--max-angle", o->maxAngle, "Search: largest angle from the reference [deg]")
+        ->check(CLI::Range(0.0, 180.0))
+        ->default_val(45);
+    cmd->add_option("--max-length", o->maxLength, "Search: longest path [mm]; default the needle's length")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--min-clearance", o->minClearance, "Smallest clearance to a critical structure [mm]")
-        ->check(CLI::NonNegativeNumber)->default_val(5);
+        ->check(CLI::NonNegativeNumber)
+        ->default_val(5);
     cmd->add_option("--margin", o->margin, "Risk margin: structures nearer than this raise the risk [mm]")
-        ->check(CLI::PositiveNumber)->default_val(20);
-    cmd->add_option("--step", o->step, "Search: direction grid spacing [deg]")->check(CLI::Range(0.1, 45.0))->default_val(2);
+        ->check(CLI::PositiveNumber)
+        ->default_val(20);
+    cmd->add_option("--step", o->step, "Search: direction grid spacing [deg]")
+        ->check(CLI::Range(0.1, 45.0))
+        ->default_val(2);
     cmd->add_option("--entry-box", o->entryBox, "Search: entries only in the box x0,y0,z0,x1,y1,z1 [mm, LPS]");
     cmd->add_flag("--allow-bone", o->allowBone, "Search: accept paths that cross bone before the target's own");
     cmd->add_flag("--no-views", o->noViews, "Do not render the slice views");

@@ -43,8 +43,8 @@ int run(const PlotOptions& o)
         j["events"] = trace.events.size();
         std::cout << j.dump(2) << '\n';
     } else {
-        std::cout << "wrote  " << png << "  (" << trace.samples.size() << " samples, " << trace.layers.size() << " layers, "
-                  << trace.events.size() << " events)\n";
+        std::cout << "wrote  " << png << "  (" << trace.samples.size() << " samples, " << trace.layers.size()
+                  << " layers, " << trace.events.size() << " events)\n";
     }
     return 0;
 }
@@ -54,9 +54,10 @@ int run(const PlotOptions& o)
 Action registerPlot(CLI::App& app)
 {
     auto o = std::make_shared<PlotOptions>();
-    CLI::App* cmd = app.add_subcommand("plot", "Force-depth PNG of a recording, with layer bands and events (needs gnuplot)");
+    CLI::App* cmd =
+        app.add_subcommand("plot", "Force-depth PNG of a recording, with layer bands and events (needs gnuplot)");
     cmd->add_option("recording", o->input,
-                    "insertion.csv (voxhap simulate), session.csv (voxhap serve; events.csv beside it), or their folder")
+           "insertion.csv (voxhap simulate), session.csv (voxhap serve; events.csv beside it), or their folder")
         ->required()
         ->check(CLI::ExistingPath);
     cmd->add_option("--out,-o", o->out, "Output PNG (default: force-depth.png beside the recording)");

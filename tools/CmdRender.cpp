@@ -34,7 +34,8 @@ namespace fs = std::filesystem;
 struct RenderOptions {
     CommonOptions common;
     ReaderOptions reader;
-    std::string input, views = "axial,sagittal,coronal,3d", mode = "colour", caster = "auto", window, path, point, out = "voxhap-render";
+    std::string input, views = "axial,sagittal,coronal,3d", mode = "colour", caster = "auto", window, path, point,
+                       out = "voxhap-render";
     double pixelMm = 0.0;
     int size = 768;
     bool noLabels = false, noSurfaces = false;
@@ -50,7 +51,9 @@ render::RenderRequest request(const RenderOptions& o)
     } catch (const ValueError& e) {
         throw UsageError(e.what());
     }
-    r.caster = o.caster == "gpu" ? render::RayCaster::Gpu : o.caster == "cpu" ? render::RayCaster::Cpu : render::RayCaster::Auto;
+    r.caster = o.caster == "gpu" ? render::RayCaster::Gpu
+        : o.caster == "cpu"      ? render::RayCaster::Cpu
+                                 : render::RayCaster::Auto;
     if (r.caster == render::RayCaster::Cpu && r.mode == render::BlendMode::Sum) {
         throw UsageError("--caster cpu: the CPU ray caster has no summed projection");
     }
@@ -83,8 +86,9 @@ int run(const RenderOptions& o)
     const double loadS = secondsSince(start);
     // The presets are Hounsfield windows: on MR they would show nothing true.
     if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
-        throw UsageError("--window " + o.window + ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
-                         "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
+        throw UsageError("--window " + o.window +
+            ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
+            "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
     }
     if (req.point) {
         const auto b = v.worldBounds();
@@ -109,11 +113,11 @@ int run(const RenderOptions& o)
         render::Image img = snap.render(k);
         const double s = secondsSince(t);
         const std::string name = k == render::ViewKind::ThreeD
-                                     ? "3d-" + std::string(render::blendModeName(req.mode)) + ".png"
-                                     : std::string(render::viewName(k)) + ".png";
+            ? "3d-" + std::string(render::blendModeName(req.mode)) + ".png"
+            : std::string(render::viewName(k)) + ".png";
         render::writePng(img, fs::path(o.out) / name);
         files.push_back({{"view", render::viewName(k)}, {"file", (fs::path(o.out) / name).string()},
-                         {"width", img.width()}, {"height", img.height()}, {"seconds", s}});
+            {"width", img.width()}, {"height", img.height()}, {"seconds", s}});
         images.push_back(std::move(img));
     }
     const fs::path sheet = fs::path(o.out) / "sheet.png";
@@ -132,8 +136,8 @@ int run(const RenderOptions& o)
         j["dense_bytes"] = snap.volume().denseBytes();
         std::cout << j.dump(2) << '\n';
     } else {
-        std::cout << std::fixed << std::setprecision(3) << "read   " << o.input << " in " << loadS << " s; handed to VTK in "
-                  << setUpS << " s (" << snap.volume().denseBytes() / (1 << 20) << " MiB)\n"
+        std::cout << std::fixed << std::setprecision(3) << "read   " << o.input << " in " << loadS
+                  << " s; handed to VTK in " << setUpS << " s (" << snap.volume().denseBytes() / (1 << 20) << " MiB)\n"
                   << std::setprecision(1) << "point  " << p.x() << ", " << p.y() << ", " << p.z() << " mm (LPS)\n";
         for (const auto& f : files) {
             std::cout << "wrote  " << f["file"].get<std::string>() << "  " << f["width"] << " x " << f["height"] << ", "
@@ -142,7 +146,8 @@ int run(const RenderOptions& o)
         if (!images.empty()) std::cout << "wrote  " << sheet.string() << "  (contact sheet)\n";
     }
     // Which path the views took, on stderr (one line): slices never need GL.
-    if (display && display->available()) std::cerr << "voxhap render: slices without GL; " << display->description() << '\n';
+    if (display && display->available())
+        std::cerr << "voxhap render: slices without GL; " << display->description() << '\n';
     if (!failure.empty()) throw IoError(failure);
     return 0;
 }
@@ -152,19 +157,22 @@ int run(const RenderOptions& o)
 Action registerRender(CLI::App& app)
 {
     auto o = std::make_shared<RenderOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "render", "Snapshots of a volume: axial, sagittal, coronal and 3D views with paths, as PNGs and a contact sheet");
+    CLI::App* cmd = app.add_subcommand("render",
+        "Snapshots of a volume: axial, sagittal, coronal and 3D views with paths, as PNGs and a contact sheet");
     cmd->add_option("volume", o->input, "A volume: .vdb, .nrrd, .nii, .mha or a DICOM folder")->required();
     cmd->add_option("--views", o->views, "Comma-separated views: axial, sagittal, coronal, 3d (default all four)");
     cmd->add_option("--mode", o->mode, "3D blend mode: colour (tissue colours), grey, mip or sum (default colour)");
     cmd->add_option("--caster", o->caster, "3D ray caster: auto (the faster for the mode), gpu or cpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}));
-    cmd->add_option("--window", o->window, "Window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft; MIP: bone); on MR WIDTH,LEVEL in its "
-                   "units, default the 1st to 99th percentile of the body's voxels");
+    cmd->add_option("--window", o->window,
+        "Window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft; MIP: bone); on MR WIDTH,LEVEL in its "
+        "units, default the 1st to 99th percentile of the body's voxels");
     cmd->add_option("--path", o->path, "Planned paths: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--point", o->point, "Slice position and crosshair x,y,z [mm, LPS] (default: the path's target, else the centre)");
-    cmd->add_option("--pixel", o->pixelMm, "Pixel size [mm] (default: the finest voxel size)")->check(CLI::PositiveNumber);
+    cmd->add_option("--point", o->point,
+        "Slice position and crosshair x,y,z [mm, LPS] (default: the path's target, else the centre)");
+    cmd->add_option("--pixel", o->pixelMm, "Pixel size [mm] (default: the finest voxel size)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--size", o->size, "Largest side of a view [px] (default 768)")->check(CLI::Range(32, 4096));
     cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
     cmd->add_flag("--no-surfaces", o->noSurfaces, "3D view without the critical-structure surfaces");

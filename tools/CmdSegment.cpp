@@ -47,7 +47,8 @@ volume::Volume labelsOnly(const volume::Volume& v)
 {
     volume::Volume out(v.transformPtr()->copy(), v.indexBox());
     out.metadata() = v.metadata();
-    out.setGrid(volume::Channel::Label, std::const_pointer_cast<openvdb::GridBase>(v.grid(volume::Channel::Label))->copyGrid());
+    out.setGrid(
+        volume::Channel::Label, std::const_pointer_cast<openvdb::GridBase>(v.grid(volume::Channel::Label))->copyGrid());
     return out;
 }
 
@@ -58,7 +59,8 @@ int run(const SegmentCliOptions& o)
     if (!o.exportNrrd.empty() && volume::formatOf(o.exportNrrd) != volume::VolumeFormat::Nrrd) {
         throw UsageError("--export '" + o.exportNrrd + "': expected a .nrrd file name");
     }
-    if (!o.labelMap.empty() && o.labels.empty()) throw UsageError("--label-map needs --labels (the mapping of its values to tissues)");
+    if (!o.labelMap.empty() && o.labels.empty())
+        throw UsageError("--label-map needs --labels (the mapping of its values to tissues)");
     const volume::TissueTable& table = tissueTable(o.common);
     const bool terminal = stderrIsTerminal() && !o.common.json;
 
@@ -103,29 +105,28 @@ int run(const SegmentCliOptions& o)
         j["torso_fraction"] = r.torsoFraction;
         j["labels"] = nlohmann::json::array();
         for (const auto& l : r.labels) {
-            j["labels"].push_back({{"id", l.id},
-                                   {"name", l.name},
-                                   {"voxels", l.voxels},
-                                   {"ml", l.ml},
-                                   {"min_mm", {l.bounds[0].x(), l.bounds[0].y(), l.bounds[0].z()}},
-                                   {"max_mm", {l.bounds[1].x(), l.bounds[1].y(), l.bounds[1].z()}}});
+            j["labels"].push_back({{"id", l.id}, {"name", l.name}, {"voxels", l.voxels}, {"ml", l.ml},
+                {"min_mm", {l.bounds[0].x(), l.bounds[0].y(), l.bounds[0].z()}},
+                {"max_mm", {l.bounds[1].x(), l.bounds[1].y(), l.bounds[1].z()}}});
         }
         std::cout << j.dump(2) << '\n';
         return 0;
     }
-    std::cout << "segmented " << o.in << " (" << r.method << ") in " << std::fixed << std::setprecision(1) << r.seconds << " s";
+    std::cout << "segmented " << o.in << " (" << r.method << ") in " << std::fixed << std::setprecision(1) << r.seconds
+              << " s";
     if (r.importedVoxels) std::cout << "; " << r.importedVoxels << " voxels from the imported map";
     std::cout << "\n";
     // What the rules could not do here (a head, a limb, an MR contrast): said, not hidden.
     for (const auto& note : r.notes) std::cout << "note: " << note << '\n';
     std::cout << '\n';
-    std::cout << std::left << std::setw(4) << "id" << std::setw(22) << "label" << std::right << std::setw(11) << "voxels"
-              << std::setw(10) << "ml" << "   bounding box [mm, LPS]\n";
+    std::cout << std::left << std::setw(4) << "id" << std::setw(22) << "label" << std::right << std::setw(11)
+              << "voxels" << std::setw(10) << "ml"
+              << "   bounding box [mm, LPS]\n";
     for (const auto& l : r.labels) {
-        std::cout << std::left << std::setw(4) << l.id << std::setw(22) << l.name << std::right << std::setw(11) << l.voxels
-                  << std::setw(10) << std::setprecision(1) << l.ml << "   (" << std::setprecision(0) << l.bounds[0].x() << ", "
-                  << l.bounds[0].y() << ", " << l.bounds[0].z() << ") .. (" << l.bounds[1].x() << ", " << l.bounds[1].y()
-                  << ", " << l.bounds[1].z() << ")\n";
+        std::cout << std::left << std::setw(4) << l.id << std::setw(22) << l.name << std::right << std::setw(11)
+                  << l.voxels << std::setw(10) << std::setprecision(1) << l.ml << "   (" << std::setprecision(0)
+                  << l.bounds[0].x() << ", " << l.bounds[0].y() << ", " << l.bounds[0].z() << ") .. ("
+                  << l.bounds[1].x() << ", " << l.bounds[1].y() << ", " << l.bounds[1].z() << ")\n";
     }
     std::cout << "\ndistance fields:";
     for (const auto& d : r.distanceFields) std::cout << ' ' << d;
@@ -141,19 +142,22 @@ int run(const SegmentCliOptions& o)
 Action registerSegment(CLI::App& app)
 {
     auto o = std::make_shared<SegmentCliOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "segment",
+    CLI::App* cmd = app.add_subcommand("segment",
         "Label tissues (CT: HU thresholds, connectivity and shape rules; MR: fat and muscle from T1), apply an "
         "imported label map, and compute signed distance fields of the critical structures (sdf.<tissue> grids)");
-    cmd->add_option("in", o->in, "Input volume: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")->required();
-    cmd->add_option("--out", o->out, "Output .vdb: the input grids, the label grid and the distance fields")->required();
+    cmd->add_option("in", o->in, "Input volume: a DICOM directory or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb")
+        ->required();
+    cmd->add_option("--out", o->out, "Output .vdb: the input grids, the label grid and the distance fields")
+        ->required();
     cmd->add_option("--labels", o->labels,
-                    "Label mapping JSON {\"schema\": \"voxhap.label-mapping/1\", \"file\": MAP, \"labels\": {VALUE: "
-                    "TISSUE}}: the imported labels override the automatic ones");
-    cmd->add_option("--label-map", o->labelMap, "The label map (.nrrd, .nii, .mha, .vdb) if the mapping does not name it");
-    cmd->add_option("--export", o->exportNrrd, "Also write the label grid alone as .nrrd (opens in 3D Slicer as a label map)");
+        "Label mapping JSON {\"schema\": \"voxhap.label-mapping/1\", \"file\": MAP, \"labels\": {VALUE: "
+        "TISSUE}}: the imported labels override the automatic ones");
+    cmd->add_option(
+        "--label-map", o->labelMap, "The label map (.nrrd, .nii, .mha, .vdb) if the mapping does not name it");
+    cmd->add_option(
+        "--export", o->exportNrrd, "Also write the label grid alone as .nrrd (opens in 3D Slicer as a label map)");
     cmd->add_option("--critical", o->critical,
-                    "Comma-separated tissues that get a distance field (default: those the tissue table marks critical)");
+        "Comma-separated tissues that get a distance field (default: those the tissue table marks critical)");
     cmd->add_option("--band", o->bandMm, "Distance fields are exact within this distance of a structure [mm]")
         ->check(CLI::PositiveNumber)
         ->default_val(30.0);

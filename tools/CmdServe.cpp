@@ -39,8 +39,8 @@ struct ServeOptions {
     bool reckless = false;
 };
 
-std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App& cmd, const haptic::NeedleForceModel& m,
-                                           const haptic::Scene& scene, double& duration)
+std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App& cmd,
+    const haptic::NeedleForceModel& m, const haptic::Scene& scene, double& duration)
 {
     const double speed = cmd.count("--speed") ? o.speed : scene.speedMmPerS;
     if (o.device == "hand") {
@@ -64,7 +64,8 @@ std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App
             } catch (const std::exception&) {
                 throw UsageError("--device: '" + o.device + "': the port must be a number");
             }
-            if (io.port < 1 || io.port > 65535) throw UsageError("--device: port " + o.device.substr(5) + " outside 1..65535");
+            if (io.port < 1 || io.port > 65535)
+                throw UsageError("--device: port " + o.device.substr(5) + " outside 1..65535");
         }
         auto dev = std::make_unique<haptic::IgtlDevice>(io, m.device());
         std::cerr << "voxhap serve: OpenIGTLink server on 127.0.0.1:" << dev->port()
@@ -146,42 +147,35 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     haptic::writeSession(session, model->layers(), o.out);
     const haptic::TraineeMetrics m = haptic::traineeMetrics(session, model->layers(), model->path().direction);
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
-    nlohmann::json j = {{"scene", scene.name},
-                        {"device", device->name()},
-                        {"success_dura_intact", m.success},
-                        {"bone_contacts", m.boneContacts},
-                        {"pops", m.pops},
-                        {"insertion_angle_deg", opt(m.insertionAngleDeg)},
-                        {"speed_mean_mm_per_s", m.speedMeanMmPerS},
-                        {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2},
-                        {"epidural_overshoot_mm", opt(m.overshootMm)},
-                        {"syrrate_per_m", opt(m.syrrate)},
-                        {"duration_s", m.durationS},
-                        {"ticks", loop.ticks()},
-                        {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
-                        {"tick_compute_ns", {{"p50", loop.stats().computeQuantileNs(0.5)},
-                                             {"p99", loop.stats().computeQuantileNs(0.99)},
-                                             {"max", loop.maxComputeNs()}}},
-                        {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)},
-                        {"overruns", loop.overruns()},
-                        {"dropped_records", loop.droppedRecords()},
-                        {"interrupted", InterruptGuard::interrupted()}};
+    nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success_dura_intact", m.success},
+        {"bone_contacts", m.boneContacts}, {"pops", m.pops}, {"insertion_angle_deg", opt(m.insertionAngleDeg)},
+        {"speed_mean_mm_per_s", m.speedMeanMmPerS}, {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2},
+        {"epidural_overshoot_mm", opt(m.overshootMm)}, {"syrrate_per_m", opt(m.syrrate)}, {"duration_s", m.durationS},
+        {"ticks", loop.ticks()}, {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
+        {"tick_compute_ns",
+            {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
+                {"max", loop.maxComputeNs()}}},
+        {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
+        {"dropped_records", loop.droppedRecords()}, {"interrupted", InterruptGuard::interrupted()}};
     writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
     if (o.common.json) {
         std::cout << j.dump(2) << '\n';
         return 0;
     }
     std::cout << "voxhap serve: " << scene.name << ", device " << device->name() << ", " << loop.ticks() << " ticks in "
-              << std::fixed << std::setprecision(1) << wall << " s" << (InterruptGuard::interrupted() ? " (interrupted)" : "") << "\n"
+              << std::fixed << std::setprecision(1) << wall << " s"
+              << (InterruptGuard::interrupted() ? " (interrupted)" : "") << "\n"
               << "  dura            " << (m.success ? "intact (success)" : "punctured") << "\n"
               << "  pops            " << m.pops << ", bone contacts " << m.boneContacts << "\n"
               << "  speed           " << std::setprecision(2) << m.speedMeanMmPerS << " mm/s mean, variance "
               << m.speedVarianceMm2PerS2 << " mm²/s²\n";
     if (m.overshootMm) std::cout << "  epidural travel " << *m.overshootMm << " mm\n";
     std::cout << "  tick compute    p50 " << std::setprecision(1) << loop.stats().computeQuantileNs(0.5) * 1e-3
-              << " us, p99 " << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us, overruns " << loop.overruns() << "\n"
+              << " us, p99 " << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us, overruns " << loop.overruns()
+              << "\n"
               << "\noutputs:\n  " << (fs::path(o.out) / "session.csv").string() << "\n  "
-              << (fs::path(o.out) / "events.csv").string() << "\n  " << (fs::path(o.out) / "metrics.json").string() << '\n';
+              << (fs::path(o.out) / "events.csv").string() << "\n  " << (fs::path(o.out) / "metrics.json").string()
+              << '\n';
     return 0;
 }
 
@@ -190,21 +184,24 @@ int run(const ServeOptions& o, const CLI::App& cmd)
 Action registerServe(CLI::App& app)
 {
     auto o = std::make_shared<ServeOptions>();
-    CLI::App* cmd = app.add_subcommand("serve", "Run the haptic servo loop in real time against a device; Ctrl-C stops "
-                                                "and writes the session and trainee metrics");
+    CLI::App* cmd = app.add_subcommand("serve",
+        "Run the haptic servo loop in real time against a device; Ctrl-C stops "
+        "and writes the session and trainee metrics");
     cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name")->required();
     cmd->add_option("--device", o->device,
-                    "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion), "
-                    "igtl[:PORT] (an OpenIGTLink server on loopback, default port 18944) or replay:FILE (a recorded "
-                    "session.csv)");
-    cmd->add_option("--speed", o->speed, "Hand or script speed [mm/s] (default: the scene's)")->check(CLI::PositiveNumber);
-    cmd->add_option("--duration", o->duration, "Stop after this many seconds (hand default 60)")->check(CLI::PositiveNumber);
+        "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion), "
+        "igtl[:PORT] (an OpenIGTLink server on loopback, default port 18944) or replay:FILE (a recorded "
+        "session.csv)");
+    cmd->add_option("--speed", o->speed, "Hand or script speed [mm/s] (default: the scene's)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--duration", o->duration, "Stop after this many seconds (hand default 60)")
+        ->check(CLI::PositiveNumber);
     cmd->add_flag("--reckless", o->reckless, "The simulated hand does not stop when it feels the loss of resistance");
     cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-serve)");
     cmd->add_option("--viewer", o->viewer,
-                    "Stream the needle pose at about 50 Hz to `voxhap view --listen PORT` at [HOST:]PORT (OpenIGTLink "
-                    "TRANSFORM)");
+        "Stream the needle pose at about 50 Hz to `voxhap view --listen PORT` at [HOST:]PORT (OpenIGTLink "
+        "TRANSFORM)");
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };
 }

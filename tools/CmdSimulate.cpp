@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 struct SimulateOptions {
     CommonOptions common;
-    std::string input;       ///< .vdb file or phantom name, optional
+    std::string input; ///< .vdb file or phantom name, optional
     std::string scene;
     std::string entry, target, script, out = "voxhap-simulate";
     double speed = 0, depth = 0, rate = 0;
@@ -67,8 +67,8 @@ int run(const SimulateOptions& o, const CLI::App& cmd)
     const double pathLength = (inst.target() - inst.entry()).norm();
     const double depth = cmd.count("--depth") ? o.depth : scene.depthMm.value_or(pathLength);
     const haptic::InsertionScript script = o.script.empty()
-                                               ? haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed)
-                                               : haptic::InsertionScript::load(o.script);
+        ? haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed)
+        : haptic::InsertionScript::load(o.script);
     if (script.duration() * rate > 5e7) throw UsageError("--rate and the insertion give more than 5e7 ticks");
 
     auto model = inst.makeModel();
@@ -100,8 +100,9 @@ Action registerSimulate(CLI::App& app)
     CLI::App* cmd = app.add_subcommand(
         "simulate", "Insert a needle through a scene's force model: CSV, force-depth PNG and a summary");
     cmd->add_option("volume", o->input,
-                    "A labelled volume (.vdb, .nrrd, .nii, .mha, DICOM folder), or a phantom: lumbar[:average|overweight|calcified], "
-                    "torso (default: the scene's)");
+        "A labelled volume (.vdb, .nrrd, .nii, .mha, DICOM folder), or a phantom: "
+        "lumbar[:average|overweight|calcified], "
+        "torso (default: the scene's)");
     cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name (" + names + ")")->required();
     cmd->add_option("--entry", o->entry, "Entry point on the skin x,y,z [mm, LPS] (default: the scene's)");
     cmd->add_option("--target", o->target, "Target x,y,z [mm, LPS] (default: the scene's)");

@@ -69,7 +69,7 @@ double viewSecondsSince(std::chrono::steady_clock::time_point t)
 /// Hands the latest streamed pose to the viewer, and says how the stream is doing.
 class NeedleFeed {
 public:
-    NeedleFeed(haptic::PoseReceiver* receiver, double lengthMm) : mReceiver(receiver), mLengthMm(lengthMm) {}
+    NeedleFeed(haptic::PoseReceiver* receiver, double lengthMm) : mReceiver(receiver), mLengthMm(lengthMm) { }
     long poses() const { return mReceiver ? mReceiver->poses() : 0; }
     void pump(render::Viewer& viewer)
     {
@@ -100,7 +100,10 @@ private:
 /// Plays the script's steps one at a time, so that the window stays live while it waits.
 class ScriptPlayer {
 public:
-    ScriptPlayer(std::vector<render::ScriptStep> steps, std::string origin) : mSteps(std::move(steps)), mOrigin(std::move(origin)) {}
+    ScriptPlayer(std::vector<render::ScriptStep> steps, std::string origin)
+        : mSteps(std::move(steps)), mOrigin(std::move(origin))
+    {
+    }
     bool done() const { return mNext >= mSteps.size(); }
     /// Run steps until one must wait; false once a step asks to quit.
     /// @throw IoError when a wait-pose step times out
@@ -118,10 +121,11 @@ public:
                 mPosesAtStart = feed.poses();
             }
             const double waited = viewSecondsSince(*mWaitStarted);
-            const bool finished = s.kind == render::ScriptStep::Kind::Sleep ? waited >= s.seconds : feed.poses() > mPosesAtStart;
+            const bool finished =
+                s.kind == render::ScriptStep::Kind::Sleep ? waited >= s.seconds : feed.poses() > mPosesAtStart;
             if (!finished && s.kind == render::ScriptStep::Kind::WaitPose && waited >= s.seconds) {
                 throw IoError(mOrigin + ":" + std::to_string(s.line) + ": wait-pose: no needle pose within " +
-                              std::to_string(s.seconds) + " s" + (feed.poses() == 0 && !mListening ? " (no --listen)" : ""));
+                    std::to_string(s.seconds) + " s" + (feed.poses() == 0 && !mListening ? " (no --listen)" : ""));
             }
             if (!finished) return true;
             mWaitStarted.reset();
@@ -146,11 +150,8 @@ nlohmann::json paneJson(const render::Viewer& v)
     for (const render::PaneRect& p : v.layout().panes) {
         const render::ViewFrame& f = v.frame(p.view);
         const render::Vec2d o = v.imageOrigin(p.view);
-        panes.push_back({{"view", render::viewName(p.view)},
-                         {"pane", {p.x, p.y, p.width, p.height}},
-                         {"image_origin", {int(o.x()), int(o.y())}},
-                         {"image_size", {f.width, f.height}},
-                         {"pixel_mm", f.pixelMm}});
+        panes.push_back({{"view", render::viewName(p.view)}, {"pane", {p.x, p.y, p.width, p.height}},
+            {"image_origin", {int(o.x()), int(o.y())}}, {"image_size", {f.width, f.height}}, {"pixel_mm", f.pixelMm}});
     }
     return panes;
 }
@@ -172,13 +173,15 @@ int run(const ViewOptions& o)
     vo.labels = !o.noLabels;
     vo.planOut = o.save;
     if (!o.plan.empty()) vo.plan = render::loadPlan(o.plan);
-    ScriptPlayer script(o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script);
+    ScriptPlayer script(
+        o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script);
     const volume::TissueTable& table = tissueTable(o.common);
     const bool windowed = o.snapshot.empty();
     if (windowed) {
         const char* d = std::getenv("DISPLAY");
         if (!d || !render::displayReachable(d)) {
-            throw IoError("view: no X display ($DISPLAY unset or not answering); for a headless run give --snapshot FILE");
+            throw IoError(
+                "view: no X display ($DISPLAY unset or not answering); for a headless run give --snapshot FILE");
         }
     }
     // Before any thread starts: the guard may set $DISPLAY for this process.
@@ -191,15 +194,17 @@ int run(const ViewOptions& o)
     if (o.listen >= 0) {
         receiver = std::make_unique<haptic::PoseReceiver>(o.listen);
         script.setListening(true);
-        std::cerr << "voxhap view: listening for needle poses (OpenIGTLink TRANSFORM) on 127.0.0.1:" << receiver->port() << '\n';
+        std::cerr << "voxhap view: listening for needle poses (OpenIGTLink TRANSFORM) on 127.0.0.1:" << receiver->port()
+                  << '\n';
     }
     NeedleFeed feed(receiver.get(), o.needleLengthMm);
 
     const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
     // The presets are Hounsfield windows: on MR they would show nothing true.
     if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
-        throw UsageError("--window " + o.window + ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
-                         "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
+        throw UsageError("--window " + o.window +
+            ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
+            "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
     }
     if (vo.point) {
         const auto b = v.worldBounds();
@@ -220,8 +225,12 @@ int run(const ViewOptions& o)
         while (running && !InterruptGuard::interrupted()) {
             for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15)) {
                 switch (in.kind) {
-                case render::WindowInput::Kind::Click: running = viewer.clickWindow(in.x, in.y) && running; break;
-                case render::WindowInput::Kind::Scroll: viewer.scrollWindow(in.x, in.y, in.steps); break;
+                case render::WindowInput::Kind::Click:
+                    running = viewer.clickWindow(in.x, in.y) && running;
+                    break;
+                case render::WindowInput::Kind::Scroll:
+                    viewer.scrollWindow(in.x, in.y, in.steps);
+                    break;
                 case render::WindowInput::Kind::Key: {
                     render::ViewerEvent e;
                     e.kind = render::ViewerEvent::Kind::Key;
@@ -229,7 +238,9 @@ int run(const ViewOptions& o)
                     running = viewer.handle(e) && running;
                     break;
                 }
-                case render::WindowInput::Kind::Close: running = false; break;
+                case render::WindowInput::Kind::Close:
+                    running = false;
+                    break;
                 }
             }
             feed.pump(viewer);
@@ -276,9 +287,9 @@ int run(const ViewOptions& o)
         j["status"] = viewer.status();
         std::cout << j.dump(2) << '\n';
     } else {
-        std::cout << "view   " << o.input << ": " << width << " x " << height << " px, " << std::fixed << std::setprecision(3)
-                  << viewer.frame(render::ViewKind::Axial).pixelMm << " mm pixels, " << frames << " frames, ended: " << why
-                  << '\n';
+        std::cout << "view   " << o.input << ": " << width << " x " << height << " px, " << std::fixed
+                  << std::setprecision(3) << viewer.frame(render::ViewKind::Axial).pixelMm << " mm pixels, " << frames
+                  << " frames, ended: " << why << '\n';
         if (receiver) std::cout << "needle " << feed.poses() << " poses received\n";
         if (!o.snapshot.empty()) std::cout << "wrote  " << o.snapshot << '\n';
         std::cout << "status " << viewer.status() << '\n';
@@ -291,9 +302,9 @@ int run(const ViewOptions& o)
 Action registerView(CLI::App& app)
 {
     auto o = std::make_shared<ViewOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "view", "Interactive viewer: axial, sagittal, coronal and 3D panes; click the entry and target, measure "
-                "distances and angles; show a live needle streamed by `voxhap serve --viewer`");
+    CLI::App* cmd = app.add_subcommand("view",
+        "Interactive viewer: axial, sagittal, coronal and 3D panes; click the entry and target, measure "
+        "distances and angles; show a live needle streamed by `voxhap serve --viewer`");
     cmd->footer("Keys: n navigate (click moves the slices), p plan (click entry, then target), d distance, a angle\n"
                 "(two segments), arrows or wheel: slices, w window preset, c clear, s save the plan, q quit.\n"
                 "Views are radiological: axial from the feet, coronal from the front (patient's left on the right).");
@@ -304,15 +315,20 @@ Action registerView(CLI::App& app)
     cmd->add_option("--script", o->script, "Play events from a file (key, click, scroll, wait-pose, sleep; one a line)")
         ->check(CLI::ExistingFile);
     cmd->add_option("--snapshot", o->snapshot, "No window: play the script, write the window as this PNG and exit");
-    cmd->add_option("--listen", o->listen, "Receive the live needle (OpenIGTLink TRANSFORM) on 127.0.0.1:PORT (0: any free port)")
+    cmd->add_option("--listen", o->listen,
+           "Receive the live needle (OpenIGTLink TRANSFORM) on 127.0.0.1:PORT (0: any free port)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--timeout", o->timeoutS, "Quit after this many seconds")->check(CLI::PositiveNumber);
-    cmd->add_option("--needle-length", o->needleLengthMm, "Length of the streamed needle drawn behind its tip [mm] (default 90)")
+    cmd->add_option(
+           "--needle-length", o->needleLengthMm, "Length of the streamed needle drawn behind its tip [mm] (default 90)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--size", o->size, "Window WIDTHxHEIGHT [px] (default 1024x1048)");
     cmd->add_option("--mode", o->mode, "3D blend mode: colour, grey, mip or sum (default colour)");
-    cmd->add_option("--window", o->window, "Slice window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft); on MR WIDTH,LEVEL in its units, default the 1st to 99th percentile of the body's voxels");
-    cmd->add_option("--point", o->point, "First crosshair x,y,z [mm, LPS] (default: the plan's target, else the centre)");
+    cmd->add_option("--window", o->window,
+        "Slice window: bone, soft, lung or WIDTH,LEVEL in HU on CT (default soft); on MR WIDTH,LEVEL in its units, "
+        "default the 1st to 99th percentile of the body's voxels");
+    cmd->add_option(
+        "--point", o->point, "First crosshair x,y,z [mm, LPS] (default: the plan's target, else the centre)");
     cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
     cmd->add_flag("--no-3d", o->no3d, "No 3D pane (no GL needed)");
     addReaderOptions(*cmd, o->reader);

@@ -47,7 +47,8 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
     j["modality"] = info.metadata.modality;
     j["source"] = info.metadata.source;
     j["description"] = info.metadata.description;
-    j["units"] = {{"hu", info.metadata.huUnits}, {"t1", info.metadata.t1Units}, {"intensity", info.metadata.intensityUnits}};
+    j["units"] = {
+        {"hu", info.metadata.huUnits}, {"t1", info.metadata.t1Units}, {"intensity", info.metadata.intensityUnits}};
     if (!info.metadata.mrWeighting.empty()) j["mr_weighting"] = info.metadata.mrWeighting;
     j["dimensions"] = vec(info.box.dims());
     j["index_min"] = vec(info.box.min);
@@ -67,7 +68,7 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
     Json grids = Json::array();
     for (const auto& c : info.channels) {
         grids.push_back({{"name", c.name}, {"type", c.valueType}, {"active_voxels", c.activeVoxels},
-                         {"memory_bytes", c.memoryBytes}, {"min", c.min}, {"max", c.max}, {"mean", c.mean}});
+            {"memory_bytes", c.memoryBytes}, {"min", c.min}, {"max", c.max}, {"mean", c.mean}});
     }
     j["grids"] = grids;
     Json labels = Json::array();
@@ -79,7 +80,7 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
         Json layers = Json::array();
         for (const auto& l : *info.layers) {
             layers.push_back({{"tissue", l.name}, {"id", l.tissue}, {"start_mm", l.startMm}, {"end_mm", l.endMm},
-                              {"thickness_mm", l.endMm - l.startMm}});
+                {"thickness_mm", l.endMm - l.startMm}});
         }
         j["layers"] = layers;
     }
@@ -119,8 +120,8 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
     if (const std::string vol = extra("volume"); !vol.empty()) row("volume") << vol << '\n';
     if (const std::string r = extra("resampled"); !r.empty()) {
         row("resampled") << r << '\n';
-        row("") << "interpolation: " << extra("interpolation") << "; source voxels outside the grid: "
-                << extra("source_voxels_outside_grid") << '\n';
+        row("") << "interpolation: " << extra("interpolation")
+                << "; source voxels outside the grid: " << extra("source_voxels_outside_grid") << '\n';
     }
     std::string grids;
     for (const auto& c : info.channels) grids += (grids.empty() ? "" : ", ") + c.name + " (" + c.valueType + ")";
@@ -136,21 +137,20 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
             row("") << "ijk"[c] << " -> " << triple(Vec3d(g.direction.col(c)), 6, ", ") << '\n';
         }
     }
-    row("bounds") << "x " << fixed(info.worldBounds[0].x(), 1) << " .. " << fixed(info.worldBounds[1].x(), 1)
-                  << ", y " << fixed(info.worldBounds[0].y(), 1) << " .. " << fixed(info.worldBounds[1].y(), 1)
-                  << ", z " << fixed(info.worldBounds[0].z(), 1) << " .. " << fixed(info.worldBounds[1].z(), 1)
-                  << " mm\n";
+    row("bounds") << "x " << fixed(info.worldBounds[0].x(), 1) << " .. " << fixed(info.worldBounds[1].x(), 1) << ", y "
+                  << fixed(info.worldBounds[0].y(), 1) << " .. " << fixed(info.worldBounds[1].y(), 1) << ", z "
+                  << fixed(info.worldBounds[0].z(), 1) << " .. " << fixed(info.worldBounds[1].z(), 1) << " mm\n";
     const double fraction = info.denseVoxels ? 100.0 * double(info.activeVoxels) / double(info.denseVoxels) : 0.0;
     row("voxels") << info.activeVoxels << " active of " << info.denseVoxels << " dense (" << fixed(fraction, 1)
                   << " %)\n";
     row("memory") << mib(info.memoryBytes) << " sparse, " << mib(denseBytes(info)) << " as dense float/int32 arrays\n";
     for (const auto& c : info.channels) {
         if (c.name == "label") continue;
-        const std::string unit = c.name == "hu"  ? info.metadata.huUnits
-                                 : c.name == "t1" ? info.metadata.t1Units
-                                                  : info.metadata.intensityUnits;
-        row(c.name.c_str()) << "min " << fixed(c.min, 1) << ", max " << fixed(c.max, 1) << ", mean "
-                            << fixed(c.mean, 1) << ' ' << unit << " (active voxels)\n";
+        const std::string unit = c.name == "hu" ? info.metadata.huUnits
+            : c.name == "t1"                    ? info.metadata.t1Units
+                                                : info.metadata.intensityUnits;
+        row(c.name.c_str()) << "min " << fixed(c.min, 1) << ", max " << fixed(c.max, 1) << ", mean " << fixed(c.mean, 1)
+                            << ' ' << unit << " (active voxels)\n";
     }
     if (!info.labels.empty()) {
         os << "labels\n";
@@ -163,7 +163,8 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
     if (info.layers) {
         os << "layers along the reference path (depth from its entry):\n";
         os << "  " << std::right << std::setw(9) << "from mm" << std::setw(10) << "to mm" << std::setw(12)
-           << "thickness" << "  tissue\n";
+           << "thickness"
+           << "  tissue\n";
         for (const auto& l : *info.layers) {
             os << "  " << std::setw(9) << fixed(l.startMm, 2) << std::setw(10) << fixed(l.endMm, 2) << std::setw(12)
                << fixed(l.endMm - l.startMm, 2) << "  " << l.name << '\n';

@@ -15,14 +15,14 @@ namespace voxhap::tools {
 
 /// @brief Command-line form of volume::LoadOptions.
 struct ReaderOptions {
-    std::string series;        ///< --series
-    std::size_t volume = 0;    ///< --volume (from 1; 0: the series must hold one)
-    bool resample = false;     ///< --resample
-    bool skipBad = false;      ///< --skip-bad
-    double airHu = -950.0;     ///< --air-hu
-    double memoryCapMb = 4096; ///< --memory-cap [MiB]
-    bool t1Map = false;        ///< --t1-map
-    bool t1Weighted = false;   ///< --t1-weighted
+    std::string series;           ///< --series
+    std::size_t volume = 0;       ///< --volume (from 1; 0: the series must hold one)
+    bool resample = false;        ///< --resample
+    bool skipBad = false;         ///< --skip-bad
+    double airHu = -950.0;        ///< --air-hu
+    double memoryCapMb = 4096;    ///< --memory-cap [MiB]
+    bool t1Map = false;           ///< --t1-map
+    bool t1Weighted = false;      ///< --t1-weighted
     std::string channel = "auto"; ///< --channel
 };
 
@@ -37,7 +37,7 @@ void clearProgress();
 
 /// @brief volume::loadVolume() with the progress bar when @p showProgress, erased
 /// afterwards whether the load succeeds or throws.
-volume::Volume loadVolumeWithProgress(const std::string& path, const ReaderOptions& opts, bool showProgress,
-                                      volume::DicomLoadReport* report = nullptr);
+volume::Volume loadVolumeWithProgress(
+    const std::string& path, const ReaderOptions& opts, bool showProgress, volume::DicomLoadReport* report = nullptr);
 
 } // namespace voxhap::tools

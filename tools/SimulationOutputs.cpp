@@ -15,37 +15,28 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json summaryJson(const haptic::InsertionResult& r, const haptic::Scene& scene, const std::string& csv,
-                           const std::string& png)
+nlohmann::json summaryJson(
+    const haptic::InsertionResult& r, const haptic::Scene& scene, const std::string& csv, const std::string& png)
 {
     const haptic::InsertionSummary& s = r.summary;
     const auto depth = [](double d) { return std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr); };
     nlohmann::json events = nlohmann::json::array();
     for (const haptic::Event& e : r.events) {
-        events.push_back({{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
+        events.push_back(
+            {{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
     }
-    return {{"scene", scene.name},
-            {"skin_puncture_mm", depth(s.skinEntryMm)},
-            {"pops", s.pops},
-            {"loss_of_resistance_mm", depth(s.lorMm)},
-            {"dura_puncture_mm", depth(s.duraMm)},
-            {"bone_contact_mm", depth(s.boneMm)},
-            {"critical_breach_mm", depth(s.breachMm)},
-            {"peak_model_force_N", s.peakModelN},
-            {"peak_rendered_force_N", s.peakRenderedN},
-            {"peak_plunger_force_N", s.peakPlungerN},
-            {"faults", s.faults},
-            {"final_depth_mm", s.finalDepthMm},
-            {"duration_s", s.durationS},
-            {"events", events},
-            {"csv", csv},
-            {"png", png}};
+    return {{"scene", scene.name}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
+        {"loss_of_resistance_mm", depth(s.lorMm)}, {"dura_puncture_mm", depth(s.duraMm)},
+        {"bone_contact_mm", depth(s.boneMm)}, {"critical_breach_mm", depth(s.breachMm)},
+        {"peak_model_force_N", s.peakModelN}, {"peak_rendered_force_N", s.peakRenderedN},
+        {"peak_plunger_force_N", s.peakPlungerN}, {"faults", s.faults}, {"final_depth_mm", s.finalDepthMm},
+        {"duration_s", s.durationS}, {"events", events}, {"csv", csv}, {"png", png}};
 }
 
 } // namespace
 
-SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::SceneInstance& inst,
-                                const std::string& outDir, bool plot)
+SimulationFiles writeSimulation(
+    const haptic::InsertionResult& r, const haptic::SceneInstance& inst, const std::string& outDir, bool plot)
 {
     const haptic::Scene& scene = inst.scene();
     fs::create_directories(outDir);
@@ -54,8 +45,9 @@ SimulationFiles writeSimulation(const haptic::InsertionResult& r, const haptic::
     f.json = (fs::path(outDir) / "summary.json").string();
     const std::string png = (fs::path(outDir) / "force-depth.png").string();
     haptic::writeInsertionCsv(r, inst.layers(), f.csv);
-    f.plotted = plot && render::plotForceDepth(render::forceTrace(r, inst.layers(), scene.name + ": " + scene.description),
-                                                png, f.plotWhy);
+    f.plotted = plot &&
+        render::plotForceDepth(
+            render::forceTrace(r, inst.layers(), scene.name + ": " + scene.description), png, f.plotWhy);
     if (f.plotted) f.png = png;
     f.summary = summaryJson(r, scene, f.csv, f.png);
     writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });

@@ -24,10 +24,10 @@ inline constexpr double kMinTorsoWidthMm = 240.0;
 
 /// @brief The body's widest axial cross-section along LPS x.
 struct BodyWidth {
-    double widestMm = 0;   ///< over the cross-sections the field of view does not cut [mm]
+    double widestMm = 0;    ///< over the cross-sections the field of view does not cut [mm]
     double widestCutMm = 0; ///< over the cut ones: a lower bound of their width [mm]
-    int sections = 0;      ///< 2 mm axial sections (LPS z) that hold body
-    int cutSections = 0;   ///< of which touch the volume's edge left or right
+    int sections = 0;       ///< 2 mm axial sections (LPS z) that hold body
+    int cutSections = 0;    ///< of which touch the volume's edge left or right
     /// @brief At least one section was measured whole, or a cut one already reaches a trunk's width.
     bool measured() const { return sections > cutSections || widestCutMm >= kMinTorsoWidthMm; }
     /// @brief The body is a trunk somewhere (measured whole or not).

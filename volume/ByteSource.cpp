@@ -53,7 +53,8 @@ struct ByteSource::Impl {
         // A gzip member starts 1F 8B; read the second byte if it is not in the buffer yet.
         const std::uint64_t at = position();
         unsigned char first = z.next_in[0], second = 0;
-        if (z.avail_in >= 2) second = z.next_in[1];
+        if (z.avail_in >= 2)
+            second = z.next_in[1];
         else {
             in.clear();
             const auto back = in.tellg();
@@ -65,7 +66,7 @@ struct ByteSource::Impl {
         }
         if (first != 0x1f || second != 0x8b) {
             throw IoError(name + ": data: bytes after the end of the compressed stream (at byte " + std::to_string(at) +
-                          ") are not another gzip member");
+                ") are not another gzip member");
         }
         if (inflateReset(&z) != Z_OK) throw IoError(name + ": zlib reset failed");
     }
@@ -90,7 +91,8 @@ ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, 
     std::vector<char> discard(1 << 12);
     while (skip > 0) {
         const std::size_t n = std::size_t(std::min<std::uint64_t>(skip, discard.size()));
-        if (read(discard.data(), n) != n) throw IoError(mImpl->name + ": data: the file ends before its data starts (truncated file)");
+        if (read(discard.data(), n) != n)
+            throw IoError(mImpl->name + ": data: the file ends before its data starts (truncated file)");
         skip -= n;
     }
 }
@@ -112,10 +114,11 @@ std::size_t ByteSource::read(void* out, std::size_t n)
     while (m.z.avail_out > 0 && !m.zEnd) {
         if (!m.refill()) break; // compressed stream ends early: the caller sees a short read (finish() refuses it)
         const int rc = inflate(&m.z, Z_NO_FLUSH);
-        if (rc == Z_STREAM_END) m.nextMember();
+        if (rc == Z_STREAM_END)
+            m.nextMember();
         else if (rc != Z_OK && rc != Z_BUF_ERROR) {
             throw IoError(m.name + ": data: corrupt compressed data near byte " + std::to_string(m.position()) + " (" +
-                          std::string(m.z.msg ? m.z.msg : "zlib error") + ")");
+                std::string(m.z.msg ? m.z.msg : "zlib error") + ")");
         }
     }
     return n - m.z.avail_out;
@@ -130,7 +133,7 @@ void ByteSource::finish()
         const std::size_t got = read(discard.data(), discard.size());
         if (got == 0 && !m.zEnd) {
             throw IoError(m.name + ": data: the compressed stream ends at byte " + std::to_string(m.position()) +
-                          " without its trailer (truncated file)");
+                " without its trailer (truncated file)");
         }
     }
 }

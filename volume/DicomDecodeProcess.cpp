@@ -150,8 +150,7 @@ void DicomDecodeProcess::stop()
     mSocket = -1;
     if (mPid > 0) {
         int status = 0;
-        while (::waitpid(mPid, &status, 0) < 0 && errno == EINTR) {
-        }
+        while (::waitpid(mPid, &status, 0) < 0 && errno == EINTR) { }
     }
     mPid = -1;
 }
@@ -164,7 +163,7 @@ void DicomDecodeProcess::decode(const std::filesystem::path& file, DicomFrames& 
     DecodeReply r;
     std::string message;
     bool complete = sendAll(mSocket, &length, sizeof length) && sendAll(mSocket, path.data(), path.size()) &&
-                    receiveAll(mSocket, &r, sizeof r);
+        receiveAll(mSocket, &r, sizeof r);
     if (complete && !r.ok) {
         message.resize(r.messageBytes);
         complete = receiveAll(mSocket, message.data(), message.size());
@@ -181,12 +180,11 @@ void DicomDecodeProcess::decode(const std::filesystem::path& file, DicomFrames& 
         ::close(mSocket);
         mSocket = -1;
         int status = 0;
-        while (pid > 0 && ::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-        }
+        while (pid > 0 && ::waitpid(pid, &status, 0) < 0 && errno == EINTR) { }
         mPid = -1;
         if (pid > 0 && WIFSIGNALED(status)) {
             throw IoError(path + ": (7FE0,0010) PixelData: GDCM aborted while decoding it (signal " +
-                          std::to_string(WTERMSIG(status)) + "): corrupt or unsupported pixel data");
+                std::to_string(WTERMSIG(status)) + "): corrupt or unsupported pixel data");
         }
         throw IoError(path + ": (7FE0,0010) PixelData: the decoder ended without a result");
     }

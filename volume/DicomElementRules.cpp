@@ -35,7 +35,8 @@ std::string tagText(const gdcm::Tag& t)
     return buf;
 }
 
-[[noreturn]] void fail(const std::filesystem::path& file, const gdcm::Tag& t, const std::string& name, const std::string& what)
+[[noreturn]] void fail(
+    const std::filesystem::path& file, const gdcm::Tag& t, const std::string& name, const std::string& what)
 {
     throw IoError(file.string() + ": " + tagText(t) + " " + name + ": " + what);
 }
@@ -52,8 +53,8 @@ std::size_t valueCount(const gdcm::DataElement& de)
 
 /// The sequence @p tag of @p ds when present; GDCM asserts when it is present
 /// but not a sequence, or is read as item 1 while empty.
-gdcm::SmartPointer<gdcm::SequenceOfItems> sequence(const gdcm::DataSet& ds, const gdcm::Tag& tag, const std::string& name,
-                                                   const std::filesystem::path& file)
+gdcm::SmartPointer<gdcm::SequenceOfItems> sequence(
+    const gdcm::DataSet& ds, const gdcm::Tag& tag, const std::string& name, const std::filesystem::path& file)
 {
     if (!ds.FindDataElement(tag)) return nullptr;
     gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(tag).GetValueAsSQ();
@@ -64,8 +65,8 @@ gdcm::SmartPointer<gdcm::SequenceOfItems> sequence(const gdcm::DataSet& ds, cons
 
 /// The values of @p tag in @p ds, which must hold exactly @p count numbers.
 template <std::uint16_t G, std::uint16_t E>
-std::optional<std::vector<double>> numbers(const gdcm::DataSet& ds, std::size_t count, const std::string& name,
-                                           const std::filesystem::path& file)
+std::optional<std::vector<double>> numbers(
+    const gdcm::DataSet& ds, std::size_t count, const std::string& name, const std::filesystem::path& file)
 {
     const gdcm::Tag tag(G, E);
     if (!ds.FindDataElement(tag)) return std::nullopt;
@@ -79,8 +80,8 @@ std::optional<std::vector<double>> numbers(const gdcm::DataSet& ds, std::size_t 
 }
 
 /// Item 1 of a functional group (shared or per-frame), checked; empty if absent.
-const gdcm::DataSet* firstItem(const gdcm::DataSet& ds, const gdcm::Tag& group, const std::string& name,
-                               const std::filesystem::path& file)
+const gdcm::DataSet* firstItem(
+    const gdcm::DataSet& ds, const gdcm::Tag& group, const std::string& name, const std::filesystem::path& file)
 {
     auto sq = sequence(ds, group, name, file);
     return sq ? &sq->GetItem(1).GetNestedDataSet() : nullptr;
@@ -117,13 +118,40 @@ std::string_view expectedVr(std::uint16_t group, std::uint16_t element)
         std::string_view vr;
     };
     static constexpr Rule kRules[] = {
-        {0x00080016, "UI"}, {0x00080060, "CS"}, {0x00180050, "DS"}, {0x00180088, "DS"}, {0x00181164, "DS"},
-        {0x00182010, "DS"}, {0x0018602c, "FD"}, {0x0018602e, "FD"}, {0x00200032, "DS"}, {0x00200037, "DS"},
-        {0x00280002, "US"}, {0x00280004, "CS"}, {0x00280006, "US"}, {0x00280008, "IS"}, {0x00280009, "AT"},
-        {0x00280010, "US"}, {0x00280011, "US"}, {0x00280030, "DS"}, {0x00280034, "IS"}, {0x00280100, "US"},
-        {0x00280101, "US"}, {0x00280102, "US"}, {0x00280103, "US"}, {0x00281050, "DS"}, {0x00281051, "DS"},
-        {0x00281052, "DS"}, {0x00281053, "DS"}, {0x00281054, "LO"}, {0x00281101, "US|SS"}, {0x00281102, "US|SS"},
-        {0x00281103, "US|SS"}, {0x30040002, "CS"}, {0x3004000c, "DS"}, {0x3004000e, "DS"},
+        {0x00080016, "UI"},
+        {0x00080060, "CS"},
+        {0x00180050, "DS"},
+        {0x00180088, "DS"},
+        {0x00181164, "DS"},
+        {0x00182010, "DS"},
+        {0x0018602c, "FD"},
+        {0x0018602e, "FD"},
+        {0x00200032, "DS"},
+        {0x00200037, "DS"},
+        {0x00280002, "US"},
+        {0x00280004, "CS"},
+        {0x00280006, "US"},
+        {0x00280008, "IS"},
+        {0x00280009, "AT"},
+        {0x00280010, "US"},
+        {0x00280011, "US"},
+        {0x00280030, "DS"},
+        {0x00280034, "IS"},
+        {0x00280100, "US"},
+        {0x00280101, "US"},
+        {0x00280102, "US"},
+        {0x00280103, "US"},
+        {0x00281050, "DS"},
+        {0x00281051, "DS"},
+        {0x00281052, "DS"},
+        {0x00281053, "DS"},
+        {0x00281054, "LO"},
+        {0x00281101, "US|SS"},
+        {0x00281102, "US|SS"},
+        {0x00281103, "US|SS"},
+        {0x30040002, "CS"},
+        {0x3004000c, "DS"},
+        {0x3004000e, "DS"},
     };
     const std::uint32_t tag = std::uint32_t(group) << 16 | element;
     for (const Rule& r : kRules) {
@@ -180,7 +208,7 @@ void checkElementRules(const gdcm::DataSet& ds, const std::filesystem::path& fil
         if (plane.FindDataElement(kOrientation) && gdcm::ImageHelper::GetDirectionCosinesFromDataSet(plane, own) &&
             own != *cosines) {
             fail(file, kOrientation, "ImageOrientationPatient",
-                 "frame " + std::to_string(i) + " is oriented differently from the others");
+                "frame " + std::to_string(i) + " is oriented differently from the others");
         }
     }
 }

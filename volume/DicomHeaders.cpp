@@ -40,11 +40,12 @@ const gdcm::Tag kSeriesUid(0x0020, 0x000e), kModality(0x0008, 0x0060), kSeriesDe
     kPadding(0x0028, 0x0120), kPixelRepresentation(0x0028, 0x0103), kSamplesPerPixel(0x0028, 0x0002),
     kBitsAllocated(0x0028, 0x0100), kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102),
     kFieldStrength(0x0018, 0x0087), kManufacturer(0x0008, 0x0070), kScanningSequence(0x0018, 0x0020),
-    kSequenceVariant(0x0018, 0x0021), kSequenceName(0x0018, 0x0024), kProtocolName(0x0018, 0x1030), kScanOptions(0x0018, 0x0022),
-    kRepetitionTime(0x0018, 0x0080), kEchoTime(0x0018, 0x0081), kInversionTime(0x0018, 0x0082),
-    kFlipAngle(0x0018, 0x1314), kEchoNumbers(0x0018, 0x0086), kTemporalPosition(0x0020, 0x0100),
-    kAcquisitionNumber(0x0020, 0x0012), kInstanceNumber(0x0020, 0x0013), kTriggerTime(0x0018, 0x1060),
-    kSpacingBetweenSlices(0x0018, 0x0088), kDiffusionBValue(0x0018, 0x9087), kPulseSequenceName(0x0018, 0x9005);
+    kSequenceVariant(0x0018, 0x0021), kSequenceName(0x0018, 0x0024), kProtocolName(0x0018, 0x1030),
+    kScanOptions(0x0018, 0x0022), kRepetitionTime(0x0018, 0x0080), kEchoTime(0x0018, 0x0081),
+    kInversionTime(0x0018, 0x0082), kFlipAngle(0x0018, 0x1314), kEchoNumbers(0x0018, 0x0086),
+    kTemporalPosition(0x0020, 0x0100), kAcquisitionNumber(0x0020, 0x0012), kInstanceNumber(0x0020, 0x0013),
+    kTriggerTime(0x0018, 0x1060), kSpacingBetweenSlices(0x0018, 0x0088), kDiffusionBValue(0x0018, 0x9087),
+    kPulseSequenceName(0x0018, 0x9005);
 
 std::string tagName(const gdcm::Tag& t, const char* name)
 {
@@ -64,8 +65,8 @@ std::string trim(const char* s)
 }
 
 /// A backslash-separated list of decimal numbers, each finite.
-std::vector<double> numbers(const std::string& text, const fs::path& file, const gdcm::Tag& tag, const char* name,
-                            std::size_t expected)
+std::vector<double> numbers(
+    const std::string& text, const fs::path& file, const gdcm::Tag& tag, const char* name, std::size_t expected)
 {
     std::vector<double> out;
     std::stringstream in(text);
@@ -81,7 +82,7 @@ std::vector<double> numbers(const std::string& text, const fs::path& file, const
     }
     if (expected && out.size() != expected) {
         throw IoError(file.string() + ": " + tagName(tag, name) + ": expected " + std::to_string(expected) +
-                      " numbers, got '" + text + "'");
+            " numbers, got '" + text + "'");
     }
     return out;
 }
@@ -98,7 +99,7 @@ int positiveInt(const char* value, const fs::path& file, const gdcm::Tag& tag, c
     const auto v = optionalNumber(value, file, tag, name);
     if (!v || *v < 1 || *v > 1e6 || *v != std::floor(*v)) {
         throw IoError(file.string() + ": " + tagName(tag, name) + ": expected a positive whole number, got '" +
-                      trim(value) + "'");
+            trim(value) + "'");
     }
     return int(*v);
 }
@@ -110,7 +111,8 @@ std::vector<fs::path> expand(const std::vector<fs::path>& inputs)
         std::error_code ec;
         if (fs::is_directory(in, ec)) {
             std::vector<fs::path> found;
-            for (const auto& e : fs::recursive_directory_iterator(in, fs::directory_options::skip_permission_denied, ec)) {
+            for (const auto& e :
+                fs::recursive_directory_iterator(in, fs::directory_options::skip_permission_denied, ec)) {
                 if (e.is_regular_file()) found.push_back(e.path());
             }
             if (ec) throw IoError(in.string() + ": cannot list the directory (" + ec.message() + ")");
@@ -235,7 +237,9 @@ void readFrameAttributes(const gdcm::DataSet& ds, DicomHeader& h)
             slope = itemNumber(*pv, kSlope, "DS").value_or(slope);
             intercept = itemNumber(*pv, kIntercept, "DS").value_or(intercept);
         }
-        if (slope == 0) throw IoError(h.file.string() + ": (0028,9145) PixelValueTransformation of frame " + std::to_string(i) + ": RescaleSlope is zero");
+        if (slope == 0)
+            throw IoError(h.file.string() + ": (0028,9145) PixelValueTransformation of frame " + std::to_string(i) +
+                ": RescaleSlope is zero");
         h.frameRescale.emplace_back(slope, intercept);
         DicomFrameKey k = h.key;
         if (const gdcm::DataSet* fc = macro(frame, frameContent)) {
@@ -284,12 +288,12 @@ void readMultiFrame(DicomHeader& h)
     h.framePositions = perFramePositions(file.GetDataSet());
     if (h.framePositions.empty()) { // legacy multi-frame: evenly spaced along the normal
         const Vec3d n = h.rowDirection.cross(h.columnDirection).normalized();
-        for (int k = 0; k < h.frames; ++k) h.framePositions.push_back(Vec3d(origin[0], origin[1], origin[2]) + k * spacing[2] * n);
+        for (int k = 0; k < h.frames; ++k)
+            h.framePositions.push_back(Vec3d(origin[0], origin[1], origin[2]) + k * spacing[2] * n);
     }
     if (int(h.framePositions.size()) != h.frames) {
         throw IoError(h.file.string() + ": (5200,9230) PerFrameFunctionalGroups: " +
-                      std::to_string(h.framePositions.size()) + " plane positions for " + std::to_string(h.frames) +
-                      " frames");
+            std::to_string(h.framePositions.size()) + " plane positions for " + std::to_string(h.frames) + " frames");
     }
     readFrameAttributes(file.GetDataSet(), h);
     // Positions and directions come out of GDCM as doubles: their stored
@@ -303,7 +307,8 @@ bool DicomHeader::looksLikeT1Map() const
 {
     std::string text = imageType + " " + seriesDescription;
     std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::toupper(c)); });
-    text.erase(std::remove_if(text.begin(), text.end(), [](char c) { return c == ' ' || c == '_' || c == '-'; }), text.end());
+    text.erase(
+        std::remove_if(text.begin(), text.end(), [](char c) { return c == ' ' || c == '_' || c == '-'; }), text.end());
     return text.find("T1MAP") != std::string::npos;
 }
 
@@ -341,13 +346,13 @@ std::vector<DicomHeader> scanChunk(const std::vector<fs::path>& files, std::vect
 {
     // One scan reads every tag any step needs: headers are parsed once per load.
     gdcm::Scanner scanner;
-    for (const auto& t : {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames,
-                          kPosition, kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding,
-                          kPixelRepresentation, kSamplesPerPixel, kBitsAllocated, kBitsStored, kHighBit, kFieldStrength,
-                          kManufacturer, kScanningSequence, kSequenceVariant, kSequenceName, kProtocolName,
-                          kRepetitionTime, kEchoTime, kInversionTime, kFlipAngle, kEchoNumbers, kTemporalPosition,
-                          kAcquisitionNumber, kInstanceNumber, kTriggerTime, kSpacingBetweenSlices, kDiffusionBValue,
-                          kPulseSequenceName, kScanOptions}) {
+    for (const auto& t :
+        {kSeriesUid, kModality, kSeriesDescription, kSeriesNumber, kImageType, kRows, kColumns, kFrames, kPosition,
+            kOrientation, kPixelSpacing, kThickness, kSlope, kIntercept, kTilt, kPadding, kPixelRepresentation,
+            kSamplesPerPixel, kBitsAllocated, kBitsStored, kHighBit, kFieldStrength, kManufacturer, kScanningSequence,
+            kSequenceVariant, kSequenceName, kProtocolName, kRepetitionTime, kEchoTime, kInversionTime, kFlipAngle,
+            kEchoNumbers, kTemporalPosition, kAcquisitionNumber, kInstanceNumber, kTriggerTime, kSpacingBetweenSlices,
+            kDiffusionBValue, kPulseSequenceName, kScanOptions}) {
         scanner.AddTag(t);
     }
     scanner.Scan(names(files));
@@ -360,7 +365,8 @@ std::vector<DicomHeader> scanChunk(const std::vector<fs::path>& files, std::vect
         }
         const char* rows = scanner.GetValue(name.c_str(), kRows);
         if (!rows) {
-            skipped.push_back({f, "no image", name + ": a CT or MR object without (0028,0010) Rows: no image in it", {}});
+            skipped.push_back(
+                {f, "no image", name + ": a CT or MR object without (0028,0010) Rows: no image in it", {}});
             continue;
         }
         DicomHeader h;
@@ -409,7 +415,8 @@ std::optional<double> lenientNumber(const DicomHeader& h, const gdcm::Tag& t)
 
 /// The element of private tag (@p group, @p element & 0xFF) in the block
 /// its creator @p creator reserved (PS3.5 §7.8.1), if the file has that creator.
-std::optional<gdcm::Tag> privateElement(const DicomHeader& h, std::uint16_t group, const char* creator, std::uint16_t low)
+std::optional<gdcm::Tag> privateElement(
+    const DicomHeader& h, std::uint16_t group, const char* creator, std::uint16_t low)
 {
     // The creators are elements 0x0010..0x00FF of the group: one range of the map.
     const std::uint32_t first = std::uint32_t(group) << 16 | 0x0010u, last = std::uint32_t(group) << 16 | 0x00FFu;
@@ -434,8 +441,8 @@ std::optional<double> classicBValue(const DicomHeader& h)
     }
     if (auto t = privateElement(h, 0x2001, "Philips Imaging DD 001", 0x03)) {
         const std::string raw = h.tags.count(std::uint32_t(t->GetGroup()) << 16 | t->GetElement())
-                                    ? h.tags.at(std::uint32_t(t->GetGroup()) << 16 | t->GetElement())
-                                    : std::string();
+            ? h.tags.at(std::uint32_t(t->GetGroup()) << 16 | t->GetElement())
+            : std::string();
         if (raw.size() == 4) { // FL, little endian
             float b;
             std::memcpy(&b, raw.data(), 4);
@@ -496,12 +503,12 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
         } else if (!damage[n].empty()) {
             scan.skipped.push_back({all[n], "damaged", damage[n], notes[n].seriesUid});
         } else if (kind[n] == DicomKind::NotDicom) {
-            scan.skipped.push_back({all[n], "not DICOM", all[n].string() + ": no DICM preamble: not a DICOM Part 10 file", {}});
+            scan.skipped.push_back(
+                {all[n], "not DICOM", all[n].string() + ": no DICM preamble: not a DICOM Part 10 file", {}});
         } else if (kind[n] == DicomKind::NonImage) {
             scan.skipped.push_back({all[n], notes[n].nonImageReason,
-                                    all[n].string() + ": " + notes[n].nonImageReason + " (" + notes[n].sopClass +
-                                        "): not a CT or MR image",
-                                    {}});
+                all[n].string() + ": " + notes[n].nonImageReason + " (" + notes[n].sopClass + "): not a CT or MR image",
+                {}});
         } else {
             located[all[n]] = n;
             files.push_back(all[n]);
@@ -513,7 +520,7 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
     std::vector<std::vector<DicomSkippedFile>> unread(chunks);
     tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
         const std::vector<fs::path> part(files.begin() + std::ptrdiff_t(c * kChunk),
-                                         files.begin() + std::ptrdiff_t(std::min(files.size(), (c + 1) * kChunk)));
+            files.begin() + std::ptrdiff_t(std::min(files.size(), (c + 1) * kChunk)));
         found[c] = scanChunk(part, unread[c]);
     });
     for (std::size_t c = 0; c < chunks; ++c) {
@@ -528,7 +535,7 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
         scan.skipped.insert(scan.skipped.end(), unread[c].begin(), unread[c].end());
     }
     std::sort(scan.skipped.begin(), scan.skipped.end(),
-              [](const DicomSkippedFile& a, const DicomSkippedFile& b) { return a.file < b.file; });
+        [](const DicomSkippedFile& a, const DicomSkippedFile& b) { return a.file < b.file; });
     for (auto& s : scan.skipped) {
         s.reason = scan.originalNames(s.reason);
         if (auto it = scan.inflatedFrom.find(s.file.string()); it != scan.inflatedFrom.end()) s.file = it->second;
@@ -539,7 +546,8 @@ DicomScan scanDicomInputs(const std::vector<fs::path>& inputs, std::uint64_t inf
 std::string DicomScan::originalNames(std::string message) const
 {
     for (const auto& [copy, original] : inflatedFrom) {
-        for (std::size_t at = message.find(copy); at != std::string::npos; at = message.find(copy, at + original.size())) {
+        for (std::size_t at = message.find(copy); at != std::string::npos;
+             at = message.find(copy, at + original.size())) {
             message.replace(at, copy.size(), original);
         }
     }
@@ -560,7 +568,8 @@ std::vector<DicomHeader> scanDicomHeaders(const std::vector<fs::path>& inputs)
 std::vector<DicomHeader> readSeriesHeaders(const std::vector<fs::path>& files)
 {
     std::vector<DicomHeader> out = scanDicomHeaders(files);
-    if (out.size() != files.size()) throw IoError(files.front().parent_path().string() + ": not every file is a DICOM image");
+    if (out.size() != files.size())
+        throw IoError(files.front().parent_path().string() + ": not every file is a DICOM image");
     for (DicomHeader& h : out) completeDicomHeader(h);
     return out;
 }
@@ -585,11 +594,12 @@ void completeDicomHeader(DicomHeader& h)
     };
     if (small(kSamplesPerPixel, "SamplesPerPixel", 1, 4, 1) != 1) {
         throw IoError(name + ": " + tagName(kSamplesPerPixel, "SamplesPerPixel") + ": " + trim(get(kSamplesPerPixel)) +
-                      ": colour images are not volumes");
+            ": colour images are not volumes");
     }
     const int allocated = small(kBitsAllocated, "BitsAllocated", 1, 64, 16);
     if (allocated != 8 && allocated != 16 && allocated != 32 && allocated != 64) {
-        throw IoError(name + ": " + tagName(kBitsAllocated, "BitsAllocated") + ": " + std::to_string(allocated) + " is not supported");
+        throw IoError(name + ": " + tagName(kBitsAllocated, "BitsAllocated") + ": " + std::to_string(allocated) +
+            " is not supported");
     }
     const int stored = small(kBitsStored, "BitsStored", 1, allocated, allocated);
     // HighBit places the stored bits in the word (PS3.5 §8.1.1): bits
@@ -642,7 +652,7 @@ void completeDicomHeader(DicomHeader& h)
     if (std::abs(rn - 1) > tolerance || std::abs(cn - 1) > tolerance ||
         std::abs(h.rowDirection.dot(h.columnDirection)) > tolerance) {
         throw IoError(name + ": " + tagName(kOrientation, "ImageOrientationPatient") +
-                      ": the row and column directions are not orthonormal");
+            ": the row and column directions are not orthonormal");
     }
     h.rowDirection /= rn;
     h.columnDirection /= cn;
@@ -664,13 +674,12 @@ void checkSameGrid(const DicomHeader& first, const DicomHeader& h)
     if ((h.rowDirection - first.rowDirection).norm() > directions ||
         (h.columnDirection - first.columnDirection).norm() > directions) {
         throw IoError(name + tagName(kOrientation, "ImageOrientationPatient") + " differs from " +
-                      first.file.filename().string() + "'s: slices of one series must share their orientation");
+            first.file.filename().string() + "'s: slices of one series must share their orientation");
     }
     if (h.rows != first.rows || h.columns != first.columns) {
         throw IoError(name + tagName(kRows, "Rows") + " / " + tagName(kColumns, "Columns") + " " +
-                      std::to_string(h.rows) + "×" + std::to_string(h.columns) + " differ from " +
-                      first.file.filename().string() + "'s " + std::to_string(first.rows) + "×" +
-                      std::to_string(first.columns));
+            std::to_string(h.rows) + "×" + std::to_string(h.columns) + " differ from " +
+            first.file.filename().string() + "'s " + std::to_string(first.rows) + "×" + std::to_string(first.columns));
     }
     // Relative 1e-4 at least (the tolerance before the digits were read); a
     // spacing stored to 0.01 mm may differ by one unit between two files.
@@ -679,7 +688,7 @@ void checkSameGrid(const DicomHeader& first, const DicomHeader& h)
         const double tolerance = std::max(kDirectionFloor * first.pixelSpacing[i], unit);
         if (std::abs(h.pixelSpacing[i] - first.pixelSpacing[i]) > tolerance) {
             throw IoError(name + tagName(kPixelSpacing, "PixelSpacing") + " differs from " +
-                          first.file.filename().string() + "'s");
+                first.file.filename().string() + "'s");
         }
     }
 }

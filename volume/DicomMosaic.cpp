@@ -32,7 +32,8 @@ bool isMosaic(const DicomHeader& h)
 void readMosaic(DicomHeader& h)
 {
     const std::string name = h.file.string();
-    if (h.storedFrames != 1) throw IoError(name + ": (0008,0008) ImageType MOSAIC on a multi-frame file: not a Siemens mosaic");
+    if (h.storedFrames != 1)
+        throw IoError(name + ": (0008,0008) ImageType MOSAIC on a multi-frame file: not a Siemens mosaic");
     gdcm::Reader reader;
     reader.SetFileName(name.c_str());
     if (!reader.Read()) throw IoError(name + ": not a readable DICOM file");
@@ -54,32 +55,36 @@ void readMosaic(DicomHeader& h)
         }
     }
     if (images == 0 || images > 4096) {
-        throw IoError(name + ": (0029,1010) CSA NumberOfImagesInMosaic: missing or invalid, so the mosaic cannot be split into its slices");
+        throw IoError(name +
+            ": (0029,1010) CSA NumberOfImagesInMosaic: missing or invalid, so the mosaic cannot be split into its "
+            "slices");
     }
     const int side = int(std::ceil(std::sqrt(double(images))));
     if (h.storedColumns % side != 0 || h.storedRows % side != 0) {
         throw IoError(name + ": (0028,0010) Rows / (0028,0011) Columns " + std::to_string(h.storedRows) + "×" +
-                      std::to_string(h.storedColumns) + " is not " + std::to_string(side) + "×" + std::to_string(side) +
-                      " tiles of " + std::to_string(images) + " mosaic images");
+            std::to_string(h.storedColumns) + " is not " + std::to_string(side) + "×" + std::to_string(side) +
+            " tiles of " + std::to_string(images) + " mosaic images");
     }
     gdcm::SplitMosaicFilter filter;
     filter.SetFile(file);
     double snv[3] = {0, 0, 0};
     bool inverted = false;
     if (!filter.ComputeMOSAICSliceNormal(snv, inverted)) {
-        throw IoError(name + ": (0029,1010) CSA SliceNormalVector: missing or not along ±(row × column), so the order of "
-                             "the mosaic's slices is unknown");
+        throw IoError(name +
+            ": (0029,1010) CSA SliceNormalVector: missing or not along ±(row × column), so the order of "
+            "the mosaic's slices is unknown");
     }
     const double spacing = h.spacingBetweenSlices.value_or(h.sliceThickness);
     if (!(spacing > 0)) {
-        throw IoError(name + ": (0018,0088) SpacingBetweenSlices and (0018,0050) SliceThickness: missing, so the mosaic's "
-                             "slices cannot be placed");
+        throw IoError(name +
+            ": (0018,0088) SpacingBetweenSlices and (0018,0050) SliceThickness: missing, so the mosaic's "
+            "slices cannot be placed");
     }
     const int tileRows = h.storedRows / side, tileColumns = h.storedColumns / side;
     const Vec3d normal = Vec3d(snv[0], snv[1], snv[2]).normalized();
     const Vec3d first = h.framePositions.front() +
-                        h.rowDirection * h.pixelSpacing[1] * double(h.storedColumns - tileColumns) / 2.0 +
-                        h.columnDirection * h.pixelSpacing[0] * double(h.storedRows - tileRows) / 2.0;
+        h.rowDirection * h.pixelSpacing[1] * double(h.storedColumns - tileColumns) / 2.0 +
+        h.columnDirection * h.pixelSpacing[0] * double(h.storedRows - tileRows) / 2.0;
     h.framePositions.clear();
     for (unsigned k = 0; k < images; ++k) h.framePositions.push_back(first + double(k) * spacing * normal);
     h.rows = tileRows;

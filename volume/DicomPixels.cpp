@@ -27,7 +27,7 @@ namespace {
 /// branch-free.
 template <typename T>
 void toFloat(const char* raw, std::size_t count, int bitsStored, int shift, double slope, double intercept,
-             std::optional<double> padding, float air, float* out)
+    std::optional<double> padding, float air, float* out)
 {
     constexpr int bits = int(sizeof(T) * 8);
     const auto run = [&](auto masked, auto padded) {
@@ -105,16 +105,17 @@ void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& 
     // bytes under it without a word, so the header and the data disagree.
     if (ts.IsEncapsulated() && !img.GetDataElement().GetSequenceOfFragments()) {
         throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid +
-                      " is compressed but (7FE0,0010) PixelData is not encapsulated: inconsistent header");
+            " is compressed but (7FE0,0010) PixelData is not encapsulated: inconsistent header");
     }
     if (pf.GetSamplesPerPixel() != 1) {
         throw IoError(name + ": (0028,0002) SamplesPerPixel is " + std::to_string(pf.GetSamplesPerPixel()) +
-                      ": colour images are not volumes");
+            ": colour images are not volumes");
     }
     f.columns = int(img.GetDimension(0));
     f.rows = int(img.GetDimension(1));
     f.frames = img.GetNumberOfDimensions() > 2 ? int(img.GetDimension(2)) : 1;
-    if (f.rows <= 0 || f.columns <= 0 || f.frames <= 0) throw IoError(name + ": (0028,0010) Rows / (0028,0011) Columns: empty image");
+    if (f.rows <= 0 || f.columns <= 0 || f.frames <= 0)
+        throw IoError(name + ": (0028,0010) Rows / (0028,0011) Columns: empty image");
 
     const std::size_t count = std::size_t(f.rows) * std::size_t(f.columns) * std::size_t(f.frames);
     const std::size_t expected = img.GetBufferLength();
@@ -124,47 +125,72 @@ void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& 
     if (!ts.IsEncapsulated()) {
         const gdcm::ByteValue* bv = img.GetDataElement().GetByteValue();
         if (!bv || bv->GetLength() < expected) {
-            throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(bv ? std::uint64_t(bv->GetLength()) : 0) +
-                          " bytes, expected " + std::to_string(expected));
+            throw IoError(name + ": (7FE0,0010) PixelData holds " +
+                std::to_string(bv ? std::uint64_t(bv->GetLength()) : 0) + " bytes, expected " +
+                std::to_string(expected));
         }
     }
     std::vector<char>& raw = f.raw;
     raw.resize(expected);
     if (!img.GetBuffer(raw.data())) {
-        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid + ": cannot decode the pixel data (unsupported or corrupt)");
+        throw IoError(name + ": (0002,0010) TransferSyntaxUID " + tsUid +
+            ": cannot decode the pixel data (unsupported or corrupt)");
     }
     f.bitsStored = pf.GetBitsStored();
     f.highBit = pf.GetHighBit();
     switch (pf.GetScalarType()) {
-    case gdcm::PixelFormat::UINT8: f.type = SampleType::UInt8; break;
-    case gdcm::PixelFormat::INT8: f.type = SampleType::Int8; break;
-    case gdcm::PixelFormat::UINT16: f.type = SampleType::UInt16; break;
-    case gdcm::PixelFormat::INT16: f.type = SampleType::Int16; break;
-    case gdcm::PixelFormat::UINT32: f.type = SampleType::UInt32; break;
-    case gdcm::PixelFormat::INT32: f.type = SampleType::Int32; break;
-    case gdcm::PixelFormat::FLOAT32: f.type = SampleType::Float32; break;
-    case gdcm::PixelFormat::FLOAT64: f.type = SampleType::Float64; break;
+    case gdcm::PixelFormat::UINT8:
+        f.type = SampleType::UInt8;
+        break;
+    case gdcm::PixelFormat::INT8:
+        f.type = SampleType::Int8;
+        break;
+    case gdcm::PixelFormat::UINT16:
+        f.type = SampleType::UInt16;
+        break;
+    case gdcm::PixelFormat::INT16:
+        f.type = SampleType::Int16;
+        break;
+    case gdcm::PixelFormat::UINT32:
+        f.type = SampleType::UInt32;
+        break;
+    case gdcm::PixelFormat::INT32:
+        f.type = SampleType::Int32;
+        break;
+    case gdcm::PixelFormat::FLOAT32:
+        f.type = SampleType::Float32;
+        break;
+    case gdcm::PixelFormat::FLOAT64:
+        f.type = SampleType::Float64;
+        break;
     default:
         throw IoError(name + ": (0028,0100) BitsAllocated " + std::to_string(pf.GetBitsAllocated()) +
-                      ": unsupported pixel type " + pf.GetScalarTypeAsString());
+            ": unsupported pixel type " + pf.GetScalarTypeAsString());
     }
     if (sampleBytes(f.type) * count != expected) {
         throw IoError(name + ": (0028,0100) BitsAllocated " + std::to_string(pf.GetBitsAllocated()) +
-                      ": the decoded buffer does not match the pixel type");
+            ": the decoded buffer does not match the pixel type");
     }
 }
 
 bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
 {
     const bool littleEndian = h.transferSyntax == "1.2.840.10008.1.2" || h.transferSyntax == "1.2.840.10008.1.2.1";
-    if (!littleEndian || h.pixelLength == 0 || (h.bitsAllocated != 8 && h.bitsAllocated != 16 && h.bitsAllocated != 32)) {
+    if (!littleEndian || h.pixelLength == 0 ||
+        (h.bitsAllocated != 8 && h.bitsAllocated != 16 && h.bitsAllocated != 32)) {
         return false;
     }
     const bool sign = h.pixelRepresentation == 1;
     switch (h.bitsAllocated) {
-    case 8: f.type = sign ? SampleType::Int8 : SampleType::UInt8; break;
-    case 16: f.type = sign ? SampleType::Int16 : SampleType::UInt16; break;
-    default: f.type = sign ? SampleType::Int32 : SampleType::UInt32; break;
+    case 8:
+        f.type = sign ? SampleType::Int8 : SampleType::UInt8;
+        break;
+    case 16:
+        f.type = sign ? SampleType::Int16 : SampleType::UInt16;
+        break;
+    default:
+        f.type = sign ? SampleType::Int32 : SampleType::UInt32;
+        break;
     }
     f.rows = h.storedRows;
     f.columns = h.storedColumns;
@@ -176,7 +202,7 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
     const std::string name = h.file.string();
     if (h.pixelLength < expected) {
         throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(h.pixelLength) + " bytes, expected " +
-                      std::to_string(expected));
+            std::to_string(expected));
     }
     f.raw.resize(expected);
     std::ifstream in(h.file, std::ios::binary);
@@ -188,27 +214,43 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
 }
 
 void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
-                  float air, float* out)
+    float air, float* out)
 {
     samplesToFloat(f, frame, 0, std::size_t(f.rows) * std::size_t(f.columns), slope, intercept, padding, air, out);
 }
 
-void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t plane, double slope, double intercept,
-                    std::optional<double> padding, float air, float* out)
+void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t plane, double slope,
+    double intercept, std::optional<double> padding, float air, float* out)
 {
     const std::size_t framePlane = std::size_t(f.rows) * std::size_t(f.columns);
     const char* raw = f.raw.data() + (framePlane * std::size_t(frame) + first) * sampleBytes(f.type);
     // A HighBit outside bitsStored − 1 .. the word was refused with the header.
     const int shift = f.highBit < 0 ? 0 : std::max(0, f.highBit + 1 - f.bitsStored);
     switch (f.type) {
-    case SampleType::UInt8: toFloat<std::uint8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::Int8: toFloat<std::int8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::UInt16: toFloat<std::uint16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::Int16: toFloat<std::int16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::UInt32: toFloat<std::uint32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::Int32: toFloat<std::int32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out); break;
-    case SampleType::Float32: toFloat<float>(raw, plane, 0, 0, slope, intercept, padding, air, out); break;
-    case SampleType::Float64: toFloat<double>(raw, plane, 0, 0, slope, intercept, padding, air, out); break;
+    case SampleType::UInt8:
+        toFloat<std::uint8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Int8:
+        toFloat<std::int8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::UInt16:
+        toFloat<std::uint16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Int16:
+        toFloat<std::int16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::UInt32:
+        toFloat<std::uint32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Int32:
+        toFloat<std::int32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Float32:
+        toFloat<float>(raw, plane, 0, 0, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Float64:
+        toFloat<double>(raw, plane, 0, 0, slope, intercept, padding, air, out);
+        break;
     }
 }
 

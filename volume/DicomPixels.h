@@ -30,12 +30,12 @@ struct DicomFrames {
 /// stored values equal to @p padding (PixelPaddingValue) become @p air.
 /// One pass over the samples; unused high bits are masked (sign-extended).
 void frameToFloat(const DicomFrames& f, int frame, double slope, double intercept, std::optional<double> padding,
-                  float air, float* out);
+    float air, float* out);
 
 /// @brief As frameToFloat, for @p count samples of frame @p frame from sample
 /// @p first on (one image row, for instance).
-void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t count, double slope, double intercept,
-                    std::optional<double> padding, float air, float* out);
+void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t count, double slope,
+    double intercept, std::optional<double> padding, float air, float* out);
 
 /// @brief Silence GDCM's own warnings and errors: voxhap reports its own, one line each.
 void quietGdcm();

@@ -28,7 +28,7 @@ namespace voxhap::volume {
 namespace {
 
 constexpr std::uint32_t kUndefined = 0xFFFFFFFFu;
-constexpr int kMaxDepth = 32; // real files nest a few levels; bounds the recursion
+constexpr int kMaxDepth = 32;         // real files nest a few levels; bounds the recursion
 constexpr std::uint32_t kMaxUid = 65; // longest UID: 64 characters and a padding byte (PS3.5 §9.1)
 
 struct Tag {
@@ -50,7 +50,8 @@ bool wantedPrivate(const Tag& t)
     if (t.group != 0x0019 && t.group != 0x0043 && t.group != 0x2001) return false;
     if (t.element >= 0x0010 && t.element <= 0x00FF) return true; // a private creator
     const unsigned low = t.element & 0xFFu;
-    return (t.group == 0x0019 && low == 0x0C) || (t.group == 0x0043 && low == 0x39) || (t.group == 0x2001 && low == 0x03);
+    return (t.group == 0x0019 && low == 0x0C) || (t.group == 0x0043 && low == 0x39) ||
+        (t.group == 0x2001 && low == 0x03);
 }
 
 /// @p text with bytes outside printable ASCII shown as '?', for messages on one line.
@@ -110,13 +111,16 @@ public:
         }
         // GDCM trusts the group length and the presence of a data set.
         mAt = pos;
-        if (groupEnd && groupEnd != pos) fail(Tag{0x0002, 0x0000}, "FileMetaInformationGroupLength does not match the meta header (truncated or corrupt file)");
+        if (groupEnd && groupEnd != pos)
+            fail(Tag{0x0002, 0x0000},
+                "FileMetaInformationGroupLength does not match the meta header (truncated or corrupt file)");
         if (pos >= mSize) fail(Tag{0x0002, 0x0000}, "no data set after the meta header (truncated file)");
         return pos;
     }
 
     /// Elements from @p pos to @p end, or to an item delimiter when @p end is undefined.
-    std::uint64_t dataset(std::uint64_t pos, std::uint64_t end, bool untilDelimiter, bool explicitVr, bool big, int depth)
+    std::uint64_t dataset(
+        std::uint64_t pos, std::uint64_t end, bool untilDelimiter, bool explicitVr, bool big, int depth)
     {
         if (depth > kMaxDepth) fail(Tag{}, "sequences nested deeper than " + std::to_string(kMaxDepth) + " levels");
         while (untilDelimiter || pos < end) {
@@ -130,10 +134,12 @@ public:
             if (!untilDelimiter && pos + 8 > end) fail(Tag{}, "element header runs past its sequence item");
             unsigned char h[12];
             read(pos, h, 8, Tag{});
-            if (top && std::all_of(h, h + 8, [](unsigned char c) { return c == 0; }) && zerosToEnd(pos)) return padding(pos);
+            if (top && std::all_of(h, h + 8, [](unsigned char c) { return c == 0; }) && zerosToEnd(pos))
+                return padding(pos);
             const Tag t{u16(h, big), u16(h + 2, big)};
             if (t.is(0xFFFE, 0xE00D) && untilDelimiter) return pos + 8; // end of an undefined-length item
-            if (depth == 0 && (t.is(0x5200, 0x9229) || t.is(0x5200, 0x9230) || t.is(0x0018, 0x6011))) mFunctionalGroups = true;
+            if (depth == 0 && (t.is(0x5200, 0x9229) || t.is(0x5200, 0x9230) || t.is(0x0018, 0x6011)))
+                mFunctionalGroups = true;
             // Item tags anywhere else: GDCM would re-read the rest with other
             // lengths than this walk checked (found by fuzz/FuzzDicomPreflight).
             if (t.group == 0xFFFE) fail(t, "item tag outside a sequence");
@@ -148,7 +154,8 @@ public:
                 // to encapsulated (OB/OW) pixel data or to UN, whose items are
                 // implicit VR (CP-246) (fuzz finding).
                 bool nestedExplicit = explicitVr;
-                if (vr == "UN" && !t.is(0x7FE0, 0x0010)) nestedExplicit = false;
+                if (vr == "UN" && !t.is(0x7FE0, 0x0010))
+                    nestedExplicit = false;
                 else if (explicitVr && (t.is(0x7FE0, 0x0010) ? vr != "OB" && vr != "OW" : vr != "SQ")) {
                     fail(t, "undefined length with value representation '" + printable(vr) + "'");
                 }
@@ -235,7 +242,8 @@ private:
         }
     }
 
-    std::uint32_t length(std::uint64_t pos, unsigned char* h, bool explicitVr, bool big, const Tag& t, std::uint64_t& header)
+    std::uint32_t length(
+        std::uint64_t pos, unsigned char* h, bool explicitVr, bool big, const Tag& t, std::uint64_t& header)
     {
         const bool item = t.group == 0xFFFE;
         if (!explicitVr || item) {
@@ -245,17 +253,19 @@ private:
         const char vr[3] = {char(h[4]), char(h[5]), 0};
         // Only the VRs of PS3.5 §6.2: GDCM asserts on others in the meta header
         // (found by fuzz/FuzzDicomPreflight) and guesses at them in the data set.
-        static const char* kKnown[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FD", "FL", "IS", "LO", "LT",
-                                       "OB", "OD", "OF", "OL", "OV", "OW", "PN", "SH", "SL", "SQ", "SS", "ST",
-                                       "SV", "TM", "UC", "UI", "UL", "UN", "UR", "US", "UT", "UV"};
-        if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return std::strcmp(k, vr) == 0; })) {
+        static const char* kKnown[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FD", "FL", "IS", "LO", "LT", "OB",
+            "OD", "OF", "OL", "OV", "OW", "PN", "SH", "SL", "SQ", "SS", "ST", "SV", "TM", "UC", "UI", "UL", "UN", "UR",
+            "US", "UT", "UV"};
+        if (std::none_of(
+                std::begin(kKnown), std::end(kKnown), [&](const char* k) { return std::strcmp(k, vr) == 0; })) {
             fail(t, "invalid value representation");
         }
         // A known VR that is not the one GDCM reads this element as (DicomElementRules.h).
         if (const std::string_view expected = expectedVr(t.group, t.element);
             !expected.empty() && expected.find(std::string_view(vr, 2)) == std::string_view::npos) {
-            fail(t, "value representation '" + printable(std::string(vr, 2)) + "' where " + std::string(expected) +
-                        " is required");
+            fail(t,
+                "value representation '" + printable(std::string(vr, 2)) + "' where " + std::string(expected) +
+                    " is required");
         }
         static const char* kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV", "UC", "UN", "UR", "UT", "UV"};
         for (const char* l : kLong) {
@@ -306,10 +316,13 @@ private:
     /// offset of its header, then what is wrong.
     [[noreturn]] void fail(const Tag& t, const std::string& what)
     {
-        throw IoError(mFile.string() + ": " + (t.group || t.element ? t.text() + " " : std::string("element ")) + "at byte " +
-                      std::to_string(mAt) + ": " + what);
+        throw IoError(mFile.string() + ": " + (t.group || t.element ? t.text() + " " : std::string("element ")) +
+            "at byte " + std::to_string(mAt) + ": " + what);
     }
-    static std::uint16_t u16(const unsigned char* p, bool big) { return big ? std::uint16_t(p[0] << 8 | p[1]) : std::uint16_t(p[1] << 8 | p[0]); }
+    static std::uint16_t u16(const unsigned char* p, bool big)
+    {
+        return big ? std::uint16_t(p[0] << 8 | p[1]) : std::uint16_t(p[1] << 8 | p[0]);
+    }
     static std::uint32_t u32(const unsigned char* p, bool big)
     {
         return big ? std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 | std::uint32_t(p[2]) << 8 | p[3]
@@ -326,7 +339,6 @@ private:
     std::string mMetaSopClass, mSopClass;
     std::optional<std::pair<std::uint64_t, std::uint64_t>> mPixels;
 };
-
 
 /// The image storage classes voxhap reads: CT and MR, classic, enhanced and
 /// legacy-converted enhanced. GDCM takes other classes down paths that assert
@@ -430,7 +442,8 @@ DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* 
         walk.refuse(Tag{0x0002, 0x0010}, "TransferSyntaxUID '" + printable(ts) + "' is missing or unknown");
     }
     if (syntax == gdcm::TransferSyntax::ImplicitVRBigEndianPrivateGE) {
-        walk.refuse(Tag{0x0002, 0x0010}, "TransferSyntaxUID " + ts + " (GE private, mixed byte orders) is not supported");
+        walk.refuse(
+            Tag{0x0002, 0x0010}, "TransferSyntaxUID " + ts + " (GE private, mixed byte orders) is not supported");
     }
     // A deflated data set cannot be walked before GDCM inflates it; its meta
     // header must name the class (a readable one, from the test above).

@@ -25,24 +25,24 @@ enum class DicomKind {
 
 /// @brief Where a file's (7FE0,0010) PixelData lies, as the walk found it.
 struct DicomPixelLocation {
-    std::string transferSyntax;  ///< (0002,0010), padding removed
-    std::uint64_t offset = 0;    ///< first byte of the value
-    std::uint64_t length = 0;    ///< value length [bytes]
-    bool found = false;          ///< a top-level PixelData of defined length (native, not encapsulated)
+    std::string transferSyntax; ///< (0002,0010), padding removed
+    std::uint64_t offset = 0;   ///< first byte of the value
+    std::uint64_t length = 0;   ///< value length [bytes]
+    bool found = false;         ///< a top-level PixelData of defined length (native, not encapsulated)
 };
 
 /// @brief What the walk found besides the pixel data.
 struct DicomPreflightNotes {
-    std::string sopClass;            ///< (0002,0002), else (0008,0016), padding removed
-    std::string nonImageReason;      ///< NonImage: the class in words and its UID
-    std::string seriesUid;           ///< (0020,000E) if the walk got that far (also on a refusal)
+    std::string sopClass;              ///< (0002,0002), else (0008,0016), padding removed
+    std::string nonImageReason;        ///< NonImage: the class in words and its UID
+    std::string seriesUid;             ///< (0020,000E) if the walk got that far (also on a refusal)
     std::uint64_t trailingPadding = 0; ///< zero bytes after the last complete top-level element
     /// Short top-level values of the private groups that carry diffusion
     /// b-values — Siemens (0019,xxxx), GE (0043,xxxx), Philips (2001,xxxx) —
     /// keyed by (group << 16 | element), raw bytes: gdcm::Scanner reads no
     /// private tag, so the walk keeps them (creators included).
     std::map<std::uint32_t, std::string> privateValues;
-    std::uint64_t paddingOffset = 0;   ///< where they start
+    std::uint64_t paddingOffset = 0; ///< where they start
 };
 
 /// @brief Walk @p file's meta header and data set.
@@ -61,8 +61,8 @@ struct DicomPreflightNotes {
 /// @throw IoError naming the file, the element and its byte offset where the
 ///        file is damaged (an element that runs past the end, an invalid VR,
 ///        nesting deeper than 32 levels, ...)
-DicomKind preflightDicom(const std::filesystem::path& file, DicomPixelLocation* where = nullptr,
-                         DicomPreflightNotes* notes = nullptr);
+DicomKind preflightDicom(
+    const std::filesystem::path& file, DicomPixelLocation* where = nullptr, DicomPreflightNotes* notes = nullptr);
 
 /// @brief The name of a SOP class voxhap does not load, for skip reports
 /// ("Secondary Capture Image Storage", "Media Storage Directory (DICOMDIR)", ...);

@@ -56,11 +56,11 @@ struct Slice {
 
 /// The series' slices that make up the chosen volume, with the geometry checks done.
 struct Plan {
-    std::vector<DicomHeader> headers;   ///< of the files in the volume
-    std::vector<Slice> slices;          ///< of the volume
-    SliceStackGeometry stack;           ///< ordered along the normal
+    std::vector<DicomHeader> headers; ///< of the files in the volume
+    std::vector<Slice> slices;        ///< of the volume
+    SliceStackGeometry stack;         ///< ordered along the normal
     Vec3d row{1, 0, 0}, col{0, 1, 0}, normal{0, 0, 1};
-    std::size_t volume = 0;             ///< from 1; 0 for a series of one volume
+    std::size_t volume = 0; ///< from 1; 0 for a series of one volume
 };
 
 /// "axial", "sagittal" or "coronal" by the slice normal's largest LPS
@@ -143,14 +143,14 @@ bool damagedFileOf(const DicomSkippedFile& s, const std::string& uid, const std:
 /// loads, its plan. Problems go to info.problem, never thrown.
 struct SeriesWork {
     DicomSeriesInfo info;
-    std::vector<DicomHeader> headers;        ///< completed (skipBad: without the bad ones)
-    std::vector<DicomSkippedFile> bad;       ///< files left out under skipBad
+    std::vector<DicomHeader> headers;  ///< completed (skipBad: without the bad ones)
+    std::vector<DicomSkippedFile> bad; ///< files left out under skipBad
     std::optional<DicomVolumeSet> volumes;
     std::optional<Plan> plan;
 };
 
 void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vector<DicomSkippedFile>& skipped,
-                 const DicomOptions& o, const std::map<std::string, std::string>& inflatedFrom = {})
+    const DicomOptions& o, const std::map<std::string, std::string>& inflatedFrom = {})
 {
     DicomSeriesInfo& info = w.info;
     const fs::path folder = headers.front().file.parent_path();
@@ -178,8 +178,9 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         }
     }
     if (!w.bad.empty() && !o.skipBad) {
-        info.problem = w.bad.front().reason + (w.bad.size() > 1 ? " (and " + std::to_string(w.bad.size() - 1) + " more)" : "") +
-                       "; --skip-bad loads the rest of the series";
+        info.problem = w.bad.front().reason +
+            (w.bad.size() > 1 ? " (and " + std::to_string(w.bad.size() - 1) + " more)" : "") +
+            "; --skip-bad loads the rest of the series";
     }
     if (done.empty()) {
         if (info.problem.empty()) info.problem = folder.string() + ": no readable image in the series";
@@ -202,7 +203,8 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
     double positionUnit = 0, orientationUnit = 0;
     for (const DicomHeader& h : done) {
         if (h.positionUnit > 0 && (positionUnit == 0 || h.positionUnit < positionUnit)) positionUnit = h.positionUnit;
-        if (h.orientationUnit > 0 && (orientationUnit == 0 || h.orientationUnit < orientationUnit)) orientationUnit = h.orientationUnit;
+        if (h.orientationUnit > 0 && (orientationUnit == 0 || h.orientationUnit < orientationUnit))
+            orientationUnit = h.orientationUnit;
     }
     const double positionTolerance = positionToleranceMm(positionUnit);
     const double directionTol = directionTolerance(orientationUnit);
@@ -214,7 +216,7 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
     info.separatedBy = set.separatedBy;
     w.headers = std::move(done);
     const std::string where = folder.string() + ": series " + std::to_string(info.index) +
-                              (info.number.empty() ? "" : " (SeriesNumber " + info.number + ")");
+        (info.number.empty() ? "" : " (SeriesNumber " + info.number + ")");
     if (!set.problem.empty()) {
         info.volumes = 0;
         if (info.problem.empty()) info.problem = where + ": " + set.problem;
@@ -225,12 +227,12 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         if (o.volume == 0) {
             if (info.problem.empty()) {
                 info.problem = where + " holds " + set.shape() + " (by " + set.separatedBy + "; " + set.summary() +
-                               "): load one with --volume 1.." + std::to_string(set.count());
+                    "): load one with --volume 1.." + std::to_string(set.count());
             }
         } else if (o.volume > set.count()) {
             if (info.problem.empty()) {
                 info.problem = where + " holds " + std::to_string(set.count()) + " volumes; --volume " +
-                               std::to_string(o.volume) + " does not exist";
+                    std::to_string(o.volume) + " does not exist";
             }
         } else {
             volume = o.volume;
@@ -249,7 +251,7 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         try {
             if (placements.size() > 1) {
                 info.spacing[2] = orderSlices(placements, h1.rowDirection.cross(h1.columnDirection).normalized(),
-                                              positionTolerance, std::min(directionTol, kMaxDriftPerMm))
+                    positionTolerance, std::min(directionTol, kMaxDriftPerMm))
                                       .step;
             }
         } catch (const ValueError&) {
@@ -283,15 +285,17 @@ void studySeries(SeriesWork& w, std::vector<DicomHeader> headers, const std::vec
         if (info.problem.empty()) info.problem = folder.string() + ": (0020,0032) ImagePositionPatient: " + e.what();
         return;
     }
-    if (plan.slices.size() > 1) info.spacing[2] = plan.stack.step;
-    else if (lead.sliceThickness > 0) info.spacing[2] = lead.sliceThickness;
+    if (plan.slices.size() > 1)
+        info.spacing[2] = plan.stack.step;
+    else if (lead.sliceThickness > 0)
+        info.spacing[2] = lead.sliceThickness;
     if (!plan.stack.problem.empty()) {
         if (lead.gantryTilt != 0.0 && plan.stack.tilted) {
             plan.stack.problem += " ((0018,1120) GantryDetectorTilt " + std::to_string(lead.gantryTilt) + " deg)";
         }
         if (o.irregular == IrregularSlices::Refuse && info.problem.empty()) {
             info.problem = folder.string() + ": (0020,0032) ImagePositionPatient: " + plan.stack.problem +
-                           "; refusing (--resample loads it on a uniform grid)";
+                "; refusing (--resample loads it on a uniform grid)";
         }
     }
     w.plan = std::move(plan);
@@ -303,7 +307,7 @@ const DicomSeriesInfo& findSeries(const std::vector<DicomSeriesInfo>& all, const
 {
     const auto describe = [](const DicomSeriesInfo& s) {
         return "#" + std::to_string(s.index) + " (SeriesNumber " + (s.number.empty() ? "none" : s.number) + ", " +
-               s.modality + (s.description.empty() ? "" : " \"" + s.description + "\"") + ", " + s.uid + ")";
+            s.modality + (s.description.empty() ? "" : " \"" + s.description + "\"") + ", " + s.uid + ")";
     };
     for (const auto& s : all) {
         if (s.uid == wanted) return s;
@@ -311,7 +315,7 @@ const DicomSeriesInfo& findSeries(const std::vector<DicomSeriesInfo>& all, const
     const bool hash = !wanted.empty() && wanted.front() == '#';
     const std::string digits = hash ? wanted.substr(1) : wanted;
     const bool numeric = !digits.empty() && digits.size() < 9 &&
-                         std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+        std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
     std::vector<const DicomSeriesInfo*> found;
     if (numeric) {
         const long n = std::stol(digits);
@@ -325,18 +329,18 @@ const DicomSeriesInfo& findSeries(const std::vector<DicomSeriesInfo>& all, const
     if (found.size() > 1) {
         std::string list;
         for (const auto* s : found) list += (list.empty() ? "" : "; ") + describe(*s);
-        throw ValueError("series '" + wanted + "' is ambiguous: " + list +
-                         " (give the UID, or #N for the table's index N)");
+        throw ValueError(
+            "series '" + wanted + "' is ambiguous: " + list + " (give the UID, or #N for the table's index N)");
     }
     throw ValueError("series '" + wanted + "': not found (" + std::to_string(all.size()) +
-                     " series present; give a SeriesInstanceUID, a SeriesNumber or #1 to #" + std::to_string(all.size()) +
-                     " as `voxhap info` lists them)");
+        " series present; give a SeriesInstanceUID, a SeriesNumber or #1 to #" + std::to_string(all.size()) +
+        " as `voxhap info` lists them)");
 }
 
 /// Frames of a file decoded on demand; multi-frame files and mosaics are decoded once.
 class FrameSource {
 public:
-    explicit FrameSource(const std::vector<DicomHeader>& headers) : mHeaders(headers), mCache(headers.size()) {}
+    explicit FrameSource(const std::vector<DicomHeader>& headers) : mHeaders(headers), mCache(headers.size()) { }
 
     /// The stored samples of @p s's file: decoded into @p scratch (its buffers
     /// reused slice after slice), or a multi-frame file's or mosaic's cached decode.
@@ -357,9 +361,11 @@ public:
                 std::lock_guard<std::mutex> lock(mMutex); // one decoder process, one request at a time
                 mDecoder.decode(h.file, scratch);
             }
-            if (frames->rows != h.storedRows || frames->columns != h.storedColumns || frames->frames != h.storedFrames) {
-                throw IoError(h.file.string() + ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
-                                                "pixel data dimensions differ from the header");
+            if (frames->rows != h.storedRows || frames->columns != h.storedColumns ||
+                frames->frames != h.storedFrames) {
+                throw IoError(h.file.string() +
+                    ": (0028,0010) Rows / (0028,0011) Columns / (0028,0008) NumberOfFrames: "
+                    "pixel data dimensions differ from the header");
             }
         } catch (const IoError&) {
             std::lock_guard<std::mutex> lock(mMutex);
@@ -377,7 +383,8 @@ public:
         const DicomHeader& h = mHeaders[s.file];
         for (int y = 0; y < h.rows; ++y) {
             samplesToFloat(f, s.frame, std::size_t(s.row0 + y) * std::size_t(f.columns) + std::size_t(s.col0),
-                           std::size_t(h.columns), s.slope, s.intercept, h.padding, air, out + std::size_t(y) * std::size_t(h.columns));
+                std::size_t(h.columns), s.slope, s.intercept, h.padding, air,
+                out + std::size_t(y) * std::size_t(h.columns));
         }
     }
 
@@ -457,7 +464,7 @@ bool looksLikeDicom(const fs::path& path)
         // gzip: a .dcm.gz is DICOM; a .nii.gz is not, and its name says so.
         const std::string name = path.filename().string();
         return name.size() > 3 && name.compare(name.size() - 3, 3, ".gz") == 0 &&
-               name.find(".nii") == std::string::npos;
+            name.find(".nii") == std::string::npos;
     }
     if (!in.read(magic + 2, sizeof magic - 2)) return false;
     return std::string(magic + 128, 4) == "DICM";
@@ -481,8 +488,8 @@ Study study(const std::vector<fs::path>& inputs, const DicomOptions& o)
     for (DicomHeader& h : scan.images) byUid[h.seriesUid].push_back(std::move(h));
     scan.images.clear();
     // Table order: SeriesNumber (numerically; none last), then UID.
-    std::vector<std::pair<std::string, std::vector<DicomHeader>>> ordered(std::make_move_iterator(byUid.begin()),
-                                                                         std::make_move_iterator(byUid.end()));
+    std::vector<std::pair<std::string, std::vector<DicomHeader>>> ordered(
+        std::make_move_iterator(byUid.begin()), std::make_move_iterator(byUid.end()));
     const auto numberOf = [](const std::vector<DicomHeader>& hs) {
         char* end = nullptr;
         const std::string& n = hs.front().seriesNumber;
@@ -490,7 +497,7 @@ Study study(const std::vector<fs::path>& inputs, const DicomOptions& o)
         return n.empty() || end != n.c_str() + n.size() ? 1e300 : v;
     };
     std::stable_sort(ordered.begin(), ordered.end(),
-                     [&](const auto& a, const auto& b) { return numberOf(a.second) < numberOf(b.second); });
+        [&](const auto& a, const auto& b) { return numberOf(a.second) < numberOf(b.second); });
     for (auto& [uid, headers] : ordered) {
         SeriesWork w;
         w.info.index = int(st.work.size()) + 1;
@@ -556,7 +563,7 @@ std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs
         std::string what;
         for (const auto& in : inputs) what += (what.empty() ? "" : ", ") + in.string();
         throw IoError(what + ": no DICOM image found" +
-                      (c.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(c.skipped) + ")"));
+            (c.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(c.skipped) + ")"));
     }
     return c.series;
 }
@@ -577,7 +584,7 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             throw IoError(catalog.skipped.front().reason);
         }
         throw IoError(what + ": no DICOM image found" +
-                      (catalog.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(catalog.skipped) + ")"));
+            (catalog.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(catalog.skipped) + ")"));
     }
     const DicomSeriesInfo* chosen = nullptr;
     std::string because;
@@ -587,8 +594,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             if (catalog.series.size() == 1) throw IoError(catalog.series.front().problem);
             std::string list;
             for (const auto& s : catalog.series) {
-                list += (list.empty() ? "" : " | ") + std::string("#") + std::to_string(s.index) + " " + s.modality + ": " +
-                        s.problem;
+                list += (list.empty() ? "" : " | ") + std::string("#") + std::to_string(s.index) + " " + s.modality +
+                    ": " + s.problem;
             }
             throw IoError(what + ": no series loads as one 3D volume: " + list);
         }
@@ -616,9 +623,12 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             const int nx = first.columns, ny = first.rows;
             Geometry geo;
             geo.spacing = Vec3d(first.pixelSpacing[1], first.pixelSpacing[0], 1.0);
-            if (plan.slices.size() > 1) geo.spacing[2] = plan.stack.step;
-            else if (first.sliceThickness > 0) geo.spacing[2] = first.sliceThickness; // one slice: nothing else to go by
-            else if (first.spacingBetweenSlices) geo.spacing[2] = *first.spacingBetweenSlices;
+            if (plan.slices.size() > 1)
+                geo.spacing[2] = plan.stack.step;
+            else if (first.sliceThickness > 0)
+                geo.spacing[2] = first.sliceThickness; // one slice: nothing else to go by
+            else if (first.spacingBetweenSlices)
+                geo.spacing[2] = *first.spacingBetweenSlices;
             geo.direction.col(0) = row;
             geo.direction.col(1) = col;
             geo.direction.col(2) = normal;
@@ -635,18 +645,20 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             // Worst case: every voxel active in the float grid (leaf overhead is ~1%),
             // plus one slab, plus the whole input stack when resampling.
             const std::uint64_t need = std::uint64_t(outPlane) * std::uint64_t(rg.nz) * sizeof(float) +
-                                       std::uint64_t(outPlane) * SparseSlabs::kSlabSlices * sizeof(float) +
-                                       (resample ? std::uint64_t(inPlane) * plan.slices.size() * sizeof(float) : 0);
+                std::uint64_t(outPlane) * SparseSlabs::kSlabSlices * sizeof(float) +
+                (resample ? std::uint64_t(inPlane) * plan.slices.size() * sizeof(float) : 0);
             if (need > options.memoryCapBytes) {
-                throw IoError(first.file.parent_path().string() + ": (0028,0010) Rows × (0028,0011) Columns × slices = " +
-                              std::to_string(rg.nx) + "×" + std::to_string(rg.ny) + "×" + std::to_string(rg.nz) +
-                              " voxels may need " + mib(need) + ", over the memory cap of " + mib(options.memoryCapBytes));
+                throw IoError(first.file.parent_path().string() +
+                    ": (0028,0010) Rows × (0028,0011) Columns × slices = " + std::to_string(rg.nx) + "×" +
+                    std::to_string(rg.ny) + "×" + std::to_string(rg.nz) + " voxels may need " + mib(need) +
+                    ", over the memory cap of " + mib(options.memoryCapBytes));
             }
 
             // MR goes to the intensity channel first; assignMrMaterial moves it.
             const float background = isMr ? kAirIntensity : kAirHu;
             // MR: zero and below is background (magnitude images hold no tissue there).
-            const float airBelow = isMr ? std::nextafter(options.airT1, std::numeric_limits<float>::max()) : options.airHu;
+            const float airBelow =
+                isMr ? std::nextafter(options.airT1, std::numeric_limits<float>::max()) : options.airHu;
             SparseSlabs sparse(background, airBelow);
             FrameSource source(work.headers);
             const auto& order = plan.stack.slices;
@@ -673,16 +685,16 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                             const Slice& s = plan.slices[order[std::size_t(k0 + k)].source];
                             const SampleType type = frames[std::size_t(k)]->type;
                             finite = finite && type != SampleType::Float32 && type != SampleType::Float64 &&
-                                     std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
+                                std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
                         }
                         sparse.addSlabRows(
                             [&](int z, int y, float* scratch) {
                                 const Slice& s = plan.slices[order[std::size_t(k0 + z)].source];
                                 const DicomFrames& f = *frames[std::size_t(z)];
                                 samplesToFloat(f, s.frame,
-                                               std::size_t(s.row0 + y) * std::size_t(f.columns) + std::size_t(s.col0),
-                                               std::size_t(nx), s.slope, s.intercept, source.header(s).padding, background,
-                                               scratch);
+                                    std::size_t(s.row0 + y) * std::size_t(f.columns) + std::size_t(s.col0),
+                                    std::size_t(nx), s.slope, s.intercept, source.header(s).padding, background,
+                                    scratch);
                                 return static_cast<const float*>(scratch);
                             },
                             nx, ny, k0, n, finite);
@@ -695,12 +707,13 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                     tbb::parallel_for(std::size_t(0), plan.slices.size(), [&](std::size_t k) {
                         source.read(plan.slices[order[k].source], input.data() + inPlane * k, background);
                     });
-                    SliceResampler resampler(plan.stack, input.data(), nx, ny, row, col, geo.spacing.head<2>(), background);
+                    SliceResampler resampler(
+                        plan.stack, input.data(), nx, ny, row, col, geo.spacing.head<2>(), background);
                     for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
                         const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
                         tbb::parallel_for(0, n, [&](int k) {
                             resampler.sample(geo.origin + double(k0 + k) * geo.spacing[2] * normal, rg.nx, rg.ny,
-                                             slab.data() + outPlane * std::size_t(k));
+                                slab.data() + outPlane * std::size_t(k));
                         });
                         sparse.addSlab(slab.data(), rg.nx, rg.ny, k0, n);
                         if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
@@ -727,8 +740,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             md.extra["series_uid"] = chosen->uid;
             md.extra["slices"] = std::to_string(plan.slices.size());
             if (plan.volume > 0) {
-                md.extra["volume"] = std::to_string(plan.volume) + " of " + std::to_string(work.volumes->count()) + " (" +
-                                     work.volumes->labels[plan.volume - 1] + ")";
+                md.extra["volume"] = std::to_string(plan.volume) + " of " + std::to_string(work.volumes->count()) +
+                    " (" + work.volumes->labels[plan.volume - 1] + ")";
             }
             std::ostringstream air;
             air << airBelow;
@@ -749,7 +762,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                 mo.assumedField = options.assumedField;
                 MrWeighting weighting = classifyMrWeighting(sequenceFields(first));
                 mr = assignMrMaterial(v, weighting, first.fieldStrength, mo, first.file.parent_path().string());
-                if (!first.fieldStrength) md.extra["field_strength_source"] = "assumed: (0018,0087) MagneticFieldStrength absent";
+                if (!first.fieldStrength)
+                    md.extra["field_strength_source"] = "assumed: (0018,0087) MagneticFieldStrength absent";
             }
 
             if (report) {
@@ -761,8 +775,8 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                 report->chosenBecause = because;
                 report->mr = mr;
                 const auto active = v.has(Channel::Hu) ? v.grid(Channel::Hu)
-                                    : v.has(Channel::T1) ? v.grid(Channel::T1)
-                                                         : v.grid(Channel::Intensity);
+                    : v.has(Channel::T1)               ? v.grid(Channel::T1)
+                                                       : v.grid(Channel::Intensity);
                 report->denseVoxels = v.indexBox().voxelCount();
                 report->activeVoxels = std::int64_t(active->activeVoxelCount());
                 report->memoryBytes = active->memUsage();
@@ -794,8 +808,9 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             again.info.damagedFiles = 0;
             // The headers are complete: studySeries completes them again, which is harmless.
             studySeries(again, std::move(rest), {}, options);
-            if (!again.info.problem.empty()) throw IoError(catalog.scan.originalNames(again.info.problem) + " (after leaving out " +
-                                                           work.headers[bad.file].file.string() + ", which could not be read)");
+            if (!again.info.problem.empty())
+                throw IoError(catalog.scan.originalNames(again.info.problem) + " (after leaving out " +
+                    work.headers[bad.file].file.string() + ", which could not be read)");
             again.bad = work.bad;
             work = std::move(again);
         }

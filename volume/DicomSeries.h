@@ -34,23 +34,23 @@ namespace voxhap::volume {
 
 /// @brief One series found among the inputs, as the series table shows it.
 struct DicomSeriesInfo {
-    int index = 0;            ///< 1-based position in the table (ordered by SeriesNumber, then UID)
-    std::string uid;          ///< SeriesInstanceUID
-    std::string modality;     ///< "CT", "MR", ...
-    std::string description;  ///< SeriesDescription, may be empty
-    std::string number;       ///< SeriesNumber, may be empty
+    int index = 0;             ///< 1-based position in the table (ordered by SeriesNumber, then UID)
+    std::string uid;           ///< SeriesInstanceUID
+    std::string modality;      ///< "CT", "MR", ...
+    std::string description;   ///< SeriesDescription, may be empty
+    std::string number;        ///< SeriesNumber, may be empty
     int rows = 0, columns = 0; ///< of a slice (a mosaic's tile)
-    std::int64_t slices = 0;  ///< slices over all files of the series (a mosaic's tiles count)
+    std::int64_t slices = 0;   ///< slices over all files of the series (a mosaic's tiles count)
     std::vector<std::filesystem::path> files;
-    std::string orientation;  ///< "axial", "sagittal", "coronal" or "oblique" (from the slice normal)
-    Vec3d spacing{0, 0, 0};   ///< between columns, between rows, slice step [mm]; 0 where unknown
-    std::size_t volumes = 0;  ///< 3D volumes in the series; 0 if it could not be split
-    std::string volumeShape;  ///< "13 volumes × 25 slices"
-    std::string volumeSummary; ///< "1: b=0, 2–13: b=1000"
-    std::string separatedBy;  ///< what separates the volumes: "b-value, acquisition order"
-    std::string weighting;    ///< MR: the weighting rule's verdict ("T1-weighted", ...)
-    std::string weightingReason; ///< MR: why
-    std::int64_t voxels = 0;  ///< voxels of one volume (rows × columns × its slices)
+    std::string orientation;       ///< "axial", "sagittal", "coronal" or "oblique" (from the slice normal)
+    Vec3d spacing{0, 0, 0};        ///< between columns, between rows, slice step [mm]; 0 where unknown
+    std::size_t volumes = 0;       ///< 3D volumes in the series; 0 if it could not be split
+    std::string volumeShape;       ///< "13 volumes × 25 slices"
+    std::string volumeSummary;     ///< "1: b=0, 2–13: b=1000"
+    std::string separatedBy;       ///< what separates the volumes: "b-value, acquisition order"
+    std::string weighting;         ///< MR: the weighting rule's verdict ("T1-weighted", ...)
+    std::string weightingReason;   ///< MR: why
+    std::int64_t voxels = 0;       ///< voxels of one volume (rows × columns × its slices)
     std::int64_t damagedFiles = 0; ///< damaged files that belong to it (set aside)
     /// Empty if the series loads as one 3D volume with the options given;
     /// otherwise why not, naming the option that would load it.
@@ -103,9 +103,9 @@ struct DicomOptions {
 
 /// @brief Every series among the inputs and every file set aside.
 struct DicomCatalog {
-    std::vector<DicomSeriesInfo> series;     ///< the series table, in index order
-    std::vector<DicomSkippedFile> skipped;   ///< files not read, with the reason
-    DicomScan scan;                          ///< the scanned headers (and any inflated copies)
+    std::vector<DicomSeriesInfo> series;   ///< the series table, in index order
+    std::vector<DicomSkippedFile> skipped; ///< files not read, with the reason
+    DicomScan scan;                        ///< the scanned headers (and any inflated copies)
     /// Headers of each series (same order as `series`), geometry completed;
     /// empty for a series whose headers could not be completed (see its problem).
     std::vector<std::vector<DicomHeader>> headers;
@@ -114,24 +114,24 @@ struct DicomCatalog {
 /// @brief Figures of one load, for reports and benchmarks.
 struct DicomLoadReport {
     DicomSeriesInfo series;
-    std::vector<DicomSeriesInfo> allSeries; ///< every series found among the inputs
-    std::vector<DicomSkippedFile> skipped;  ///< files among the inputs that were not read, with the reason
+    std::vector<DicomSeriesInfo> allSeries;   ///< every series found among the inputs
+    std::vector<DicomSkippedFile> skipped;    ///< files among the inputs that were not read, with the reason
     std::vector<DicomSkippedFile> skippedBad; ///< files of this series left out under skipBad
-    std::size_t volume = 0;                 ///< the volume loaded (from 1); 0 when the series has one
-    std::string chosenBecause;              ///< why this series (the default rule, or the option)
-    double seconds = 0;                     ///< wall time of the whole load [s]
-    double scanSeconds = 0;                 ///< of which: preflight walk and header scan [s]
-    double decodeSeconds = 0;               ///< of which: GDCM decode and rescale to float [s]
-    double sparseSeconds = 0;               ///< of which: dense slabs into the sparse grid [s]
+    std::size_t volume = 0;                   ///< the volume loaded (from 1); 0 when the series has one
+    std::string chosenBecause;                ///< why this series (the default rule, or the option)
+    double seconds = 0;                       ///< wall time of the whole load [s]
+    double scanSeconds = 0;                   ///< of which: preflight walk and header scan [s]
+    double decodeSeconds = 0;                 ///< of which: GDCM decode and rescale to float [s]
+    double sparseSeconds = 0;                 ///< of which: dense slabs into the sparse grid [s]
     std::int64_t denseVoxels = 0;
     std::int64_t activeVoxels = 0;
-    std::uint64_t memoryBytes = 0;          ///< the grid's memory [bytes]
+    std::uint64_t memoryBytes = 0; ///< the grid's memory [bytes]
     bool resampled = false;
-    std::string irregularity;               ///< why the slices were resampled, empty if not
-    std::string interpolation;              ///< how they were, empty if not
-    std::int64_t sourceVoxelsOutside = 0;   ///< source voxels whose centre lies outside the resampled grid
-    std::int64_t paddedFiles = 0;           ///< files with zero padding after their last element (accepted)
-    std::optional<MrMaterialReport> mr;     ///< MR: what the image became
+    std::string irregularity;             ///< why the slices were resampled, empty if not
+    std::string interpolation;            ///< how they were, empty if not
+    std::int64_t sourceVoxelsOutside = 0; ///< source voxels whose centre lies outside the resampled grid
+    std::int64_t paddedFiles = 0;         ///< files with zero padding after their last element (accepted)
+    std::optional<MrMaterialReport> mr;   ///< MR: what the image became
 };
 
 /// @brief True if @p path is a directory or a file that starts like DICOM
@@ -157,6 +157,6 @@ const DicomSeriesInfo* chooseDefaultSeries(const DicomCatalog& catalog);
 ///        and the option that resolves the problem
 /// @throw ValueError for a choice that makes no sense (unknown or ambiguous series)
 Volume loadDicom(const std::vector<std::filesystem::path>& inputs, const DicomOptions& options = {},
-                 DicomLoadReport* report = nullptr);
+    DicomLoadReport* report = nullptr);
 
 } // namespace voxhap::volume

@@ -21,7 +21,8 @@ using Order = std::tuple<long, double, long, std::size_t, int>;
 Order orderOf(const DicomSlice& s, const std::vector<DicomHeader>& headers)
 {
     const DicomFrameKey& k = headers[s.file].frameKey(s.frame);
-    return {k.acquisitionNumber.value_or(0), k.triggerTime.value_or(0.0), k.instanceNumber.value_or(0), s.file, s.frame};
+    return {
+        k.acquisitionNumber.value_or(0), k.triggerTime.value_or(0.0), k.instanceNumber.value_or(0), s.file, s.frame};
 }
 
 std::string shortNumber(double v)
@@ -86,8 +87,8 @@ std::string DicomVolumeSet::summary() const
     return os.str();
 }
 
-DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers,
-                            double toleranceMm)
+DicomVolumeSet splitVolumes(
+    const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers, double toleranceMm)
 {
     DicomVolumeSet out;
     // 1. Separating keys.
@@ -102,10 +103,10 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
         const DicomFrameKey& k = headers[slices[members.front()].file].frameKey(slices[members.front()].frame);
         byType |= k.imageType != k0.imageType;
         byEcho |= k.echoNumber != k0.echoNumber || (k.echoTime.has_value() != k0.echoTime.has_value()) ||
-                  (k.echoTime && k0.echoTime && std::lround(*k.echoTime * 100) != std::lround(*k0.echoTime * 100));
+            (k.echoTime && k0.echoTime && std::lround(*k.echoTime * 100) != std::lround(*k0.echoTime * 100));
         byTime |= k.temporalPosition != k0.temporalPosition;
         byB |= (k.bValue.has_value() != k0.bValue.has_value()) ||
-               (k.bValue && k0.bValue && std::lround(*k.bValue) != std::lround(*k0.bValue));
+            (k.bValue && k0.bValue && std::lround(*k.bValue) != std::lround(*k0.bValue));
         byStack |= k.stack != k0.stack;
     }
 
@@ -147,7 +148,9 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
             label << sep() << "echo " << (k.echoNumber ? std::to_string(*k.echoNumber) : std::string("?"));
             if (k.echoTime) label << " (TE " << shortNumber(*k.echoTime) << " ms)";
         }
-        if (byTime) label << sep() << "time point " << (k.temporalPosition ? std::to_string(*k.temporalPosition) : std::string("?"));
+        if (byTime)
+            label << sep() << "time point "
+                  << (k.temporalPosition ? std::to_string(*k.temporalPosition) : std::string("?"));
         if (byStack) label << sep() << "stack " << (k.stack ? std::to_string(*k.stack) : std::string("?"));
         if (byType) label << sep() << k.imageType;
         if (lo != hi) {
@@ -167,8 +170,8 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
             for (std::size_t r = 0; r < c.size(); ++r) repeats[r].members.push_back(c[r]);
         }
         for (Volume& v : repeats) {
-            v.index = {k.temporalPosition.value_or(0), k.echoNumber.value_or(0), std::lround(k.echoTime.value_or(0) * 100),
-                       k.stack.value_or(0)};
+            v.index = {k.temporalPosition.value_or(0), k.echoNumber.value_or(0),
+                std::lround(k.echoTime.value_or(0) * 100), k.stack.value_or(0)};
             v.first = orderOf(slices[v.members.front()], headers);
             for (std::size_t i : v.members) v.first = std::min(v.first, orderOf(slices[i], headers));
             v.label = label.str();
@@ -176,7 +179,7 @@ DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::ve
         }
     }
     std::sort(volumes.begin(), volumes.end(),
-              [](const Volume& a, const Volume& b) { return std::tie(a.index, a.first) < std::tie(b.index, b.first); });
+        [](const Volume& a, const Volume& b) { return std::tie(a.index, a.first) < std::tie(b.index, b.first); });
     std::vector<std::string> by;
     if (byType) by.push_back("image type");
     if (byEcho) by.push_back("echo");

@@ -56,7 +56,7 @@ std::vector<DicomSlice> seriesSlices(const std::vector<DicomHeader>& headers);
 /// @brief Split @p slices into volumes (the rule above). Positions are
 /// compared along each group's own slice normal.
 /// @param toleranceMm   positions closer than this along the normal are the same position
-DicomVolumeSet splitVolumes(const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers,
-                            double toleranceMm);
+DicomVolumeSet splitVolumes(
+    const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers, double toleranceMm);
 
 } // namespace voxhap::volume

@@ -12,8 +12,8 @@
 
 namespace voxhap::volume {
 
-using FloatGrid = openvdb::FloatGrid;  ///< hu, t1 and derived material grids
-using LabelGrid = openvdb::Int32Grid;  ///< tissue ids
+using FloatGrid = openvdb::FloatGrid; ///< hu, t1 and derived material grids
+using LabelGrid = openvdb::Int32Grid; ///< tissue ids
 
 /// @brief Initialise OpenVDB's grid registry once (thread-safe, idempotent).
 void initializeOpenVdb();

@@ -40,7 +40,8 @@ bool inflateDicomGzip(const std::filesystem::path& in, const std::filesystem::pa
     // The preamble and magic first: a compressed file that is not DICOM is
     // not inflated any further.
     char preamble[132];
-    if (src.read(preamble, sizeof preamble) != sizeof preamble || std::memcmp(preamble + 128, "DICM", 4) != 0) return false;
+    if (src.read(preamble, sizeof preamble) != sizeof preamble || std::memcmp(preamble + 128, "DICM", 4) != 0)
+        return false;
     std::ofstream o(out, std::ios::binary | std::ios::trunc);
     if (!o) throw IoError(out.string() + ": cannot write an inflated copy of " + in.string());
     try {
@@ -50,8 +51,8 @@ bool inflateDicomGzip(const std::filesystem::path& in, const std::filesystem::pa
         for (std::size_t n; (n = src.read(buf.data(), buf.size())) > 0;) {
             total += n;
             if (total > capBytes) {
-                throw IoError(in.string() + ": inflates to more than the memory cap of " + std::to_string(capBytes >> 20) +
-                              " MiB");
+                throw IoError(in.string() + ": inflates to more than the memory cap of " +
+                    std::to_string(capBytes >> 20) + " MiB");
             }
             o.write(buf.data(), std::streamsize(n));
         }

@@ -19,20 +19,20 @@ namespace {
 // Geometry of the vertebrae around the midline path [mm, chosen]: typical
 // adult lumbar proportions, sized so that the midline path at x = z = 0 passes
 // between the spinous processes and laminae and ends on a vertebral body.
-constexpr double kMidlineHalfWidth = 5.0;   ///< supraspinous/interspinous ligament and spinous process, |x|
-constexpr double kLaminaHalfWidth = 18.0;   ///< laminae and pedicles, |x|
-constexpr double kCanalHalfWidth = 11.0;    ///< spinal canal, |x|
-constexpr double kSacHalfWidth = 8.0;       ///< thecal sac (dura + CSF), |x|
-constexpr double kBodyHalfWidth = 20.0;     ///< vertebral body, |x|
-constexpr double kInterspinousGap = 12.0;   ///< gap between spinous processes and laminae, along z
-constexpr double kBodyHeight = 30.0;        ///< vertebral body height along z
-constexpr double kDiscHeight = 10.0;        ///< intervertebral disc height along z
-constexpr double kBodyStartZ = -4.0;        ///< lower endplate of the upper body: the path meets bone
-constexpr double kBodyDepth = 30.0;         ///< vertebral body depth (anterior-posterior)
-constexpr double kAnteriorEpidural = 1.0;   ///< epidural space in front of the thecal sac
-constexpr double kMuscleBelow = 10.0;       ///< muscle (psoas) below the vertebral body
-constexpr double kHalfExtent = 40.0;        ///< block half size in x and z
-constexpr double kAirAbove = 5.0;           ///< air above the skin
+constexpr double kMidlineHalfWidth = 5.0; ///< supraspinous/interspinous ligament and spinous process, |x|
+constexpr double kLaminaHalfWidth = 18.0; ///< laminae and pedicles, |x|
+constexpr double kCanalHalfWidth = 11.0;  ///< spinal canal, |x|
+constexpr double kSacHalfWidth = 8.0;     ///< thecal sac (dura + CSF), |x|
+constexpr double kBodyHalfWidth = 20.0;   ///< vertebral body, |x|
+constexpr double kInterspinousGap = 12.0; ///< gap between spinous processes and laminae, along z
+constexpr double kBodyHeight = 30.0;      ///< vertebral body height along z
+constexpr double kDiscHeight = 10.0;      ///< intervertebral disc height along z
+constexpr double kBodyStartZ = -4.0;      ///< lower endplate of the upper body: the path meets bone
+constexpr double kBodyDepth = 30.0;       ///< vertebral body depth (anterior-posterior)
+constexpr double kAnteriorEpidural = 1.0; ///< epidural space in front of the thecal sac
+constexpr double kMuscleBelow = 10.0;     ///< muscle (psoas) below the vertebral body
+constexpr double kHalfExtent = 40.0;      ///< block half size in x and z
+constexpr double kAirAbove = 5.0;         ///< air above the skin
 
 // [S19] Table I: derma length and epidural space length per patient type (physics.md §2.3).
 struct PresetRow {
@@ -103,7 +103,8 @@ PhantomModel lumbarModel(const LumbarParams& p, const TissueTable& table)
     const LumbarLayout l = lumbarLayout(p, table);
     const auto id = [&](const char* name) { return table.at(name).id; };
     const int skin = id("skin"), fat = id("fat"), muscle = id("muscle");
-    const int supra = id("supraspinous_ligament"), inter = id("interspinous_ligament"), flavum = id("ligamentum_flavum");
+    const int supra = id("supraspinous_ligament"), inter = id("interspinous_ligament"),
+              flavum = id("ligamentum_flavum");
     const int epidural = id("epidural_space"), dura = id("dura"), csf = id("csf"), disc = id("intervertebral_disc");
     const int cortical = id("cortical_bone"), cancellous = id("cancellous_bone");
     const double shell = defaultThickness(table, "cortical_bone");

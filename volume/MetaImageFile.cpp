@@ -24,7 +24,8 @@ Volume loadMetaImage(const std::filesystem::path& file, const RasterOptions& opt
     text.resize(std::size_t(in.gcount()));
     const MetaImageHeader h = parseMetaImageHeader(text, file);
     checkRasterSize(h.layout.dims, options.memoryCapBytes, name, "DimSize");
-    if (!std::filesystem::is_regular_file(h.dataFile)) throw IoError(name + ": ElementDataFile: " + h.dataFile.string() + " not found");
+    if (!std::filesystem::is_regular_file(h.dataFile))
+        throw IoError(name + ": ElementDataFile: " + h.dataFile.string() + " not found");
     ByteSource src(h.dataFile, h.dataOffset, h.compressed);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
     v.setGrid(options.channel, readRaster(src, h.layout, options.channel, options, h.dataFile.string()));

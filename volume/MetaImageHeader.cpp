@@ -30,10 +30,12 @@ std::vector<double> numbers(const std::string& text, std::size_t n, const std::s
     std::vector<double> v(n);
     for (auto& x : v) {
         if (!(in >> x) || !std::isfinite(x)) {
-            throw IoError(file + ": " + key + ": expected " + std::to_string(n) + " finite numbers, got '" + text + "'");
+            throw IoError(
+                file + ": " + key + ": expected " + std::to_string(n) + " finite numbers, got '" + text + "'");
         }
     }
-    if (!(in >> std::ws).eof()) throw IoError(file + ": " + key + ": expected " + std::to_string(n) + " numbers, got '" + text + "'");
+    if (!(in >> std::ws).eof())
+        throw IoError(file + ": " + key + ": expected " + std::to_string(n) + " numbers, got '" + text + "'");
     return v;
 }
 
@@ -77,34 +79,40 @@ MetaImageHeader parseMetaImageHeader(std::string_view text, const std::filesyste
         if (it == f.end()) throw IoError(file + ": " + key + ": missing");
         return it->second;
     };
-    if (f.count("ObjectType") && f["ObjectType"] != "Image") throw IoError(file + ": ObjectType: '" + f["ObjectType"] + "' (Image expected)");
+    if (f.count("ObjectType") && f["ObjectType"] != "Image")
+        throw IoError(file + ": ObjectType: '" + f["ObjectType"] + "' (Image expected)");
     if (need("NDims") != "3") throw IoError(file + ": NDims: " + f["NDims"] + " (only 3D volumes are read)");
     if (f.count("ElementNumberOfChannels") && f["ElementNumberOfChannels"] != "1") {
         throw IoError(file + ": ElementNumberOfChannels: " + f["ElementNumberOfChannels"] + " (one channel expected)");
     }
     const auto dims = numbers(need("DimSize"), 3, file, "DimSize");
     for (int a = 0; a < 3; ++a) {
-        if (dims[a] < 1 || dims[a] > (1 << 24) || dims[a] != std::floor(dims[a])) throw IoError(file + ": DimSize: '" + f["DimSize"] + "' out of range");
+        if (dims[a] < 1 || dims[a] > (1 << 24) || dims[a] != std::floor(dims[a]))
+            throw IoError(file + ": DimSize: '" + f["DimSize"] + "' out of range");
         h.layout.dims[a] = int(dims[a]);
     }
-    static const std::map<std::string, SampleType> kTypes{
-        {"MET_CHAR", SampleType::Int8},   {"MET_UCHAR", SampleType::UInt8}, {"MET_SHORT", SampleType::Int16},
-        {"MET_USHORT", SampleType::UInt16}, {"MET_INT", SampleType::Int32}, {"MET_UINT", SampleType::UInt32},
-        {"MET_LONG", SampleType::Int32},  {"MET_ULONG", SampleType::UInt32}, {"MET_FLOAT", SampleType::Float32},
-        {"MET_DOUBLE", SampleType::Float64}};
+    static const std::map<std::string, SampleType> kTypes{{"MET_CHAR", SampleType::Int8},
+        {"MET_UCHAR", SampleType::UInt8}, {"MET_SHORT", SampleType::Int16}, {"MET_USHORT", SampleType::UInt16},
+        {"MET_INT", SampleType::Int32}, {"MET_UINT", SampleType::UInt32}, {"MET_LONG", SampleType::Int32},
+        {"MET_ULONG", SampleType::UInt32}, {"MET_FLOAT", SampleType::Float32}, {"MET_DOUBLE", SampleType::Float64}};
     const auto type = kTypes.find(need("ElementType"));
-    if (type == kTypes.end()) throw IoError(file + ": ElementType: '" + f["ElementType"] + "' is not a supported scalar type");
+    if (type == kTypes.end())
+        throw IoError(file + ": ElementType: '" + f["ElementType"] + "' is not a supported scalar type");
     h.layout.type = type->second;
-    const std::string msb = f.count("BinaryDataByteOrderMSB") ? f["BinaryDataByteOrderMSB"] : f.count("ElementByteOrderMSB") ? f["ElementByteOrderMSB"] : "False";
+    const std::string msb = f.count("BinaryDataByteOrderMSB") ? f["BinaryDataByteOrderMSB"]
+        : f.count("ElementByteOrderMSB")                      ? f["ElementByteOrderMSB"]
+                                                              : "False";
     h.layout.bigEndian = isTrue(msb);
-    if (f.count("BinaryData") && !isTrue(f["BinaryData"])) throw IoError(file + ": BinaryData: ASCII data is not supported");
+    if (f.count("BinaryData") && !isTrue(f["BinaryData"]))
+        throw IoError(file + ": BinaryData: ASCII data is not supported");
     h.compressed = f.count("CompressedData") && isTrue(f["CompressedData"]);
 
     const std::string spacingKey = f.count("ElementSpacing") ? "ElementSpacing" : "ElementSize";
     if (f.count(spacingKey)) {
         const auto s = numbers(f[spacingKey], 3, file, spacingKey);
         for (int a = 0; a < 3; ++a) {
-            if (!(s[a] > 0)) throw IoError(file + ": " + spacingKey + ": must be positive, got '" + f[spacingKey] + "'");
+            if (!(s[a] > 0))
+                throw IoError(file + ": " + spacingKey + ": must be positive, got '" + f[spacingKey] + "'");
             h.geometry.spacing[a] = s[a];
         }
     }
@@ -121,7 +129,8 @@ MetaImageHeader parseMetaImageHeader(std::string_view text, const std::filesyste
             const auto m = numbers(f[key], 9, file, key);
             for (int a = 0; a < 3; ++a) {
                 const Vec3d axis(m[3 * a], m[3 * a + 1], m[3 * a + 2]);
-                if (std::abs(axis.norm() - 1.0) > 1e-4) throw IoError(file + ": " + key + ": axis " + std::to_string(a) + " is not a unit vector");
+                if (std::abs(axis.norm() - 1.0) > 1e-4)
+                    throw IoError(file + ": " + key + ": axis " + std::to_string(a) + " is not a unit vector");
                 h.geometry.direction.col(a) = axis.normalized();
             }
             break;
@@ -144,7 +153,8 @@ MetaImageHeader parseMetaImageHeader(std::string_view text, const std::filesyste
         h.dataOffset = 0;
         if (f.count("HeaderSize")) {
             const auto skip = numbers(f["HeaderSize"], 1, file, "HeaderSize")[0];
-            if (skip < 0 || skip != std::floor(skip)) throw IoError(file + ": HeaderSize: only a non-negative byte count is supported");
+            if (skip < 0 || skip != std::floor(skip))
+                throw IoError(file + ": HeaderSize: only a non-negative byte count is supported");
             h.dataOffset = std::uint64_t(skip);
         }
     }

@@ -18,8 +18,8 @@ struct MetaImageHeader {
     RasterLayout layout;
     Geometry geometry;
     bool compressed = false;
-    std::filesystem::path dataFile;  ///< the file holding the voxels
-    std::uint64_t dataOffset = 0;    ///< where they start in it [bytes]
+    std::filesystem::path dataFile; ///< the file holding the voxels
+    std::uint64_t dataOffset = 0;   ///< where they start in it [bytes]
 };
 
 /// @brief Parse a header; @p text is the file's first bytes (up to 64 KiB),

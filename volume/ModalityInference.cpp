@@ -91,14 +91,15 @@ ModalityGuess inferModality(const openvdb::GridBase& base)
     } else if (air >= kMinAirFraction && water >= kMinWaterFraction) {
         g.kind = ModalityGuess::Kind::Ct;
         g.reason = percent(air) + " of the voxels at -1200..-900 (air in HU) and " + percent(water) +
-                   " at -200..200 (water, soft tissue): CT in HU (" + range + ")";
+            " at -200..200 (water, soft tissue): CT in HU (" + range + ")";
     } else if (c.hi > 0 && -c.lo <= kMaxRingingFraction * c.hi && air == 0) {
         g.kind = ModalityGuess::Kind::Mr;
         g.reason = "negative values only down to " + number(c.lo) + ", within " + percent(kMaxRingingFraction) +
-                   " of the maximum " + number(c.hi) + " (interpolation ringing): MR intensities";
+            " of the maximum " + number(c.hi) + " (interpolation ringing): MR intensities";
     } else {
-        g.reason = "negative values (" + range + ", " + percent(c.negative / c.count) + " below 0) without the air of a CT (" +
-                   percent(air) + " at -1200..-900): neither CT in HU nor magnitude MR";
+        g.reason = "negative values (" + range + ", " + percent(c.negative / c.count) +
+            " below 0) without the air of a CT (" + percent(air) +
+            " at -1200..-900): neither CT in HU nor magnitude MR";
     }
     return g;
 }

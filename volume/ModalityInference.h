@@ -43,7 +43,11 @@ inline constexpr double kMaxRingingFraction = 0.05;
 
 /// @brief The verdict.
 struct ModalityGuess {
-    enum class Kind { Ct, Mr, Unknown } kind = Kind::Unknown;
+    enum class Kind {
+        Ct,
+        Mr,
+        Unknown
+    } kind = Kind::Unknown;
     std::string reason; ///< one line: the figures that decided
 };
 

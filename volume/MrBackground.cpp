@@ -57,22 +57,22 @@ bool leafInBox(const FloatLeaf& leaf, const openvdb::CoordBBox& box, openvdb::Co
 
 /// Visit every leaf that meets the box, in parallel: f(leaf, clipped) with
 /// @p clipped the in-box part of the leaf (index space, inclusive).
-template<typename F>
+template <typename F>
 void forEachLeafInBox(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, const F& f)
 {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t n = r.begin(); n < r.end(); ++n) {
-            FloatLeaf& leaf = leaves.leaf(n);
-            openvdb::CoordBBox c;
-            if (leafInBox(leaf, box, c)) f(leaf, c);
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n < r.end(); ++n) {
+                FloatLeaf& leaf = leaves.leaf(n);
+                openvdb::CoordBBox c;
+                if (leafInBox(leaf, box, c)) f(leaf, c);
+            }
+        });
 }
 
 /// Visit the voxels of @p c (the in-box part of one leaf): f(offset, x, y, z)
 /// with x, y, z relative to the box minimum.
-template<typename F>
-void forEachVoxel(const openvdb::CoordBBox& c, const openvdb::CoordBBox& box, const F& f)
+template <typename F> void forEachVoxel(const openvdb::CoordBBox& c, const openvdb::CoordBBox& box, const F& f)
 {
     for (int z = c.min().z(); z <= c.max().z(); ++z) {
         for (int y = c.min().y(); y <= c.max().y(); ++y) {
@@ -88,8 +88,8 @@ void forEachVoxel(const openvdb::CoordBBox& c, const openvdb::CoordBBox& box, co
 struct ValueRange {
     double lo = std::numeric_limits<double>::infinity();
     double hi = -std::numeric_limits<double>::infinity();
-    std::int64_t positive = 0;  ///< active voxels in the box with a value > 0
-    bool integer = true;        ///< every value is a whole number
+    std::int64_t positive = 0; ///< active voxels in the box with a value > 0
+    bool integer = true;       ///< every value is a whole number
 };
 
 /// A histogram of equal bins over [lo, lo + width·count.size()); values
@@ -183,9 +183,9 @@ double rayleighDistance(const std::vector<double>& edges, const std::vector<doub
 /// from the seeds through voxels where enter(mark) holds is set to @p to
 /// (for which enter() must be false). Returns the number of voxels set.
 /// @param stack scratch, reused between calls
-template<typename Enter>
-std::int64_t floodFill(std::uint8_t* m, const DenseLayout& d, std::vector<std::array<std::int32_t, 3>>& stack, const Enter& enter,
-                       std::uint8_t to)
+template <typename Enter>
+std::int64_t floodFill(std::uint8_t* m, const DenseLayout& d, std::vector<std::array<std::int32_t, 3>>& stack,
+    const Enter& enter, std::uint8_t to)
 {
     std::int64_t filled = 0;
     while (!stack.empty()) {
@@ -198,7 +198,8 @@ std::int64_t floodFill(std::uint8_t* m, const DenseLayout& d, std::vector<std::a
         while (x1 + 1 < d.nx && enter(row[x1 + 1])) ++x1;
         std::fill(row + x0, row + x1 + 1, to);
         filled += x1 - x0 + 1;
-        const std::array<std::array<std::int64_t, 2>, 4> neighbours{{{sy - 1, sz}, {sy + 1, sz}, {sy, sz - 1}, {sy, sz + 1}}};
+        const std::array<std::array<std::int64_t, 2>, 4> neighbours{
+            {{sy - 1, sz}, {sy + 1, sz}, {sy, sz - 1}, {sy, sz + 1}}};
         for (const auto& [ny, nz] : neighbours) {
             if (ny < 0 || ny >= d.ny || nz < 0 || nz >= d.nz) continue;
             const std::uint8_t* next = m + d.index(0, ny, nz);
@@ -234,7 +235,8 @@ struct NoiseEstimate {
     std::string why;                 ///< why the peak was rejected, if it was
 };
 
-NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, std::int64_t total)
+NoiseEstimate estimateNoise(
+    openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, std::int64_t total)
 {
     NoiseEstimate e;
     // Pass 1: range and integrality of the active in-box values.
@@ -281,7 +283,8 @@ NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const
     // Pass 3: the low histogram, positive values below tBET (set after pass 2).
     // Integer data: unit bins centred on the integers, else kLowBins bins.
     constexpr std::int64_t kLowBins = 4096;
-    tbb::enumerable_thread_specific<std::vector<std::int64_t>> local([&] { return std::vector<std::int64_t>(range.count.size(), 0); });
+    tbb::enumerable_thread_specific<std::vector<std::int64_t>> local(
+        [&] { return std::vector<std::int64_t>(range.count.size(), 0); });
     forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
         std::vector<std::int64_t>& h = local.local();
         forEachVoxel(c, box, [&](openvdb::Index i, int, int, int) {
@@ -307,12 +310,14 @@ NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const
         // Reuse pass 2's unit bins: bin b holds the integer b.
         low.lo = -0.5;
         low.width = 1.0;
-        low.count.assign(range.count.begin(), range.count.begin() + std::ptrdiff_t(std::min<double>(double(range.count.size()), std::floor(e.bet) + 1)));
+        low.count.assign(range.count.begin(),
+            range.count.begin() + std::ptrdiff_t(std::min<double>(double(range.count.size()), std::floor(e.bet) + 1)));
     } else {
         low.lo = 0;
         low.width = e.bet / double(kLowBins);
         low.count.assign(std::size_t(kLowBins), 0);
-        tbb::enumerable_thread_specific<std::vector<std::int64_t>> lowLocal([&] { return std::vector<std::int64_t>(low.count.size(), 0); });
+        tbb::enumerable_thread_specific<std::vector<std::int64_t>> lowLocal(
+            [&] { return std::vector<std::int64_t>(low.count.size(), 0); });
         forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
             std::vector<std::int64_t>& h = lowLocal.local();
             forEachVoxel(c, box, [&](openvdb::Index i, int, int, int) {
@@ -342,7 +347,8 @@ NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const
         return e;
     }
     if (e.mode > 0.5 * e.bet) {
-        e.why = "no peak at the low end of the histogram (mode " + num(e.mode) + " above tBET/2 = " + num(0.5 * e.bet) + ")";
+        e.why = "no peak at the low end of the histogram (mode " + num(e.mode) + " above tBET/2 = " + num(0.5 * e.bet) +
+            ")";
         return e;
     }
 
@@ -358,8 +364,8 @@ NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const
     e.sigma = fitRayleigh(edges, counts, 0.25 * e.mode, 4.0 * e.mode);
     e.distance = rayleighDistance(edges, counts, e.sigma);
     if (e.distance > kMaxRayleighDistance) {
-        e.why = "the low peak at " + num(e.mode) + " is not Rayleigh noise (Kolmogorov distance " + num(e.distance) + " > " +
-                num(kMaxRayleighDistance) + ")";
+        e.why = "the low peak at " + num(e.mode) + " is not Rayleigh noise (Kolmogorov distance " + num(e.distance) +
+            " > " + num(kMaxRayleighDistance) + ")";
         return e;
     }
     // How many voxels the fitted noise stands for: the fit range holds
@@ -369,7 +375,7 @@ NoiseEstimate estimateNoise(openvdb::tree::LeafManager<FloatTree>& leaves, const
     e.population = inRange / rayleighMass(edges.front(), edges.back(), e.sigma);
     if (e.population < kMinBackgroundFraction * double(total)) {
         e.why = "the low peak at " + num(e.mode) + " stands for only " + num(e.population) + " voxels (" +
-                num(100.0 * e.population / double(total)) + " %)";
+            num(100.0 * e.population / double(total)) + " %)";
         return e;
     }
     e.rayleigh = true;
@@ -414,20 +420,21 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
         const double k = mrNoiseMultiple(total);
         result.noiseFloor = noise.sigma;
         result.threshold = k * noise.sigma;
-        how = "Rayleigh noise sigma " + num(noise.sigma) + " (histogram mode " + num(noise.mode) + " below tBET " + num(noise.bet) +
-              ", ML fit below " + num(kFitRangeModes) + " modes, Kolmogorov distance " + num(noise.distance) +
-              "); threshold " + num(k) + " sigma = " + num(result.threshold) + " (k = sqrt(2 ln N), N = " + std::to_string(total) + ")";
+        how = "Rayleigh noise sigma " + num(noise.sigma) + " (histogram mode " + num(noise.mode) + " below tBET " +
+            num(noise.bet) + ", ML fit below " + num(kFitRangeModes) + " modes, Kolmogorov distance " +
+            num(noise.distance) + "); threshold " + num(k) + " sigma = " + num(result.threshold) +
+            " (k = sqrt(2 ln N), N = " + std::to_string(total) + ")";
     } else if (double(noise.zeros) >= kMinBackgroundFraction * double(total) && noise.minPositive > 0) {
         // No noise peak, but zeros: the scanner masked the air.
         result.zeroBackground = true;
         result.noiseFloor = 0;
         result.threshold = noise.minPositive;
         how = "zero background (" + num(zeroPercent) + " % of the voxels are 0, no Rayleigh noise: " + noise.why +
-              "); threshold: the smallest positive value, " + num(result.threshold);
+            "); threshold: the smallest positive value, " + num(result.threshold);
     } else {
         result.threshold = 0;
-        result.rule = "MR background: none removed, no air background (no Rayleigh noise: " + noise.why + "; " + num(zeroPercent) +
-                      " % zeros)";
+        result.rule = "MR background: none removed, no air background (no Rayleigh noise: " + noise.why + "; " +
+            num(zeroPercent) + " % zeros)";
         return unchanged(result);
     }
 
@@ -449,7 +456,8 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
             for (std::int64_t x = 0; x < d.nx; ++x) {
                 if (row[x] != kAbove) continue;
                 stack.push_back({std::int32_t(x), std::int32_t(y), std::int32_t(z)});
-                const std::int64_t n = floodFill(m, d, stack, [](std::uint8_t v) { return v == kAbove; }, kSpeck);
+                const std::int64_t n = floodFill(
+                    m, d, stack, [](std::uint8_t v) { return v == kAbove; }, kSpeck);
                 ++result.components;
                 if (n > largest) {
                     largest = n;
@@ -460,7 +468,8 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
     }
     if (largest > 0) {
         stack.push_back(largestSeed);
-        floodFill(m, d, stack, [](std::uint8_t v) { return v == kSpeck; }, kBody);
+        floodFill(
+            m, d, stack, [](std::uint8_t v) { return v == kSpeck; }, kBody);
     }
     const auto outside = [](std::uint8_t v) { return v == kBelow || v == kSpeck; };
     std::int64_t removed = 0;
@@ -481,7 +490,7 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
     }
     if (double(removed) < kMinBackgroundFraction * double(total)) {
         result.rule = "MR background: none removed, no air background (" + how + "; only " + std::to_string(removed) +
-                      " voxels outside the body reach the volume border)";
+            " voxels outside the body reach the volume border)";
         return unchanged(result);
     }
     for (std::uint8_t v : mask) result.holesFilled += v == kBelow ? 1 : 0;

@@ -14,7 +14,7 @@
 namespace voxhap::volume {
 
 MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optional<double> fieldStrengthT,
-                                  const MrMaterialOptions& options, const std::string& source)
+    const MrMaterialOptions& options, const std::string& source)
 {
     Volume::GridPtr raw = std::const_pointer_cast<openvdb::GridBase>(v.grid(Channel::Intensity));
     if (!raw) throw ValueError(source + ": no MR intensities to assign");
@@ -26,7 +26,7 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
         weighting.reason = "declared by the user (--t1-map)";
     } else if (options.t1Weighted && !weighting.fillsT1()) {
         weighting.reason = "declared by the user (--t1-weighted); the headers said: " + weighting.name +
-                           (weighting.reason.empty() ? "" : " (" + weighting.reason + ")");
+            (weighting.reason.empty() ? "" : " (" + weighting.reason + ")");
         weighting.kind = MrWeightingKind::T1Weighted;
         weighting.name = std::string(mrWeightingName(MrWeightingKind::T1Weighted));
     }
@@ -42,8 +42,8 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
         v.setGrid(Channel::Intensity, copy);
         md.extra["mr_background"] = report.background->rule;
     } else {
-        md.extra["mr_background"] = options.removeBackground ? "none: a phase image has no air of noise around zero"
-                                                             : "none: switched off";
+        md.extra["mr_background"] =
+            options.removeBackground ? "none: a phase image has no air of noise around zero" : "none: switched off";
     }
 
     // 2.–4. The channel.
@@ -77,23 +77,24 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
     md.extra["body_width_mm"] = std::to_string(int(std::lround(std::max(width.widestMm, width.widestCutMm))));
     if (width.measured() && !width.trunk()) {
         const std::string why = "the body is at most " + std::to_string(int(std::lround(width.widestMm))) +
-                                " mm across (a trunk is at least " + std::to_string(int(kMinTorsoWidthMm)) +
-                                " mm): a head or a limb, where the per-scan rule's fat and muscle (physics.md 5.1) "
-                                "are not the scan's brightest and middle classes";
+            " mm across (a trunk is at least " + std::to_string(int(kMinTorsoWidthMm)) +
+            " mm): a head or a limb, where the per-scan rule's fat and muscle (physics.md 5.1) "
+            "are not the scan's brightest and middle classes";
         md.extra["t1_norm_refused"] = why;
         report.note = "T1-weighted but not normalised (" + why + "): an intensity grid, not T1";
         return report;
     }
     if (!width.measured()) {
-        md.extra["t1_norm_anatomy"] = "the field of view cuts the body left and right in every section: taken as a trunk";
+        md.extra["t1_norm_anatomy"] =
+            "the field of view cuts the body left and right in every section: taken as a trunk";
     }
     const FieldStrength field = fieldStrengthT ? nearestFieldStrength(*fieldStrengthT) : options.assumedField;
     toT1();
     try {
         applyT1wNormalisation(v, fitT1wNormalisation(v, TissueTable::builtin(), field, source));
-        md.extra["t1_norm_field_source"] = fieldStrengthT ? "MagneticFieldStrength of the headers"
-                                                          : "assumed " + std::string(fieldStrengthName(field)) +
-                                                                ": the headers give no field strength";
+        md.extra["t1_norm_field_source"] = fieldStrengthT
+            ? "MagneticFieldStrength of the headers"
+            : "assumed " + std::string(fieldStrengthName(field)) + ": the headers give no field strength";
         report.channel = Channel::T1;
         report.note = "T1-weighted, normalised per scan to T1 [ms] at " + std::string(fieldStrengthName(field));
     } catch (const ValueError& e) {

@@ -46,10 +46,10 @@ struct MrMaterialOptions {
 
 /// @brief What assignMrMaterial decided, for reports.
 struct MrMaterialReport {
-    MrWeighting weighting;          ///< as used (after any declaration)
-    Channel channel = Channel::Intensity; ///< where the values ended
+    MrWeighting weighting;                        ///< as used (after any declaration)
+    Channel channel = Channel::Intensity;         ///< where the values ended
     std::optional<MrBackgroundResult> background; ///< when the background rule ran
-    std::string note;               ///< one line: the normalisation, or why the values are not T1
+    std::string note;                             ///< one line: the normalisation, or why the values are not T1
 };
 
 /// @brief Steps 1–4 above on @p v, whose raw MR intensities are in the
@@ -59,6 +59,6 @@ struct MrMaterialReport {
 /// @param source        names the input in messages
 /// @throw ValueError if @p v has no intensity channel
 MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optional<double> fieldStrengthT,
-                                  const MrMaterialOptions& options, const std::string& source);
+    const MrMaterialOptions& options, const std::string& source);
 
 } // namespace voxhap::volume

@@ -229,9 +229,11 @@ std::optional<MrWeighting> imageTypeVerdict(const Facts& x, const MrSequenceFiel
         return verdict(MrWeightingKind::FieldMap, it + ": " + hit + " is a B1 (RF) field map", f);
     }
     if (!(hit = anyOf({"DIFFUSION", "ADC", "EADC", "FA", "COLFA", "TRACEW", "TRACE", "TENSOR"})).empty()) {
-        return verdict(MrWeightingKind::Diffusion, it + ": " + hit + " is diffusion weighting or a map derived from it", f);
+        return verdict(
+            MrWeightingKind::Diffusion, it + ": " + hit + " is diffusion weighting or a map derived from it", f);
     }
-    if (!(hit = anyOf({"PERFUSION", "PERF", "ASL", "CBF", "CBV", "MTT", "TTP", "RELCBF", "RELCBV", "RELMTT"})).empty()) {
+    if (!(hit = anyOf({"PERFUSION", "PERF", "ASL", "CBF", "CBV", "MTT", "TTP", "RELCBF", "RELCBV", "RELMTT"}))
+             .empty()) {
         return verdict(MrWeightingKind::Perfusion, it + ": " + hit + " is perfusion", f);
     }
     if (!(hit = anyOf({"FMRI"})).empty()) return verdict(MrWeightingKind::Functional, it + ": FMRI", f);
@@ -248,7 +250,8 @@ std::optional<MrWeighting> imageTypeVerdict(const Facts& x, const MrSequenceFiel
         }
     }
     if (!(hit = anyOf({"MIP", "SUB", "SUBTRACTION", "PROJECTIONIMAGE"})).empty()) {
-        return verdict(MrWeightingKind::Derived, it + ": " + hit + " is a projection or subtraction, not a tissue image", f);
+        return verdict(
+            MrWeightingKind::Derived, it + ": " + hit + " is a projection or subtraction, not a tissue image", f);
     }
     return std::nullopt;
 }
@@ -275,11 +278,12 @@ std::optional<MrWeighting> purposeVerdict(const Facts& x, const MrSequenceFields
     static const std::regex siemensDiffusion("(^|[^a-z])(ep|re)_b[0-9]");
     static const std::regex dwiWord("^(DWI|DTI|DMRI)[0-9]*$");
     if (std::regex_search(x.seqLower, siemensDiffusion)) {
-        return verdict(
-            MrWeightingKind::Diffusion, because("sequence name " + x.seqRaw + " (Siemens diffusion EPI)", "diffusion"), f);
+        return verdict(MrWeightingKind::Diffusion,
+            because("sequence name " + x.seqRaw + " (Siemens diffusion EPI)", "diffusion"), f);
     }
     if (startsWith(x.seqUpperSqueezed, "DWI")) {
-        return verdict(MrWeightingKind::Diffusion, because("sequence name " + x.seqRaw + " (Philips diffusion)", "diffusion"), f);
+        return verdict(
+            MrWeightingKind::Diffusion, because("sequence name " + x.seqRaw + " (Philips diffusion)", "diffusion"), f);
     }
     if (x.b && *x.b > 0) {
         return verdict(MrWeightingKind::Diffusion, because("b-value " + fmt(*x.b) + " s/mm²", "diffusion"), f);
@@ -298,8 +302,8 @@ std::optional<MrWeighting> purposeVerdict(const Facts& x, const MrSequenceFields
 
     // Perfusion.
     if (x.seqLower.find("asl") != std::string::npos) {
-        return verdict(
-            MrWeightingKind::Perfusion, because("sequence name " + x.seqRaw + " (arterial spin labelling)", "perfusion"), f);
+        return verdict(MrWeightingKind::Perfusion,
+            because("sequence name " + x.seqRaw + " (arterial spin labelling)", "perfusion"), f);
     }
     if (std::string e = textHit([](const TextField& t) {
             static const std::vector<std::string> k{"ASL", "PASL", "PCASL", "CASL", "PERF", "DSC", "DCE", "CBF", "PWI"};
@@ -312,13 +316,14 @@ std::optional<MrWeighting> purposeVerdict(const Facts& x, const MrSequenceFields
 
     // Susceptibility.
     if (x.seqLower.find("swi") != std::string::npos || x.seqLower.find("swan") != std::string::npos) {
-        return verdict(MrWeightingKind::Susceptibility, because("sequence name " + x.seqRaw, "susceptibility-weighted"), f);
+        return verdict(
+            MrWeightingKind::Susceptibility, because("sequence name " + x.seqRaw, "susceptibility-weighted"), f);
     }
     if (std::string e = textHit([](const TextField& t) {
             static const std::vector<std::string> k{"SWAN", "SWIP", "QSM", "VENBOLD"};
             return t.joined.find("SUSCEPTIBILITY") != std::string::npos || adjacent(t.words, "VEN", "BOLD") ||
-                std::any_of(
-                    t.words.begin(), t.words.end(), [](const std::string& w) { return startsWith(w, "SWI") || has(k, w); });
+                std::any_of(t.words.begin(), t.words.end(),
+                    [](const std::string& w) { return startsWith(w, "SWI") || has(k, w); });
         });
         !e.empty()) {
         return verdict(MrWeightingKind::Susceptibility, because(e, "susceptibility-weighted"), f);
@@ -346,7 +351,8 @@ std::optional<MrWeighting> purposeVerdict(const Facts& x, const MrSequenceFields
     }
     if (std::string e = textHit([](const TextField& t) {
             return t.joined.find("ANGIO") != std::string::npos ||
-                std::any_of(t.words.begin(), t.words.end(), [](const std::string& w) { return std::regex_match(w, angioWord); });
+                std::any_of(t.words.begin(), t.words.end(),
+                    [](const std::string& w) { return std::regex_match(w, angioWord); });
         });
         !e.empty()) {
         return verdict(MrWeightingKind::Angiography, because(e, "angiography"), f);
@@ -368,7 +374,18 @@ std::optional<MrWeighting> purposeVerdict(const Facts& x, const MrSequenceFields
 // ---------------------------------------------------------------- stage 3
 
 /// The sequence families vendors' sequence names announce.
-enum class Family { None, SpinEcho, InversionSpinEcho, Spoiled, SpoiledPrepared, SteadyState, GradientEcho, GreEpi, SeEpi, Epi };
+enum class Family {
+    None,
+    SpinEcho,
+    InversionSpinEcho,
+    Spoiled,
+    SpoiledPrepared,
+    SteadyState,
+    GradientEcho,
+    GreEpi,
+    SeEpi,
+    Epi
+};
 
 struct SequenceFamily {
     Family family = Family::None;
@@ -386,7 +403,8 @@ SequenceFamily sequenceFamily(const Facts& x)
     if (P == "T1TFE") return {Family::SpoiledPrepared, name("Philips T1 turbo field echo"), true};
     if (P == "T1FFE") return {Family::Spoiled, name("Philips T1 fast field echo, spoiled"), true};
     if (P == "TFE") return {Family::SpoiledPrepared, name("Philips turbo field echo"), false};
-    if (P == "BTFE" || P == "BFFE" || P == "T2FFE") return {Family::SteadyState, name("Philips steady-state field echo"), false};
+    if (P == "BTFE" || P == "BFFE" || P == "T2FFE")
+        return {Family::SteadyState, name("Philips steady-state field echo"), false};
     if (P == "FFE") return {Family::GradientEcho, name("Philips fast field echo"), false};
     if (P == "FEEPI") return {Family::GreEpi, name("Philips gradient-echo EPI"), false};
     if (P == "SEEPI") return {Family::SeEpi, name("Philips spin-echo EPI"), false};
@@ -397,7 +415,8 @@ SequenceFamily sequenceFamily(const Facts& x)
     for (const char* g : {"fspgr", "spgr", "efgre3d", "bravo", "lava"}) {
         if (n.find(g) != std::string::npos) return {Family::Spoiled, name("GE spoiled gradient echo"), false};
     }
-    if (n.find("fiesta") != std::string::npos) return {Family::SteadyState, name("GE FIESTA, balanced steady state"), false};
+    if (n.find("fiesta") != std::string::npos)
+        return {Family::SteadyState, name("GE FIESTA, balanced steady state"), false};
     if (n.find("fse") != std::string::npos || n.find("cube") != std::string::npos) {
         return {Family::SpinEcho, name("GE fast spin echo"), false};
     }
@@ -417,7 +436,8 @@ SequenceFamily sequenceFamily(const Facts& x)
     if (startsWith(n, "spcir") || prefixDigit("tir") || prefixDigit("ir")) {
         return {Family::InversionSpinEcho, name("Siemens turbo inversion recovery"), false};
     }
-    if (startsWith(n, "tse") || startsWith(n, "spc") || prefixDigit("h") || startsWith(n, "haste") || prefixDigit("se")) {
+    if (startsWith(n, "tse") || startsWith(n, "spc") || prefixDigit("h") || startsWith(n, "haste") ||
+        prefixDigit("se")) {
         return {Family::SpinEcho, name("Siemens (turbo) spin echo"), false};
     }
     if (startsWith(n, "ep")) return {Family::Epi, name("EPI"), false};
@@ -467,9 +487,9 @@ ContrastOutcome spinEchoTable(const Facts& x, const MrSequenceFields& f, const s
             {}};
     }
     return {std::nullopt,
-        trte + " lies between the T1 (TR ≤ " + fmt(kMrSeShortTrMaxMs) + ", TE ≤ " + fmt(kMrShortTeMaxMs) + "), PD (TR ≥ " +
-            fmt(kMrSeLongTrMinMs) + ", TE ≤ " + fmt(kMrShortTeMaxMs) + ") and T2 (TR ≥ " + fmt(kMrSeLongTrMinMs) + ", TE ≥ " +
-            fmt(kMrLongTeMinMs) + ") corners"};
+        trte + " lies between the T1 (TR ≤ " + fmt(kMrSeShortTrMaxMs) + ", TE ≤ " + fmt(kMrShortTeMaxMs) +
+            "), PD (TR ≥ " + fmt(kMrSeLongTrMinMs) + ", TE ≤ " + fmt(kMrShortTeMaxMs) + ") and T2 (TR ≥ " +
+            fmt(kMrSeLongTrMinMs) + ", TE ≥ " + fmt(kMrLongTeMinMs) + ") corners"};
 }
 
 ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
@@ -479,9 +499,10 @@ ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
                hasEP = has(x.scanning, "EP");
     const bool optionIR = has(x.options, "IR") || has(x.options, "IR_GEMS");
     const bool isIR = hasIR || optionIR || (x.ti && *x.ti > 0) || fam.family == Family::InversionSpinEcho;
-    const bool isEPI = hasEP || fam.family == Family::GreEpi || fam.family == Family::SeEpi || fam.family == Family::Epi;
-    const bool isSE =
-        hasSE || fam.family == Family::SpinEcho || fam.family == Family::InversionSpinEcho || fam.family == Family::SeEpi;
+    const bool isEPI =
+        hasEP || fam.family == Family::GreEpi || fam.family == Family::SeEpi || fam.family == Family::Epi;
+    const bool isSE = hasSE || fam.family == Family::SpinEcho || fam.family == Family::InversionSpinEcho ||
+        fam.family == Family::SeEpi;
     const bool isGR = hasGR || fam.family == Family::Spoiled || fam.family == Family::SpoiledPrepared ||
         fam.family == Family::SteadyState || fam.family == Family::GradientEcho || fam.family == Family::GreEpi;
     const std::string label = sequenceLabel(f, fam);
@@ -501,23 +522,24 @@ ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
                     {}};
             }
             if (ti <= kMrStirMaxTiMs) {
-                return {
-                    verdict(MrWeightingKind::Stir,
-                        withTi + " ≤ " + fmt(kMrStirMaxTiMs) + " ms: short-TI inversion recovery, fat nulled (STIR), not T1", f),
+                return {verdict(MrWeightingKind::Stir,
+                            withTi + " ≤ " + fmt(kMrStirMaxTiMs) +
+                                " ms: short-TI inversion recovery, fat nulled (STIR), not T1",
+                            f),
                     {}};
             }
-            const std::string mid =
-                withTi + " between STIR (≤ " + fmt(kMrStirMaxTiMs) + " ms) and FLAIR (≥ " + fmt(kMrFlairMinTiMs) + " ms)";
+            const std::string mid = withTi + " between STIR (≤ " + fmt(kMrStirMaxTiMs) + " ms) and FLAIR (≥ " +
+                fmt(kMrFlairMinTiMs) + " ms)";
             if (x.te && isGR && !isSE && *x.te >= kMrT2StarMinTeMs) {
                 return {verdict(MrWeightingKind::T2StarWeighted,
                             mid + " but TE " + fmt(*x.te) + " ms ≥ " + fmt(kMrT2StarMinTeMs) + " ms: T2*-weighted", f),
                     {}};
             }
             if (x.te && !isGR && *x.te >= kMrLongTeMinMs) {
-                return {
-                    verdict(MrWeightingKind::T2Weighted,
-                        mid + " but TE " + fmt(*x.te) + " ms ≥ " + fmt(kMrLongTeMinMs) + " ms: T2-weighted inversion recovery",
-                        f),
+                return {verdict(MrWeightingKind::T2Weighted,
+                            mid + " but TE " + fmt(*x.te) + " ms ≥ " + fmt(kMrLongTeMinMs) +
+                                " ms: T2-weighted inversion recovery",
+                            f),
                     {}};
             }
             const char* type = isGR ? ": inversion-prepared gradient echo (MPRAGE type), T1-weighted"
@@ -555,16 +577,19 @@ ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
     // Gradient echo.
     if (isGR) {
         if (fam.family == Family::SteadyState || has(x.variant, "TRSS")) {
-            return {
-                verdict(MrWeightingKind::SteadyState, seq + ": balanced or coherent steady state (T2/T1 contrast), not T1", f),
+            return {verdict(MrWeightingKind::SteadyState,
+                        seq + ": balanced or coherent steady state (T2/T1 contrast), not T1", f),
                 {}};
         }
         if (x.te && *x.te >= kMrT2StarMinTeMs) {
             return {verdict(MrWeightingKind::T2StarWeighted,
-                        seq + " with TE " + fmt(*x.te) + " ms ≥ " + fmt(kMrT2StarMinTeMs) + " ms: T2*-weighted gradient echo", f),
+                        seq + " with TE " + fmt(*x.te) + " ms ≥ " + fmt(kMrT2StarMinTeMs) +
+                            " ms: T2*-weighted gradient echo",
+                        f),
                 {}};
         }
-        const bool spoiled = has(x.variant, "SP") || fam.family == Family::Spoiled || fam.family == Family::SpoiledPrepared;
+        const bool spoiled =
+            has(x.variant, "SP") || fam.family == Family::Spoiled || fam.family == Family::SpoiledPrepared;
         const bool prepared = has(x.variant, "MP") || fam.family == Family::SpoiledPrepared;
         if (!spoiled) return {std::nullopt, seq + ": a gradient echo whose spoiling is not given"};
         if (prepared) {
@@ -581,9 +606,9 @@ ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
         if (x.tr && *x.tr > 0 && x.flip) {
             const double w = spoiledGreT1Sensitivity(*x.tr, *x.flip, kMrReferenceT1Ms);
             const double ernst = std::acos(std::exp(-*x.tr / kMrReferenceT1Ms)) * 180.0 / std::numbers::pi;
-            const std::string why = seq + " with TR " + fmt(*x.tr) + " ms, TE " + (x.te ? fmt(*x.te) : std::string("?")) +
-                " ms, flip " + fmt(*x.flip) + "° (Ernst angle " + fmt(ernst) + "° for T1 " + fmt(kMrReferenceT1Ms) +
-                " ms): T1 sensitivity " + fmt(w);
+            const std::string why = seq + " with TR " + fmt(*x.tr) + " ms, TE " +
+                (x.te ? fmt(*x.te) : std::string("?")) + " ms, flip " + fmt(*x.flip) + "° (Ernst angle " + fmt(ernst) +
+                "° for T1 " + fmt(kMrReferenceT1Ms) + " ms): T1 sensitivity " + fmt(w);
             if (w >= kMrMinT1Sensitivity) {
                 return {verdict(MrWeightingKind::T1Weighted,
                             why + " ≥ " + fmt(kMrMinT1Sensitivity) + ", T1-weighted spoiled gradient echo", f),
@@ -606,18 +631,33 @@ ContrastOutcome contrastVerdict(const Facts& x, const MrSequenceFields& f)
 
 // ---------------------------------------------------------------- stage 4
 
-enum class Named { T1Map, T1, T2, T2Star, Pd, Flair, Stir };
+enum class Named {
+    T1Map,
+    T1,
+    T2,
+    T2Star,
+    Pd,
+    Flair,
+    Stir
+};
 
 std::string_view namedWord(Named n)
 {
     switch (n) {
-    case Named::T1Map: return "T1 map";
-    case Named::T1: return "T1";
-    case Named::T2: return "T2";
-    case Named::T2Star: return "T2*";
-    case Named::Pd: return "PD";
-    case Named::Flair: return "FLAIR";
-    case Named::Stir: return "STIR";
+    case Named::T1Map:
+        return "T1 map";
+    case Named::T1:
+        return "T1";
+    case Named::T2:
+        return "T2";
+    case Named::T2Star:
+        return "T2*";
+    case Named::Pd:
+        return "PD";
+    case Named::Flair:
+        return "FLAIR";
+    case Named::Stir:
+        return "STIR";
     }
     return "";
 }
@@ -625,8 +665,9 @@ std::string_view namedWord(Named n)
 /// The contrasts one free-text field names, on whole words.
 std::vector<Named> namedContrasts(const TextField& t)
 {
-    static const std::regex t1Word("^((2D|3D)?T1(W|WI|WEIGHTED|C|CE|GD|POST|PRE|SE|TSE|FSE|FFE|TFE|GRE|SPGR|VIBE|MPRAGE|MPR|"
-                                   "SPACE|SPC|CUBE|VISTA|IR|FLAIR)?|ST1W)$");
+    static const std::regex t1Word(
+        "^((2D|3D)?T1(W|WI|WEIGHTED|C|CE|GD|POST|PRE|SE|TSE|FSE|FFE|TFE|GRE|SPGR|VIBE|MPRAGE|MPR|"
+        "SPACE|SPC|CUBE|VISTA|IR|FLAIR)?|ST1W)$");
     static const std::regex t2Word(
         "^((2D|3D)?T2(W|WI|WEIGHTED|SE|TSE|FSE|FRFSE|FFE|SPACE|SPC|CUBE|VISTA|HASTE|BLADE|PROPELLER|DRIVE)?|ST2W)$");
     static const std::regex pdWord("^((2D|3D)?PD(W|WI|WEIGHTED|SE|TSE|FSE|FS|FATSAT|SPACE|SPC|CUBE|VISTA)?|SPDW)$");
@@ -683,7 +724,8 @@ std::optional<MrWeighting> descriptionVerdict(const Facts& x, const MrSequenceFi
         const std::string field = std::string(t.label) + " " + quoted(t.value);
         const auto contains = [&](Named k) { return std::find(n.begin(), n.end(), k) != n.end(); };
         if (contains(Named::T1Map)) {
-            return verdict(MrWeightingKind::T1Map, "only the description decided: " + field + " names a T1 map" + tail, f);
+            return verdict(
+                MrWeightingKind::T1Map, "only the description decided: " + field + " names a T1 map" + tail, f);
         }
         if (contains(Named::T1) && n.size() > 1) {
             std::string others;
@@ -694,19 +736,21 @@ std::optional<MrWeighting> descriptionVerdict(const Facts& x, const MrSequenceFi
                 MrWeightingKind::Unknown, field + " names both T1 and " + others + ", so it decides nothing" + tail, f);
         }
         if (contains(Named::T1)) {
-            return verdict(
-                MrWeightingKind::T1Weighted, "only the description decided: " + field + " names a T1-weighted series" + tail, f);
+            return verdict(MrWeightingKind::T1Weighted,
+                "only the description decided: " + field + " names a T1-weighted series" + tail, f);
         }
         // Not T1: the more specific name wins (FLAIR and STIR are T2-type; T2* removed T2 above).
-        for (auto [k, kind] : {std::pair{Named::Flair, MrWeightingKind::Flair}, std::pair{Named::Stir, MrWeightingKind::Stir},
-                 std::pair{Named::T2Star, MrWeightingKind::T2StarWeighted}}) {
+        for (auto [k, kind] :
+            {std::pair{Named::Flair, MrWeightingKind::Flair}, std::pair{Named::Stir, MrWeightingKind::Stir},
+                std::pair{Named::T2Star, MrWeightingKind::T2StarWeighted}}) {
             if (contains(k)) {
-                return verdict(kind, "only the description decided: " + field + " names " + std::string(namedWord(k)) + tail, f);
+                return verdict(
+                    kind, "only the description decided: " + field + " names " + std::string(namedWord(k)) + tail, f);
             }
         }
         if (contains(Named::T2) && contains(Named::Pd)) {
-            return verdict(
-                MrWeightingKind::Unknown, field + " names both PD and T2 (a dual-echo series?), so it decides nothing" + tail, f);
+            return verdict(MrWeightingKind::Unknown,
+                field + " names both PD and T2 (a dual-echo series?), so it decides nothing" + tail, f);
         }
         const Named k = n.front();
         return verdict(k == Named::Pd ? MrWeightingKind::PdWeighted : MrWeightingKind::T2Weighted,
@@ -720,32 +764,52 @@ std::optional<MrWeighting> descriptionVerdict(const Facts& x, const MrSequenceFi
 std::string_view mrWeightingName(MrWeightingKind k)
 {
     switch (k) {
-    case MrWeightingKind::T1Map: return "T1 map";
-    case MrWeightingKind::T1Weighted: return "T1-weighted";
-    case MrWeightingKind::PdWeighted: return "PD-weighted";
-    case MrWeightingKind::T2Weighted: return "T2-weighted";
-    case MrWeightingKind::T2StarWeighted: return "T2*-weighted";
-    case MrWeightingKind::Flair: return "FLAIR";
-    case MrWeightingKind::Stir: return "STIR";
-    case MrWeightingKind::SteadyState: return "steady state";
-    case MrWeightingKind::Diffusion: return "diffusion";
-    case MrWeightingKind::FieldMap: return "field map";
-    case MrWeightingKind::Phase: return "phase";
-    case MrWeightingKind::Perfusion: return "perfusion";
-    case MrWeightingKind::Functional: return "functional";
-    case MrWeightingKind::Susceptibility: return "susceptibility";
-    case MrWeightingKind::Angiography: return "angiography";
-    case MrWeightingKind::Localizer: return "localizer";
-    case MrWeightingKind::OtherMap: return "quantitative map";
-    case MrWeightingKind::Derived: return "derived";
-    case MrWeightingKind::Unknown: return "unknown";
+    case MrWeightingKind::T1Map:
+        return "T1 map";
+    case MrWeightingKind::T1Weighted:
+        return "T1-weighted";
+    case MrWeightingKind::PdWeighted:
+        return "PD-weighted";
+    case MrWeightingKind::T2Weighted:
+        return "T2-weighted";
+    case MrWeightingKind::T2StarWeighted:
+        return "T2*-weighted";
+    case MrWeightingKind::Flair:
+        return "FLAIR";
+    case MrWeightingKind::Stir:
+        return "STIR";
+    case MrWeightingKind::SteadyState:
+        return "steady state";
+    case MrWeightingKind::Diffusion:
+        return "diffusion";
+    case MrWeightingKind::FieldMap:
+        return "field map";
+    case MrWeightingKind::Phase:
+        return "phase";
+    case MrWeightingKind::Perfusion:
+        return "perfusion";
+    case MrWeightingKind::Functional:
+        return "functional";
+    case MrWeightingKind::Susceptibility:
+        return "susceptibility";
+    case MrWeightingKind::Angiography:
+        return "angiography";
+    case MrWeightingKind::Localizer:
+        return "localizer";
+    case MrWeightingKind::OtherMap:
+        return "quantitative map";
+    case MrWeightingKind::Derived:
+        return "derived";
+    case MrWeightingKind::Unknown:
+        return "unknown";
     }
     return "unknown";
 }
 
 double spoiledGreT1Sensitivity(double trMs, double flipDeg, double t1Ms)
 {
-    if (!(trMs > 0) || !(t1Ms > 0) || !std::isfinite(trMs) || !std::isfinite(t1Ms) || !std::isfinite(flipDeg)) return 0.0;
+    if (!(trMs > 0) || !(t1Ms > 0) || !std::isfinite(trMs) || !std::isfinite(t1Ms) || !std::isfinite(flipDeg))
+        return 0.0;
     const double x = trMs / t1Ms;
     const double oneMinusE = -std::expm1(-x); // 1 − E1, accurate for TR ≪ T1
     const double e = 1.0 - oneMinusE;
@@ -767,10 +831,11 @@ MrWeighting classifyMrWeighting(const MrSequenceFields& f)
     std::string why;
     if (!c.undecided.empty()) {
         why = c.undecided + "; no description keyword decides either";
-    } else if (x.text.empty() && x.imageType.empty() && x.seqRaw.empty() && x.scanning.empty() && x.variant.empty() && !x.tr &&
-        !x.te && !x.ti && !x.flip) {
-        why = "no sequence fields were given (ScanningSequence, SequenceVariant, sequence name, TR, TE, TI, flip angle, "
-              "ImageType, description)";
+    } else if (x.text.empty() && x.imageType.empty() && x.seqRaw.empty() && x.scanning.empty() && x.variant.empty() &&
+        !x.tr && !x.te && !x.ti && !x.flip) {
+        why =
+            "no sequence fields were given (ScanningSequence, SequenceVariant, sequence name, TR, TE, TI, flip angle, "
+            "ImageType, description)";
     } else {
         why = "none of the fields given decides the weighting";
     }
@@ -826,8 +891,8 @@ std::string sidecarValues(const nlohmann::json& j, const char* key, const fs::pa
         std::string out;
         for (const auto& e : v) {
             if (!e.is_string())
-                sidecarFail(
-                    file, key, std::string("must be a string or an array of strings, not an array holding ") + e.type_name());
+                sidecarFail(file, key,
+                    std::string("must be a string or an array of strings, not an array holding ") + e.type_name());
             out += (out.empty() ? "" : "\\") + e.get<std::string>();
         }
         return out;
@@ -887,7 +952,8 @@ BidsSidecar readBidsSidecar(const fs::path& json)
     } catch (const nlohmann::json::parse_error& e) {
         sidecarFail(json, "", "malformed JSON: " + oneLine(e.what()));
     }
-    if (!j.is_object()) sidecarFail(json, "", std::string("a BIDS sidecar must be a JSON object, not ") + j.type_name());
+    if (!j.is_object())
+        sidecarFail(json, "", std::string("a BIDS sidecar must be a JSON object, not ") + j.type_name());
 
     BidsSidecar s;
     s.file = json;
@@ -907,7 +973,8 @@ BidsSidecar readBidsSidecar(const fs::path& json)
     f.source = "BIDS sidecar " + json.filename().string();
     s.modality = trim(sidecarString(j, "Modality", json));
     s.fieldStrengthT = sidecarNumber(j, "MagneticFieldStrength", json, "T");
-    if (s.fieldStrengthT && !(*s.fieldStrengthT > 0)) sidecarFail(json, "MagneticFieldStrength", "must be positive [T]");
+    if (s.fieldStrengthT && !(*s.fieldStrengthT > 0))
+        sidecarFail(json, "MagneticFieldStrength", "must be positive [T]");
     return s;
 }
 

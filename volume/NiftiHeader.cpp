@@ -28,15 +28,24 @@ struct NiftiFree {
 SampleType sampleType(int datatype, const std::string& file)
 {
     switch (datatype) {
-    case DT_INT8: return SampleType::Int8;
-    case DT_UINT8: return SampleType::UInt8;
-    case DT_INT16: return SampleType::Int16;
-    case DT_UINT16: return SampleType::UInt16;
-    case DT_INT32: return SampleType::Int32;
-    case DT_UINT32: return SampleType::UInt32;
-    case DT_FLOAT32: return SampleType::Float32;
-    case DT_FLOAT64: return SampleType::Float64;
-    default: break;
+    case DT_INT8:
+        return SampleType::Int8;
+    case DT_UINT8:
+        return SampleType::UInt8;
+    case DT_INT16:
+        return SampleType::Int16;
+    case DT_UINT16:
+        return SampleType::UInt16;
+    case DT_INT32:
+        return SampleType::Int32;
+    case DT_UINT32:
+        return SampleType::UInt32;
+    case DT_FLOAT32:
+        return SampleType::Float32;
+    case DT_FLOAT64:
+        return SampleType::Float64;
+    default:
+        break;
     }
     throw IoError(file + ": datatype: code " + std::to_string(datatype) + " is not a supported scalar type");
 }
@@ -67,9 +76,12 @@ void checkMagic(const std::filesystem::path& file, const std::string& name)
     // dim[] and datatype checked here too: niftilib prints its own "** ERROR"
     // lines on stderr for them, and voxhap reports one line of its own.
     const auto checkDims = [&](std::int64_t ndim, auto dim) {
-        if (ndim < 1 || ndim > 7) throw IoError(name + ": dim: dim[0] = " + std::to_string(ndim) + " (1 to 7 expected)");
+        if (ndim < 1 || ndim > 7)
+            throw IoError(name + ": dim: dim[0] = " + std::to_string(ndim) + " (1 to 7 expected)");
         for (int a = 1; a <= ndim; ++a) {
-            if (dim(a) < 1) throw IoError(name + ": dim: dim[" + std::to_string(a) + "] = " + std::to_string(dim(a)) + " (must be positive)");
+            if (dim(a) < 1)
+                throw IoError(
+                    name + ": dim: dim[" + std::to_string(a) + "] = " + std::to_string(dim(a)) + " (must be positive)");
         }
     };
     std::int16_t datatype = 0;
@@ -89,7 +101,8 @@ void checkMagic(const std::filesystem::path& file, const std::string& name)
             datatype = i16(12);
         }
     } else {
-        throw IoError(name + ": header: sizeof_hdr is neither 348 (NIfTI-1) nor 540 (NIfTI-2), or the file is truncated");
+        throw IoError(
+            name + ": header: sizeof_hdr is neither 348 (NIfTI-1) nor 540 (NIfTI-2), or the file is truncated");
     }
     if (nifti) {
         sampleType(datatype, name); // throws on an unsupported datatype
@@ -106,16 +119,19 @@ NiftiHeader readNiftiHeader(const std::filesystem::path& file, std::uint64_t mem
     std::call_once(quiet, [] { nifti_set_debug_level(0); }); // voxhap reports its own one-line errors
     const std::string name = file.string();
     if (!std::filesystem::is_regular_file(file)) throw IoError(name + ": no such file");
-    if (file.extension() != ".hdr") checkMagic(file, name); // .hdr/.img pairs: niftilib checks
+    if (file.extension() != ".hdr") checkMagic(file, name);                         // .hdr/.img pairs: niftilib checks
     std::unique_ptr<nifti_image, NiftiFree> nim(nifti_image_read(name.c_str(), 0)); // header only
-    if (!nim) throw IoError(name + ": header: not a readable NIfTI file (wrong magic, truncated or inconsistent header)");
+    if (!nim)
+        throw IoError(name + ": header: not a readable NIfTI file (wrong magic, truncated or inconsistent header)");
     if (nim->nifti_type == NIFTI_FTYPE_ANALYZE) {
         throw IoError(name + ": magic: ANALYZE 7.5, not NIfTI (no reliable orientation); convert it to NIfTI first");
     }
     if (nim->ndim < 1 || nim->ndim > 3) {
-        throw IoError(name + ": dim: " + std::to_string(nim->ndim) + " dimensions (only 3D volumes are read, not time series)");
+        throw IoError(
+            name + ": dim: " + std::to_string(nim->ndim) + " dimensions (only 3D volumes are read, not time series)");
     }
-    if (nim->nx > (1 << 24) || nim->ny > (1 << 24) || nim->nz > (1 << 24)) throw IoError(name + ": dim: size out of range");
+    if (nim->nx > (1 << 24) || nim->ny > (1 << 24) || nim->nz > (1 << 24))
+        throw IoError(name + ": dim: size out of range");
     NiftiHeader h;
     RasterLayout& layout = h.layout;
     layout.dims = Vec3i(int(nim->nx), int(nim->ny), int(nim->nz));

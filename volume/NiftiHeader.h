@@ -20,7 +20,7 @@ struct NiftiHeader {
     std::string frame;              ///< "sform", "qform" or the pixdim fallback
     std::filesystem::path dataFile; ///< the .nii itself, or the .img of a pair
     bool gzip = false;
-    std::uint64_t dataOffset = 0;   ///< where the voxels start in the (inflated) data file [bytes]
+    std::uint64_t dataOffset = 0; ///< where the voxels start in the (inflated) data file [bytes]
 };
 
 /// @brief Read and check @p file's header; refuse grids over @p memoryCapBytes.

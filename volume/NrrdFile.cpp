@@ -72,8 +72,7 @@ private:
     z_stream mZ{};
 };
 
-template <typename GridT>
-void writeVoxels(const GridT& grid, const IndexBox& box, Sink& sink)
+template <typename GridT> void writeVoxels(const GridT& grid, const IndexBox& box, Sink& sink)
 {
     using ValueT = typename GridT::ValueType;
     const Vec3i d = box.dims();
@@ -81,7 +80,8 @@ void writeVoxels(const GridT& grid, const IndexBox& box, Sink& sink)
     std::vector<ValueT> buf(std::size_t(d.x()) * std::size_t(d.y()) * kSlab);
     for (int k0 = box.min.z(); k0 <= box.max.z(); k0 += kSlab) {
         const int k1 = std::min(k0 + kSlab - 1, box.max.z());
-        const openvdb::CoordBBox bb(openvdb::Coord(box.min.x(), box.min.y(), k0), openvdb::Coord(box.max.x(), box.max.y(), k1));
+        const openvdb::CoordBBox bb(
+            openvdb::Coord(box.min.x(), box.min.y(), k0), openvdb::Coord(box.max.x(), box.max.y(), k1));
         openvdb::tools::Dense<ValueT, openvdb::tools::LayoutXYZ> dense(bb, buf.data());
         openvdb::tools::copyToDense(grid, dense);
         sink.write(buf.data(), sizeof(ValueT) * std::size_t(d.x()) * std::size_t(d.y()) * std::size_t(k1 - k0 + 1));
@@ -92,7 +92,8 @@ void writeVoxels(const GridT& grid, const IndexBox& box, Sink& sink)
 
 void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding)
 {
-    if (!v.has(c)) throw ValueError(file.string() + ": the volume has no '" + std::string(channelName(c)) + "' grid to save");
+    if (!v.has(c))
+        throw ValueError(file.string() + ": the volume has no '" + std::string(channelName(c)) + "' grid to save");
     const IndexBox& box = v.indexBox();
     if (box.empty()) throw ValueError(file.string() + ": the volume's extent is empty");
     const Geometry g = v.geometry();
@@ -115,10 +116,10 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
     h << "space origin: (" << origin.x() << ',' << origin.y() << ',' << origin.z() << ")\n";
     h << "voxhap_channel:=" << channelName(c) << "\n";
     h << "voxhap_units:="
-      << (c == Channel::Hu ? v.metadata().huUnits
-          : c == Channel::T1 ? v.metadata().t1Units
-          : c == Channel::Intensity ? v.metadata().intensityUnits
-                                    : std::string("tissue id"))
+      << (c == Channel::Hu                 ? v.metadata().huUnits
+                 : c == Channel::T1        ? v.metadata().t1Units
+                 : c == Channel::Intensity ? v.metadata().intensityUnits
+                                           : std::string("tissue id"))
       << "\n";
     if (!v.metadata().mrWeighting.empty()) h << "voxhap_mr_weighting:=" << v.metadata().mrWeighting << "\n";
     if (!v.metadata().modality.empty()) h << "voxhap_modality:=" << v.metadata().modality << "\n";
@@ -128,8 +129,10 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
         const std::string header = h.str();
         out.write(header.data(), std::streamsize(header.size()));
         Sink sink(out, encoding);
-        if (c == Channel::Label) writeVoxels(*labelGrid(v), box, sink);
-        else writeVoxels(c == Channel::Hu ? *huGrid(v) : c == Channel::T1 ? *t1Grid(v) : *intensityGrid(v), box, sink);
+        if (c == Channel::Label)
+            writeVoxels(*labelGrid(v), box, sink);
+        else
+            writeVoxels(c == Channel::Hu ? *huGrid(v) : c == Channel::T1 ? *t1Grid(v) : *intensityGrid(v), box, sink);
         sink.finish();
     });
 }
@@ -146,17 +149,23 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     text.resize(std::size_t(in.gcount()));
     const std::size_t end = text.find("\n\n");
     const std::size_t endCr = text.find("\r\n\r\n");
-    const std::size_t cut = std::min(end == std::string::npos ? text.size() : end + 2, endCr == std::string::npos ? text.size() : endCr + 4);
+    const std::size_t cut = std::min(
+        end == std::string::npos ? text.size() : end + 2, endCr == std::string::npos ? text.size() : endCr + 4);
     const NrrdHeader h = parseNrrdHeader(std::string_view(text).substr(0, cut), name);
     checkRasterSize(h.layout.dims, options.memoryCapBytes, name, "sizes");
 
     Channel channel = options.channel;
     if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end()) {
-        if (it->second == "hu") channel = Channel::Hu;
-        else if (it->second == "t1") channel = Channel::T1;
-        else if (it->second == "label") channel = Channel::Label;
-        else if (it->second == "intensity") channel = Channel::Intensity;
-        else throw IoError(name + ": voxhap_channel: '" + it->second + "' (hu, t1, intensity or label)");
+        if (it->second == "hu")
+            channel = Channel::Hu;
+        else if (it->second == "t1")
+            channel = Channel::T1;
+        else if (it->second == "label")
+            channel = Channel::Label;
+        else if (it->second == "intensity")
+            channel = Channel::Intensity;
+        else
+            throw IoError(name + ": voxhap_channel: '" + it->second + "' (hu, t1, intensity or label)");
     }
     ByteSource src(file, h.dataOffset, h.gzip);
     Volume v(h.geometry, IndexBox{Vec3i::Zero(), h.layout.dims - Vec3i::Ones()});
@@ -174,8 +183,10 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
                 throw IoError(name + ": data: label " + std::to_string(x) + " is not an integer id");
             }
             if (x == 0.0f) continue;
-            if (it.isVoxelValue()) acc.setValue(it.getCoord(), std::int32_t(x));
-            else labels->tree().fill(it.getBoundingBox(), std::int32_t(x), true);
+            if (it.isVoxelValue())
+                acc.setValue(it.getCoord(), std::int32_t(x));
+            else
+                labels->tree().fill(it.getBoundingBox(), std::int32_t(x), true);
         }
         v.setGrid(channel, labels);
     } else {
@@ -186,9 +197,12 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     md.source = file.filename().string();
     if (auto it = h.keyValues.find("voxhap_modality"); it != h.keyValues.end()) md.modality = it->second;
     if (auto it = h.keyValues.find("voxhap_units"); it != h.keyValues.end()) {
-        (channel == Channel::T1 ? md.t1Units : channel == Channel::Intensity ? md.intensityUnits : md.huUnits) = it->second;
+        (channel == Channel::T1                 ? md.t1Units
+                : channel == Channel::Intensity ? md.intensityUnits
+                                                : md.huUnits) = it->second;
     }
-    if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end()) md.extra["declared_channel"] = it->second;
+    if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end())
+        md.extra["declared_channel"] = it->second;
     if (auto it = h.keyValues.find("voxhap_mr_weighting"); it != h.keyValues.end()) md.mrWeighting = it->second;
     return v;
 }

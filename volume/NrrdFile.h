@@ -26,7 +26,8 @@ enum class NrrdEncoding {
 /// @brief Write channel @p c of @p v over its dense extent; inactive voxels
 /// take the grid's background (air). The file appears only when complete.
 /// @throw IoError naming the file; ValueError if the channel is absent
-void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding = NrrdEncoding::Gzip);
+void saveNrrd(
+    const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding = NrrdEncoding::Gzip);
 
 /// @brief Read a .nrrd volume; the channel comes from the voxhap_channel
 /// key (files voxhap wrote) or else from @p options.

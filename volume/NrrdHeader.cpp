@@ -47,15 +47,33 @@ Vec3d parseVector(const std::string& text, const std::string& file, const std::s
 SampleType parseType(const std::string& t, const std::string& file)
 {
     static const std::map<std::string, SampleType> kTypes{
-        {"signed char", SampleType::Int8},   {"int8", SampleType::Int8},       {"int8_t", SampleType::Int8},
-        {"uchar", SampleType::UInt8},        {"unsigned char", SampleType::UInt8}, {"uint8", SampleType::UInt8},
-        {"uint8_t", SampleType::UInt8},      {"short", SampleType::Int16},     {"short int", SampleType::Int16},
-        {"signed short", SampleType::Int16}, {"signed short int", SampleType::Int16}, {"int16", SampleType::Int16},
-        {"int16_t", SampleType::Int16},      {"ushort", SampleType::UInt16},   {"unsigned short", SampleType::UInt16},
-        {"unsigned short int", SampleType::UInt16}, {"uint16", SampleType::UInt16}, {"uint16_t", SampleType::UInt16},
-        {"int", SampleType::Int32},          {"signed int", SampleType::Int32}, {"int32", SampleType::Int32},
-        {"int32_t", SampleType::Int32},      {"uint", SampleType::UInt32},     {"unsigned int", SampleType::UInt32},
-        {"uint32", SampleType::UInt32},      {"uint32_t", SampleType::UInt32}, {"float", SampleType::Float32},
+        {"signed char", SampleType::Int8},
+        {"int8", SampleType::Int8},
+        {"int8_t", SampleType::Int8},
+        {"uchar", SampleType::UInt8},
+        {"unsigned char", SampleType::UInt8},
+        {"uint8", SampleType::UInt8},
+        {"uint8_t", SampleType::UInt8},
+        {"short", SampleType::Int16},
+        {"short int", SampleType::Int16},
+        {"signed short", SampleType::Int16},
+        {"signed short int", SampleType::Int16},
+        {"int16", SampleType::Int16},
+        {"int16_t", SampleType::Int16},
+        {"ushort", SampleType::UInt16},
+        {"unsigned short", SampleType::UInt16},
+        {"unsigned short int", SampleType::UInt16},
+        {"uint16", SampleType::UInt16},
+        {"uint16_t", SampleType::UInt16},
+        {"int", SampleType::Int32},
+        {"signed int", SampleType::Int32},
+        {"int32", SampleType::Int32},
+        {"int32_t", SampleType::Int32},
+        {"uint", SampleType::UInt32},
+        {"unsigned int", SampleType::UInt32},
+        {"uint32", SampleType::UInt32},
+        {"uint32_t", SampleType::UInt32},
+        {"float", SampleType::Float32},
         {"double", SampleType::Float64},
     };
     const auto it = kTypes.find(lower(t));
@@ -92,7 +110,8 @@ NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file)
             continue;
         }
         const std::size_t colon = line.find(": ");
-        if (colon == std::string_view::npos) throw IoError(file + ": header: malformed line '" + std::string(line) + "'");
+        if (colon == std::string_view::npos)
+            throw IoError(file + ": header: malformed line '" + std::string(line) + "'");
         const std::string key = lower(trimmed(line.substr(0, colon)));
         if (fields.count(key)) throw IoError(file + ": " + key + ": given twice");
         fields[key] = trimmed(line.substr(colon + 2));
@@ -111,7 +130,8 @@ NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file)
         if (fields.count(skip) && fields[skip] != "0") throw IoError(file + ": " + skip + ": only 0 is supported");
     }
     h.layout.type = parseType(need("type"), file);
-    if (need("dimension") != "3") throw IoError(file + ": dimension: " + fields["dimension"] + " (only 3D volumes are read)");
+    if (need("dimension") != "3")
+        throw IoError(file + ": dimension: " + fields["dimension"] + " (only 3D volumes are read)");
     {
         std::istringstream in(need("sizes"));
         long long s[3];
@@ -124,8 +144,10 @@ NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file)
         }
     }
     const std::string enc = lower(need("encoding"));
-    if (enc == "gzip" || enc == "gz") h.gzip = true;
-    else if (enc != "raw") throw IoError(file + ": encoding: '" + enc + "' is not supported (raw or gzip)");
+    if (enc == "gzip" || enc == "gz")
+        h.gzip = true;
+    else if (enc != "raw")
+        throw IoError(file + ": encoding: '" + enc + "' is not supported (raw or gzip)");
     if (sampleBytes(h.layout.type) > 1) {
         const std::string e = lower(need("endian"));
         if (e != "little" && e != "big") throw IoError(file + ": endian: '" + e + "' (little or big)");
@@ -133,8 +155,10 @@ NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file)
     }
     const std::string space = lower(need("space"));
     Vec3d flip(1, 1, 1); // file space → LPS
-    if (space == "right-anterior-superior" || space == "ras") flip = Vec3d(-1, -1, 1);
-    else if (space == "left-anterior-superior" || space == "las") flip = Vec3d(1, -1, 1);
+    if (space == "right-anterior-superior" || space == "ras")
+        flip = Vec3d(-1, -1, 1);
+    else if (space == "left-anterior-superior" || space == "las")
+        flip = Vec3d(1, -1, 1);
     else if (space != "left-posterior-superior" && space != "lps") {
         throw IoError(file + ": space: '" + space + "' (LPS, RAS or LAS expected)");
     }
@@ -146,11 +170,13 @@ NrrdHeader parseNrrdHeader(std::string_view text, const std::string& file)
             if (!(in >> tok)) throw IoError(file + ": space directions: expected three vectors, got '" + dirs + "'");
             const Vec3d d = parseVector(tok, file, "space directions").cwiseProduct(flip);
             h.geometry.spacing[a] = d.norm();
-            if (!(h.geometry.spacing[a] > 0)) throw IoError(file + ": space directions: axis " + std::to_string(a) + " has zero length");
+            if (!(h.geometry.spacing[a] > 0))
+                throw IoError(file + ": space directions: axis " + std::to_string(a) + " has zero length");
             h.geometry.direction.col(a) = d / h.geometry.spacing[a];
         }
     }
-    if (fields.count("space origin")) h.geometry.origin = parseVector(fields["space origin"], file, "space origin").cwiseProduct(flip);
+    if (fields.count("space origin"))
+        h.geometry.origin = parseVector(fields["space origin"], file, "space origin").cwiseProduct(flip);
     try {
         makeTransform(h.geometry); // same checks as every Volume: unit, non-degenerate directions
     } catch (const ValueError& e) {

@@ -18,9 +18,9 @@ namespace voxhap::volume {
 struct NrrdHeader {
     RasterLayout layout;
     bool gzip = false;
-    Geometry geometry;                          ///< LPS, converted from the file's space
+    Geometry geometry;                            ///< LPS, converted from the file's space
     std::map<std::string, std::string> keyValues; ///< "key:=value" lines
-    std::size_t dataOffset = 0;                 ///< bytes from the start of the file to the data
+    std::size_t dataOffset = 0;                   ///< bytes from the start of the file to the data
 };
 
 /// @brief Parse the header at the start of @p text (the file's first bytes,

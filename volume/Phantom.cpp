@@ -39,7 +39,8 @@ Volume makePhantom(const PhantomModel& model, const GridSpec& grid, const Tissue
     for (const auto& l : layers) {
         jl.push_back({{"tissue", l.name}, {"id", l.tissue}, {"start_mm", l.startMm}, {"end_mm", l.endMm}});
     }
-    const Json layerDoc = {{"entry", toJson(model.pathEntry)}, {"direction", toJson(path.normalized())}, {"layers", jl}};
+    const Json layerDoc = {
+        {"entry", toJson(model.pathEntry)}, {"direction", toJson(path.normalized())}, {"layers", jl}};
     v.metadata().extra[kLayersKey] = layerDoc.dump();
 
     Json marks = Json::object();
@@ -72,7 +73,8 @@ std::optional<PhantomLayers> phantomLayers(const Volume& v)
             s.startMm = l.at("start_mm").get<double>();
             s.endMm = l.at("end_mm").get<double>();
         } catch (const Json::exception&) {
-            throw ValueError("metadata 'voxhap." + std::string(kLayersKey) + "': a layer lacks tissue, id, start_mm or end_mm");
+            throw ValueError(
+                "metadata 'voxhap." + std::string(kLayersKey) + "': a layer lacks tissue, id, start_mm or end_mm");
         }
         out.layers.push_back(std::move(s));
     }
@@ -84,7 +86,8 @@ std::optional<Vec3d> phantomLandmark(const Volume& v, const std::string& name)
     const auto it = v.metadata().extra.find(kLandmarksKey);
     if (it == v.metadata().extra.end()) return std::nullopt;
     const Json marks = Json::parse(it->second, nullptr, /*allow_exceptions=*/false);
-    if (!marks.is_object()) throw ValueError("metadata 'voxhap." + std::string(kLandmarksKey) + "' is not a JSON object");
+    if (!marks.is_object())
+        throw ValueError("metadata 'voxhap." + std::string(kLandmarksKey) + "' is not a JSON object");
     if (!marks.contains(name)) return std::nullopt;
     return vecFrom(marks[name], name, kLandmarksKey);
 }

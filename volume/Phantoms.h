@@ -44,7 +44,11 @@ struct SphereParams {
 };
 
 /// @brief Patient types of the epidural simulator (physics.md §2.3, [S19] Table I).
-enum class LumbarPreset { Average, Overweight, Calcified };
+enum class LumbarPreset {
+    Average,
+    Overweight,
+    Calcified
+};
 
 /// @brief Parse "average", "overweight" or "calcified". @throw ValueError
 LumbarPreset parseLumbarPreset(const std::string& name);
@@ -63,7 +67,7 @@ struct LumbarParams {
 struct LumbarLayout {
     double skin = 0, fat = 0, supraspinous = 0, interspinous = 0, flavum = 0;
     double epidural = 0, dura = 0, csf = 0;
-    double scale = 1.0;        ///< BMI scale factor applied above the epidural space (1 without BMI)
+    double scale = 1.0; ///< BMI scale factor applied above the epidural space (1 without BMI)
     /// Skin-to-epidural-space distance [mm].
     double sed() const { return skin + fat + supraspinous + interspinous + flavum; }
 };
@@ -82,12 +86,12 @@ struct TorsoParams {
 
 /// @brief An analytic phantom: its classifier, extent and reference path.
 struct PhantomModel {
-    std::string kind;          ///< "slab", "sphere", "lumbar" or "torso"
-    std::string description;   ///< one line, with the parameters
+    std::string kind;        ///< "slab", "sphere", "lumbar" or "torso"
+    std::string description; ///< one line, with the parameters
     Classifier classify;
     WorldBox bounds;
-    Vec3d pathEntry{0, 0, 0};  ///< reference path start (on the skin) [mm]
-    Vec3d pathTarget{0, 0, 0}; ///< reference path end [mm]
+    Vec3d pathEntry{0, 0, 0};                             ///< reference path start (on the skin) [mm]
+    Vec3d pathTarget{0, 0, 0};                            ///< reference path end [mm]
     std::vector<std::pair<std::string, Vec3d>> landmarks; ///< named points [mm]
 };
 

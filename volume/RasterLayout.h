@@ -16,12 +16,21 @@
 namespace voxhap::volume {
 
 /// @brief Stored sample types of raster files.
-enum class SampleType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+enum class SampleType {
+    Int8,
+    UInt8,
+    Int16,
+    UInt16,
+    Int32,
+    UInt32,
+    Float32,
+    Float64
+};
 std::size_t sampleBytes(SampleType t);
 
 /// @brief The layout of the voxel block.
 struct RasterLayout {
-    Vec3i dims{0, 0, 0};            ///< samples along i (fastest), j, k
+    Vec3i dims{0, 0, 0}; ///< samples along i (fastest), j, k
     SampleType type = SampleType::Float32;
     bool bigEndian = false;
     double slope = 1.0, intercept = 0.0; ///< value = slope · stored + intercept

@@ -34,7 +34,8 @@ void convert(const unsigned char* raw, std::size_t count, bool swap, double slop
 
 } // namespace
 
-Volume::GridPtr readRaster(ByteSource& src, const RasterLayout& l, Channel channel, const RasterOptions& o, const std::string& file)
+Volume::GridPtr readRaster(
+    ByteSource& src, const RasterLayout& l, Channel channel, const RasterOptions& o, const std::string& file)
 {
     if (channel == Channel::Label) throw IoError(file + ": reading a label volume from this format is not supported");
     const float background = channel == Channel::Hu ? kAirHu : kAirT1;
@@ -55,18 +56,35 @@ Volume::GridPtr readRaster(ByteSource& src, const RasterLayout& l, Channel chann
         const std::size_t got = src.read(raw.data(), want);
         done += got;
         if (got < want) {
-            throw IoError(file + ": data: " + std::to_string(done) + " bytes, expected " + std::to_string(total) + " (truncated file)");
+            throw IoError(file + ": data: " + std::to_string(done) + " bytes, expected " + std::to_string(total) +
+                " (truncated file)");
         }
         const std::size_t count = plane * std::size_t(n);
         switch (l.type) {
-        case SampleType::Int8: convert<std::int8_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::UInt8: convert<std::uint8_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::Int16: convert<std::int16_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::UInt16: convert<std::uint16_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::Int32: convert<std::int32_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::UInt32: convert<std::uint32_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::Float32: convert<float>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
-        case SampleType::Float64: convert<double>(raw.data(), count, swap, l.slope, l.intercept, slab.data()); break;
+        case SampleType::Int8:
+            convert<std::int8_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::UInt8:
+            convert<std::uint8_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::Int16:
+            convert<std::int16_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::UInt16:
+            convert<std::uint16_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::Int32:
+            convert<std::int32_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::UInt32:
+            convert<std::uint32_t>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::Float32:
+            convert<float>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
+        case SampleType::Float64:
+            convert<double>(raw.data(), count, swap, l.slope, l.intercept, slab.data());
+            break;
         }
         try {
             sparse.addSlab(slab.data(), l.dims.x(), l.dims.y(), k0, n);

@@ -21,16 +21,16 @@ namespace voxhap::volume {
 
 /// @brief Choices every raster reader takes.
 struct RasterOptions {
-    Channel channel = Channel::Hu;  ///< where the values go, unless the file says (voxhap-written NRRD)
-    float airHu = -950.0f;          ///< hu below this becomes inactive air [HU]
-    float airT1 = 0.0f;             ///< t1 below this becomes inactive [t1 units]
+    Channel channel = Channel::Hu; ///< where the values go, unless the file says (voxhap-written NRRD)
+    float airHu = -950.0f;         ///< hu below this becomes inactive air [HU]
+    float airT1 = 0.0f;            ///< t1 below this becomes inactive [t1 units]
     std::uint64_t memoryCapBytes = std::uint64_t(4) << 30; ///< refuse larger grids before allocating
-    Progress progress;                                      ///< fraction done, may be empty
+    Progress progress;                                     ///< fraction done, may be empty
 };
 
 /// @brief Read the voxel block into a sparse float grid slab by slab.
 /// @throw IoError naming @p file and the "data" field: truncated data, non-finite values
 Volume::GridPtr readRaster(ByteSource& src, const RasterLayout& layout, Channel channel, const RasterOptions& options,
-                           const std::string& file);
+    const std::string& file);
 
 } // namespace voxhap::volume

@@ -47,8 +47,7 @@ IndexBox coveringBox(const WorldBox& b, const Mat3d& indexToWorldLinear)
 
 } // namespace
 
-Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridSpec& spec,
-                 const TissueTable& table)
+Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridSpec& spec, const TissueTable& table)
 {
     Geometry g;
     g.spacing = spec.spacing;
@@ -60,7 +59,8 @@ Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridS
     if (box.empty()) throw ValueError("phantom: empty extent");
     const std::int64_t kMaxVoxels = std::int64_t(1) << 34; // 16 Gi voxels: refuse absurd requests early
     if (box.voxelCount() > kMaxVoxels) {
-        throw ValueError("phantom: " + std::to_string(box.voxelCount()) + " voxels at this spacing; use a coarser --spacing");
+        throw ValueError(
+            "phantom: " + std::to_string(box.voxelCount()) + " voxels at this spacing; use a coarser --spacing");
     }
 
     // Per-id lookup tables so that the inner loop does no map search.
@@ -124,8 +124,8 @@ Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridS
         }
     });
     if (badId.load() != -1) {
-        throw ValueError("phantom: classifier produced tissue id " + std::to_string(badId.load()) +
-                         " that " + table.origin() + " does not hold");
+        throw ValueError("phantom: classifier produced tissue id " + std::to_string(badId.load()) + " that " +
+            table.origin() + " does not hold");
     }
 
     auto labelGridPtr = LabelGrid::create(kAirLabel);
@@ -153,7 +153,7 @@ Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridS
 }
 
 std::vector<LayerSpan> traceLayers(const Classifier& classify, const Vec3d& entry, const Vec3d& direction,
-                                   double length, const TissueTable& table, double stepMm)
+    double length, const TissueTable& table, double stepMm)
 {
     std::vector<LayerSpan> out;
     const double norm = direction.norm();

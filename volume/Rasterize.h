@@ -21,8 +21,8 @@ using Classifier = std::function<int(const Vec3d& world)>;
 
 /// @brief Sampling lattice of a synthetic volume.
 struct GridSpec {
-    Vec3d spacing{0.5, 0.5, 0.5};            ///< voxel size along i, j, k [mm]; anisotropic allowed
-    Mat3d direction = Mat3d::Identity();     ///< rotation: columns are the world directions of i, j, k
+    Vec3d spacing{0.5, 0.5, 0.5};              ///< voxel size along i, j, k [mm]; anisotropic allowed
+    Mat3d direction = Mat3d::Identity();       ///< rotation: columns are the world directions of i, j, k
     FieldStrength field = FieldStrength::T1_5; ///< which T1 column fills the t1 grid
 };
 
@@ -41,21 +41,20 @@ struct WorldBox {
 /// Air (id 0) stays inactive in all three grids; uniform regions become tiles.
 /// Runs in parallel (TBB).
 /// @throw ValueError if the classifier returns an id the table does not hold.
-Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridSpec& spec,
-                 const TissueTable& table);
+Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridSpec& spec, const TissueTable& table);
 
 /// @brief One tissue interval along a straight path.
 struct LayerSpan {
-    int tissue = 0;       ///< tissue id
-    std::string name;     ///< tissue name
-    double startMm = 0;   ///< distance from the path's start [mm]
-    double endMm = 0;     ///< distance from the path's start [mm]
+    int tissue = 0;     ///< tissue id
+    std::string name;   ///< tissue name
+    double startMm = 0; ///< distance from the path's start [mm]
+    double endMm = 0;   ///< distance from the path's start [mm]
 };
 
 /// @brief The tissue intervals along entry + s·direction, s in [0, length],
 /// of the analytic classifier (not the voxels): boundaries located by bisection
 /// to 1e-9 mm after a scan at @p stepMm (features thinner than the step may be missed).
 std::vector<LayerSpan> traceLayers(const Classifier& classify, const Vec3d& entry, const Vec3d& direction,
-                                   double length, const TissueTable& table, double stepMm = 0.05);
+    double length, const TissueTable& table, double stepMm = 0.05);
 
 } // namespace voxhap::volume

@@ -63,8 +63,8 @@ PhantomModel slabModel(const SlabParams& p, const TissueTable& table)
     };
     const double hw = p.halfWidthMm;
     const double spread = hw * std::abs(std::sin(tilt)); // vertical reach of the tilted planes
-    m.bounds = {Vec3d(-hw, -(total + spread) / std::cos(tilt), -hw),
-                Vec3d(hw, spread / std::cos(tilt) + p.airMarginMm, hw)};
+    m.bounds = {
+        Vec3d(-hw, -(total + spread) / std::cos(tilt), -hw), Vec3d(hw, spread / std::cos(tilt) + p.airMarginMm, hw)};
     m.pathEntry = Vec3d::Zero();
     m.pathTarget = -total * normal;
     m.landmarks = {{"entry", m.pathEntry}, {"bottom", m.pathTarget}};

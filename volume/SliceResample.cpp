@@ -10,7 +10,7 @@
 namespace voxhap::volume {
 
 SliceResampler::SliceResampler(const SliceStackGeometry& stack, const float* input, int nx, int ny, const Vec3d& row,
-                               const Vec3d& col, const Eigen::Vector2d& spacing, float outside)
+    const Vec3d& col, const Eigen::Vector2d& spacing, float outside)
     : mStack(stack), mInput(input), mNx(nx), mNy(ny), mRow(row), mCol(col), mSpacing(spacing), mOutside(outside)
 {
     for (const auto& s : stack.slices) mAlong.push_back(s.position.dot(stack.normal));

@@ -22,7 +22,7 @@ public:
     /// @param spacing pixel size along row and col [mm]
     /// @param outside value for points outside every slice (air)
     SliceResampler(const SliceStackGeometry& stack, const float* input, int nx, int ny, const Vec3d& row,
-                   const Vec3d& col, const Eigen::Vector2d& spacing, float outside);
+        const Vec3d& col, const Eigen::Vector2d& spacing, float outside);
 
     /// @brief Fill @p out (@p outNx × @p outNy, x fastest) with the plane whose
     /// first pixel centre is at @p planeOrigin, pixels spaced as the input's.

@@ -14,14 +14,14 @@
 
 namespace voxhap::volume {
 
-SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& normal, double toleranceMm,
-                               double directionTolerance)
+SliceStackGeometry orderSlices(
+    std::vector<SlicePlacement> slices, const Vec3d& normal, double toleranceMm, double directionTolerance)
 {
     SliceStackGeometry g;
     g.normal = normal.normalized();
     const Vec3d n = g.normal;
     std::stable_sort(slices.begin(), slices.end(),
-                     [&n](const SlicePlacement& a, const SlicePlacement& b) { return a.position.dot(n) < b.position.dot(n); });
+        [&n](const SlicePlacement& a, const SlicePlacement& b) { return a.position.dot(n) < b.position.dot(n); });
     g.slices = std::move(slices);
     if (g.slices.size() < 2) return g;
 
@@ -33,7 +33,8 @@ SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& 
         const double d = along[k] - along[k - 1];
         if (d <= toleranceMm) {
             std::ostringstream os;
-            os << "two slices at the same position along the normal (" << along[k] << " mm): a mixed or repeated series";
+            os << "two slices at the same position along the normal (" << along[k]
+               << " mm): a mixed or repeated series";
             throw ValueError(os.str());
         }
         steps.push_back(d);

@@ -47,6 +47,6 @@ struct SliceStackGeometry {
 ///        drift |d|·directionTolerance off the normal line without a tilt
 /// @throw ValueError if two slices share a position along the normal
 SliceStackGeometry orderSlices(std::vector<SlicePlacement> slices, const Vec3d& normal,
-                               double toleranceMm = kSlicePositionToleranceMm, double directionTolerance = 0.0);
+    double toleranceMm = kSlicePositionToleranceMm, double directionTolerance = 0.0);
 
 } // namespace voxhap::volume

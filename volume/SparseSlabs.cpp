@@ -38,8 +38,8 @@ SparseSlabs::~SparseSlabs() = default;
 void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
 {
     const std::size_t plane = std::size_t(nx) * std::size_t(ny);
-    addSlabRows([&](int z, int y, float*) { return data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx); }, nx,
-                ny, k0, nz, false);
+    addSlabRows([&](int z, int y, float*) { return data + plane * std::size_t(z) + std::size_t(y) * std::size_t(nx); },
+        nx, ny, k0, nz, false);
 }
 
 void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite)
@@ -47,7 +47,8 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
     using LeafT = FloatGrid::TreeType::LeafNodeType;
     constexpr int kDim = int(LeafT::DIM);
     static_assert(kSlabSlices == kDim, "a slab is one layer of leaves");
-    if (k0 % kDim != 0 || nz < 1 || nz > kDim) throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
+    if (k0 % kDim != 0 || nz < 1 || nz > kDim)
+        throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
     const float air = mImpl->airBelow, bg = mImpl->background;
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
     // One leaf per 8 × 8 column block of the slab, built straight from the
@@ -59,7 +60,7 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
     std::vector<LeafT*> leaves(std::size_t(bx) * std::size_t(by), nullptr);
     const auto fail = [&](int x, int y, int z) {
         throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(k0 + z) +
-                         ") is not a finite number");
+            ") is not a finite number");
     };
     try {
         tbb::parallel_for(0, by, [&](int yb) {

@@ -99,12 +99,10 @@ double T1wNormalisation::t1Ms(double s) const
     return std::clamp(1.0 / rate, kMinT1Ms, kMaxT1Ms);
 }
 
-FieldStrength nearestFieldStrength(double tesla)
-{
-    return tesla >= 2.25 ? FieldStrength::T3 : FieldStrength::T1_5;
-}
+FieldStrength nearestFieldStrength(double tesla) { return tesla >= 2.25 ? FieldStrength::T3 : FieldStrength::T1_5; }
 
-T1wNormalisation fitT1wNormalisation(const Volume& v, const TissueTable& table, FieldStrength field, const std::string& source)
+T1wNormalisation fitT1wNormalisation(
+    const Volume& v, const TissueTable& table, FieldStrength field, const std::string& source)
 {
     const auto grid = t1Grid(v);
     if (!grid) throw ValueError(source + ": no t1 channel to normalise");
@@ -120,7 +118,8 @@ T1wNormalisation fitT1wNormalisation(const Volume& v, const TissueTable& table, 
         hi = std::max(hi, *it);
         total += double(it.getVoxelCount());
     }
-    if (total < 100 || !(hi > lo)) throw ValueError(source + ": too few distinct T1-weighted values to find fat and muscle");
+    if (total < 100 || !(hi > lo))
+        throw ValueError(source + ": too few distinct T1-weighted values to find fat and muscle");
     constexpr int kFine = 1 << 16;
     std::vector<double> fine(kFine, 0.0);
     const double fineWidth = (double(hi) - lo) / kFine;
@@ -147,10 +146,11 @@ T1wNormalisation fitT1wNormalisation(const Volume& v, const TissueTable& table, 
     fit.muscleIntensity = medianIn(*grid, fit.lowerThreshold, fit.upperThreshold, fit.muscleVoxels);
     fit.fatIntensity = medianIn(*grid, fit.upperThreshold, std::numeric_limits<double>::infinity(), fit.fatVoxels);
     const double minClass = kMinClassFraction * total;
-    if (double(fit.fatVoxels) < minClass || double(fit.muscleVoxels) < minClass || !(fit.fatIntensity > fit.muscleIntensity)) {
+    if (double(fit.fatVoxels) < minClass || double(fit.muscleVoxels) < minClass ||
+        !(fit.fatIntensity > fit.muscleIntensity)) {
         throw ValueError(source + ": no bright fat class above a muscle class in the T1-weighted intensities (fat " +
-                         number(fit.fatIntensity) + " in " + std::to_string(fit.fatVoxels) + " voxels, muscle " +
-                         number(fit.muscleIntensity) + " in " + std::to_string(fit.muscleVoxels) + ")");
+            number(fit.fatIntensity) + " in " + std::to_string(fit.fatVoxels) + " voxels, muscle " +
+            number(fit.muscleIntensity) + " in " + std::to_string(fit.muscleVoxels) + ")");
     }
     return fit;
 }
@@ -165,15 +165,17 @@ void applyT1wNormalisation(Volume& v, const T1wNormalisation& fit)
     auto tile = out->tree().beginValueOn();
     tile.setMaxDepth(FloatGrid::TreeType::ValueOnIter::LEAF_DEPTH - 1);
     for (; tile; ++tile) tile.setValue(float(fit.t1Ms(*tile)));
-    openvdb::tree::LeafManager<FloatGrid::TreeType>(out->tree()).foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
-        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(float(fit.t1Ms(*it)));
-    });
+    openvdb::tree::LeafManager<FloatGrid::TreeType>(out->tree())
+        .foreach ([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+            for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(float(fit.t1Ms(*it)));
+        });
     v.setGrid(Channel::T1, out);
 
     VolumeMetadata& md = v.metadata();
     md.t1Units = "ms";
     md.extra["t1_kind"] = "T1-weighted, normalised per scan";
-    md.extra["t1_norm_rule"] = "physics.md 5.1: fat and muscle of this scan pinned to the tissue table; linear in 1/T1 between them";
+    md.extra["t1_norm_rule"] =
+        "physics.md 5.1: fat and muscle of this scan pinned to the tissue table; linear in 1/T1 between them";
     md.extra["t1_norm_field"] = std::string(fieldStrengthName(fit.field));
     md.extra["t1_norm_fat"] = number(fit.fatIntensity) + " -> " + number(fit.fatT1Ms) + " ms";
     md.extra["t1_norm_muscle"] = number(fit.muscleIntensity) + " -> " + number(fit.muscleT1Ms) + " ms";

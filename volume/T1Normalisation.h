@@ -54,8 +54,8 @@ FieldStrength nearestFieldStrength(double tesla);
 /// @param source names the file in error messages
 /// @throw ValueError naming @p source if the grid has no t1 channel, too few
 ///        voxels, or no brighter fat class above a muscle class
-T1wNormalisation fitT1wNormalisation(const Volume& v, const TissueTable& table, FieldStrength field,
-                                     const std::string& source);
+T1wNormalisation fitT1wNormalisation(
+    const Volume& v, const TissueTable& table, FieldStrength field, const std::string& source);
 
 /// @brief Replace every active t1 value of @p v by its normalised T1 [ms] and
 /// record the fit in the metadata (t1Units "ms", t1_kind, t1_norm_*).

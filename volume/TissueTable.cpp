@@ -25,7 +25,14 @@ using Json = nlohmann::json;
 
 /// The kinds of quantity the table holds, each with the units it accepts and
 /// the factor that converts them to the canonical unit (first in the list).
-enum class Dimension { Hounsfield, RelaxationMs, Length, Force, Stiffness, DampingDensity };
+enum class Dimension {
+    Hounsfield,
+    RelaxationMs,
+    Length,
+    Force,
+    Stiffness,
+    DampingDensity
+};
 
 struct UnitFactor {
     std::string_view unit;
@@ -78,9 +85,8 @@ const std::vector<MechanicalField>& mechanicalFields()
 }
 
 const std::set<std::string, std::less<>> kTopKeys{"schema", "description", "tissues"};
-const std::set<std::string, std::less<>> kTissueKeys{
-    "id", "name", "colour", "critical", "rigid", "description", "hu", "t1_1.5T", "t1_3T",
-    "thickness", "puncture_force", "cutting_force", "elasticity", "friction_viscous",
+const std::set<std::string, std::less<>> kTissueKeys{"id", "name", "colour", "critical", "rigid", "description", "hu",
+    "t1_1.5T", "t1_3T", "thickness", "puncture_force", "cutting_force", "elasticity", "friction_viscous",
     "friction_coulomb", "damping"};
 const std::set<std::string, std::less<>> kQuantityKeys{"value", "unit", "source", "chosen", "note"};
 const std::set<std::string, std::less<>> kRangeKeys{"min", "typical", "max", "unit", "source", "chosen", "note"};
@@ -88,7 +94,7 @@ const std::set<std::string, std::less<>> kRangeKeys{"min", "typical", "max", "un
 /// Builds messages of the form "<file>: tissue 'fat' (id 2): field 'thickness': <what>".
 class Context {
 public:
-    explicit Context(std::string origin) : mOrigin(std::move(origin)) {}
+    explicit Context(std::string origin) : mOrigin(std::move(origin)) { }
     void setTissue(std::string label) { mTissue = std::move(label); }
     [[noreturn]] void fail(const std::string& field, const std::string& what) const
     {
@@ -105,8 +111,8 @@ private:
     std::string mTissue;
 };
 
-void rejectUnknownKeys(const Json& obj, const std::set<std::string, std::less<>>& allowed,
-                       const Context& ctx, const std::string& field)
+void rejectUnknownKeys(
+    const Json& obj, const std::set<std::string, std::less<>>& allowed, const Context& ctx, const std::string& field)
 {
     for (const auto& [key, value] : obj.items()) {
         if (!allowed.count(key)) ctx.fail(field, "unknown key '" + key + "'");
@@ -137,8 +143,7 @@ double unitFactor(const Json& obj, Dimension dim, const Context& ctx, const std:
 
 std::string sourceOf(const Json& obj, const Context& ctx, const std::string& field)
 {
-    if (!obj.contains("source") || !obj.at("source").is_string() ||
-        obj.at("source").get<std::string>().empty()) {
+    if (!obj.contains("source") || !obj.at("source").is_string() || obj.at("source").get<std::string>().empty()) {
         ctx.fail(field, "missing 'source'");
     }
     return obj.at("source").get<std::string>();
@@ -266,10 +271,7 @@ std::string describeOverflow(std::string_view text, const std::string& what, con
 
 } // namespace
 
-std::string_view fieldStrengthName(FieldStrength f)
-{
-    return f == FieldStrength::T3 ? "3T" : "1.5T";
-}
+std::string_view fieldStrengthName(FieldStrength f) { return f == FieldStrength::T3 ? "3T" : "1.5T"; }
 
 TissueTable TissueTable::parse(std::string_view text, const std::string& origin)
 {

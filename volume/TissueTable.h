@@ -19,40 +19,43 @@
 namespace voxhap::volume {
 
 /// @brief MR field strength: T1 depends on it (physics.md §5.1).
-enum class FieldStrength { T1_5, T3 };
+enum class FieldStrength {
+    T1_5,
+    T3
+};
 
 /// @brief "1.5T" or "3T".
 std::string_view fieldStrengthName(FieldStrength f);
 
 /// @brief A sourced number, already converted to its field's canonical unit.
 struct Quantity {
-    double value = 0.0;   ///< canonical unit of the field (see the file comment)
-    std::string source;   ///< citation, e.g. "[C-ui] skin (physics.md §3.2)"
-    bool chosen = false;  ///< a default picked for voxhap, not read from a source
+    double value = 0.0;  ///< canonical unit of the field (see the file comment)
+    std::string source;  ///< citation, e.g. "[C-ui] skin (physics.md §3.2)"
+    bool chosen = false; ///< a default picked for voxhap, not read from a source
 };
 
 /// @brief One row of the tissue table.
 struct Tissue {
-    int id = 0;                               ///< label value in the `label` grid
-    std::string name;                         ///< unique snake_case key, e.g. "ligamentum_flavum"
+    int id = 0;       ///< label value in the `label` grid
+    std::string name; ///< unique snake_case key, e.g. "ligamentum_flavum"
     std::string description;
-    std::array<std::uint8_t, 3> colour{};     ///< display colour, sRGB 0..255
-    bool critical = false;                    ///< default: must not be touched (physics.md §1.1)
-    bool rigid = false;                       ///< bone: rendered as contact, not cut (physics.md §1.3)
+    std::array<std::uint8_t, 3> colour{}; ///< display colour, sRGB 0..255
+    bool critical = false;                ///< default: must not be touched (physics.md §1.1)
+    bool rigid = false;                   ///< bone: rendered as contact, not cut (physics.md §1.3)
 
     double huMin = 0, huTypical = 0, huMax = 0; ///< CT numbers [HU]
     std::string huSource;
-    Quantity t1At1p5T;                        ///< T1 at 1.5 T [ms]
-    Quantity t1At3T;                          ///< T1 at 3 T [ms]
+    Quantity t1At1p5T; ///< T1 at 1.5 T [ms]
+    Quantity t1At3T;   ///< T1 at 3 T [ms]
 
     // Mechanical parameters; absent where no model needs them (e.g. lung).
-    std::optional<Quantity> thickness;        ///< default layer thickness [mm]
-    std::optional<Quantity> punctureForce;    ///< force at puncture [N] (physics.md §3.2)
-    std::optional<Quantity> cuttingForce;     ///< cutting force while advancing [N] (§2.3)
-    std::optional<Quantity> elasticity;       ///< tip stiffness k [N/mm] (§4)
-    std::optional<Quantity> frictionViscous;  ///< shaft viscous friction b [N·s/mm²] (§4)
-    std::optional<Quantity> frictionCoulomb;  ///< Coulomb friction C [N] (§4)
-    std::optional<Quantity> damping;          ///< damping density β [N·s/mm²] (§1.2, §5.4)
+    std::optional<Quantity> thickness;       ///< default layer thickness [mm]
+    std::optional<Quantity> punctureForce;   ///< force at puncture [N] (physics.md §3.2)
+    std::optional<Quantity> cuttingForce;    ///< cutting force while advancing [N] (§2.3)
+    std::optional<Quantity> elasticity;      ///< tip stiffness k [N/mm] (§4)
+    std::optional<Quantity> frictionViscous; ///< shaft viscous friction b [N·s/mm²] (§4)
+    std::optional<Quantity> frictionCoulomb; ///< Coulomb friction C [N] (§4)
+    std::optional<Quantity> damping;         ///< damping density β [N·s/mm²] (§1.2, §5.4)
 
     /// @brief T1 at the given field strength [ms].
     double t1(FieldStrength f) const { return f == FieldStrength::T3 ? t1At3T.value : t1At1p5T.value; }
@@ -90,7 +93,7 @@ public:
 
 private:
     std::vector<Tissue> mTissues;
-    std::vector<int> mIndexById;  // id -> index into mTissues, -1 where unused
+    std::vector<int> mIndexById; // id -> index into mTissues, -1 where unused
     int mMaxId = 0;
     std::string mOrigin;
 };

@@ -16,30 +16,30 @@ namespace {
 
 // All dimensions in mm [chosen]: an adult lower torso in LPS, posterior skin at
 // y = 0 on the midline, the body centred 100 mm anterior of it.
-constexpr double kHalfWidth = 150.0;    ///< body ellipse semi-axis along x (left-right)
-constexpr double kHalfDepth = 100.0;    ///< body ellipse semi-axis along y (anterior-posterior)
-constexpr double kCentreY = -100.0;     ///< body centre
-constexpr double kSkin = 2.0;           ///< skin shell
-constexpr double kFat = 15.0;           ///< subcutaneous fat
-constexpr double kHalfLength = 60.0;    ///< half extent along z (cranio-caudal)
+constexpr double kHalfWidth = 150.0; ///< body ellipse semi-axis along x (left-right)
+constexpr double kHalfDepth = 100.0; ///< body ellipse semi-axis along y (anterior-posterior)
+constexpr double kCentreY = -100.0;  ///< body centre
+constexpr double kSkin = 2.0;        ///< skin shell
+constexpr double kFat = 15.0;        ///< subcutaneous fat
+constexpr double kHalfLength = 60.0; ///< half extent along z (cranio-caudal)
 
-constexpr double kBodyY = -77.0;        ///< vertebral body axis (x = 0)
+constexpr double kBodyY = -77.0; ///< vertebral body axis (x = 0)
 constexpr double kBodyRadius = 18.0;
-constexpr double kVertebraHeight = 28.0;    ///< vertebral body height; the lesion's vertebra is centred at z = 0
+constexpr double kVertebraHeight = 28.0; ///< vertebral body height; the lesion's vertebra is centred at z = 0
 constexpr double kTorsoDiscHeight = 10.0;
-constexpr double kCanalY = -50.0;       ///< spinal canal axis
+constexpr double kCanalY = -50.0; ///< spinal canal axis
 constexpr double kCanalRadius = 9.0;
 constexpr double kCordRadius = 4.0;
 constexpr double kArchOuterRadius = 14.0; ///< laminae and pedicles: posterior half-annulus around the canal
 constexpr double kSpinousHalfWidth = 4.0;
-constexpr double kSpinousTipY = -22.0;  ///< spinous process tip, 22 mm under the skin
+constexpr double kSpinousTipY = -22.0; ///< spinous process tip, 22 mm under the skin
 
 const Vec3d kLesionCentre(5.0, -78.0, 0.0);
 const Vec3d kAortaAxis(15.0, -110.0, 0.0); ///< left of midline (+x), anterior of the spine
 constexpr double kAortaRadius = 11.0;
 const Vec3d kKidneyCentre(75.0, -70.0, -20.0); ///< mirrored in x for the right kidney
 const Vec3d kKidneySemiAxes(25.0, 20.0, 45.0);
-const Vec3d kLungCentre(70.0, -80.0, 90.0);   ///< lung bases reach down to z = 30
+const Vec3d kLungCentre(70.0, -80.0, 90.0); ///< lung bases reach down to z = 30
 const Vec3d kLungSemiAxes(55.0, 55.0, 60.0);
 
 bool inEllipsoid(const Vec3d& p, const Vec3d& c, const Vec3d& semi)
@@ -99,13 +99,14 @@ PhantomModel torsoModel(const TorsoParams& p, const TissueTable& table)
         if (rCanal < kArchOuterRadius && w.y() >= kCanalY) return bodyLevel ? cortical : flavum;
         if (std::abs(x) <= kSpinousHalfWidth && w.y() > kCanalY && w.y() <= kSpinousTipY) {
             if (!bodyLevel) return inter;
-            const double s = std::min({kSpinousHalfWidth - std::abs(x), kSpinousTipY - w.y(), phase, kVertebraHeight - phase});
+            const double s =
+                std::min({kSpinousHalfWidth - std::abs(x), kSpinousTipY - w.y(), phase, kVertebraHeight - phase});
             return s < shell ? cortical : cancellous;
         }
         return muscle;
     };
     m.bounds = {Vec3d(-kHalfWidth - 2.0, kCentreY - kHalfDepth - 2.0, -kHalfLength),
-                Vec3d(kHalfWidth + 2.0, kCentreY + kHalfDepth + 2.0, kHalfLength)};
+        Vec3d(kHalfWidth + 2.0, kCentreY + kHalfDepth + 2.0, kHalfLength)};
 
     // Reference path: posterolateral, 25 degrees from the sagittal plane, skin to lesion
     // centre, passing lateral of the spinal canal (a transpedicular-like approach).
@@ -119,12 +120,10 @@ PhantomModel torsoModel(const TorsoParams& p, const TissueTable& table)
     }
     m.pathEntry = kLesionCentre + lo * outward;
     m.pathTarget = kLesionCentre;
-    m.landmarks = {{"entry", m.pathEntry},
-                   {"lesion", kLesionCentre},
-                   {"aorta", kAortaAxis},
-                   {"kidney_left", kKidneyCentre},
-                   {"kidney_right", Vec3d(-kKidneyCentre.x(), kKidneyCentre.y(), kKidneyCentre.z())},
-                   {"spinal_canal", Vec3d(0.0, kCanalY, 0.0)}};
+    m.landmarks = {{"entry", m.pathEntry}, {"lesion", kLesionCentre}, {"aorta", kAortaAxis},
+        {"kidney_left", kKidneyCentre},
+        {"kidney_right", Vec3d(-kKidneyCentre.x(), kKidneyCentre.y(), kKidneyCentre.z())},
+        {"spinal_canal", Vec3d(0.0, kCanalY, 0.0)}};
     return m;
 }
 

@@ -102,15 +102,17 @@ Volume loadVdb(const std::filesystem::path& file)
         if (g && !first) first = g;
     }
     if (!first) {
-        throw IoError(file.string() + ": no grid named hu, t1, label or intensity" + (others.empty() ? "" : " (found: " + others + ")"));
+        throw IoError(file.string() + ": no grid named hu, t1, label or intensity" +
+            (others.empty() ? "" : " (found: " + others + ")"));
     }
     for (const auto& g : byChannel) {
         if (g && g->transform() != first->transform()) {
             throw IoError(file.string() + ": grid '" + g->getName() + "' has a different transform from '" +
-                          first->getName() + "'");
+                first->getName() + "'");
         }
     }
-    if (!first->transform().isLinear()) throw IoError(file.string() + ": grid '" + first->getName() + "' has a non-linear transform");
+    if (!first->transform().isLinear())
+        throw IoError(file.string() + ": grid '" + first->getName() + "' has a non-linear transform");
 
     IndexBox box;
     auto lo = meta->getMetadata<openvdb::Vec3IMetadata>("voxhap.index_min");
@@ -140,7 +142,7 @@ Volume loadVdb(const std::filesystem::path& file)
     for (const auto& g : derived) {
         if (g->transform() != first->transform()) {
             throw IoError(file.string() + ": grid '" + g->getName() + "' has a different transform from '" +
-                          first->getName() + "'");
+                first->getName() + "'");
         }
         if (v.derived(g->getName())) throw IoError(file.string() + ": grid '" + g->getName() + "' appears twice");
         v.setDerived(g->getName(), g);

@@ -15,10 +15,14 @@ namespace voxhap::volume {
 std::string_view channelName(Channel c)
 {
     switch (c) {
-    case Channel::Hu: return "hu";
-    case Channel::T1: return "t1";
-    case Channel::Label: return "label";
-    case Channel::Intensity: return "intensity";
+    case Channel::Hu:
+        return "hu";
+    case Channel::T1:
+        return "t1";
+    case Channel::Label:
+        return "label";
+    case Channel::Intensity:
+        return "intensity";
     }
     return "?";
 }
@@ -38,14 +42,14 @@ openvdb::math::Transform::Ptr makeTransform(const Geometry& g)
     for (int i = 0; i < 3; ++i) {
         if (!std::isfinite(g.spacing[i]) || g.spacing[i] < kMinSpacingMm || g.spacing[i] > kMaxSpacingMm) {
             throw ValueError("geometry: spacing[" + std::to_string(i) + "] = " + std::to_string(g.spacing[i]) +
-                             " mm is outside 1e-6 to 1e4 mm");
+                " mm is outside 1e-6 to 1e4 mm");
         }
         if (!g.origin.allFinite() || !g.direction.allFinite()) {
             throw ValueError("geometry: origin and direction must be finite");
         }
         if (std::abs(g.origin[i]) > kMaxOriginMm) {
             throw ValueError("geometry: origin[" + std::to_string(i) + "] = " + std::to_string(g.origin[i]) +
-                             " mm is more than 1 km from the scanner's origin");
+                " mm is more than 1 km from the scanner's origin");
         }
         if (std::abs(g.direction.col(i).norm() - 1.0) > 1e-6) {
             throw ValueError("geometry: direction column " + std::to_string(i) + " is not a unit vector");
@@ -83,24 +87,17 @@ Geometry geometryOf(const openvdb::math::Transform& xform)
     return g;
 }
 
-Volume::Volume(openvdb::math::Transform::Ptr xform, const IndexBox& box)
-    : mTransform(std::move(xform)), mBox(box)
+Volume::Volume(openvdb::math::Transform::Ptr xform, const IndexBox& box) : mTransform(std::move(xform)), mBox(box)
 {
     if (!mTransform) throw ValueError("volume: null transform");
     initializeOpenVdb();
 }
 
-Volume::Volume(const Geometry& g, const IndexBox& box) : Volume(makeTransform(g), box) {}
+Volume::Volume(const Geometry& g, const IndexBox& box) : Volume(makeTransform(g), box) { }
 
-Vec3d Volume::indexToWorld(const Vec3d& ijk) const
-{
-    return fromVdb(mTransform->indexToWorld(toVdb(ijk)));
-}
+Vec3d Volume::indexToWorld(const Vec3d& ijk) const { return fromVdb(mTransform->indexToWorld(toVdb(ijk))); }
 
-Vec3d Volume::worldToIndex(const Vec3d& xyz) const
-{
-    return fromVdb(mTransform->worldToIndex(toVdb(xyz)));
-}
+Vec3d Volume::worldToIndex(const Vec3d& xyz) const { return fromVdb(mTransform->worldToIndex(toVdb(xyz))); }
 
 std::array<Vec3d, 2> Volume::worldBounds() const
 {

@@ -73,9 +73,9 @@ struct IndexBox {
 /// @brief Spacing, origin and direction cosines of an index-to-world affine map:
 /// world = origin + direction · diag(spacing) · ijk.
 struct Geometry {
-    Vec3d spacing{1.0, 1.0, 1.0};         ///< voxel size along index i, j, k [mm]
-    Vec3d origin{0.0, 0.0, 0.0};          ///< world position of voxel (0,0,0)'s centre [mm, LPS]
-    Mat3d direction = Mat3d::Identity();  ///< columns: unit world directions of the i, j, k axes
+    Vec3d spacing{1.0, 1.0, 1.0};        ///< voxel size along index i, j, k [mm]
+    Vec3d origin{0.0, 0.0, 0.0};         ///< world position of voxel (0,0,0)'s centre [mm, LPS]
+    Mat3d direction = Mat3d::Identity(); ///< columns: unit world directions of the i, j, k axes
 };
 
 /// @brief Build an OpenVDB linear transform from a Geometry.
@@ -89,11 +89,11 @@ Geometry geometryOf(const openvdb::math::Transform& xform);
 
 /// @brief Descriptive metadata saved with the volume. No patient identity.
 struct VolumeMetadata {
-    std::string modality;     ///< "CT", "MR" or "phantom"
-    std::string source;       ///< file or generator that made the volume
-    std::string description;  ///< free text, patient-free
+    std::string modality;    ///< "CT", "MR" or "phantom"
+    std::string source;      ///< file or generator that made the volume
+    std::string description; ///< free text, patient-free
     std::string huUnits = "HU";
-    std::string t1Units = "ms"; ///< always "ms": the t1 grid holds T1 only
+    std::string t1Units = "ms";                     ///< always "ms": the t1 grid holds T1 only
     std::string intensityUnits = "arbitrary units"; ///< of the intensity grid
     /// MR only: what the series is, as decided from its headers (MrWeighting.h):
     /// "T1 map", "T1-weighted", "PD-weighted", "T2-weighted", "diffusion", ...;

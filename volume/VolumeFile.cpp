@@ -54,12 +54,18 @@ VolumeFormat formatOf(const std::filesystem::path& path)
 std::string formatName(VolumeFormat f)
 {
     switch (f) {
-    case VolumeFormat::Dicom: return "dicom";
-    case VolumeFormat::Vdb: return "vdb";
-    case VolumeFormat::Nrrd: return "nrrd";
-    case VolumeFormat::Nifti: return "nifti";
-    case VolumeFormat::MetaImage: return "metaimage";
-    case VolumeFormat::Unknown: break;
+    case VolumeFormat::Dicom:
+        return "dicom";
+    case VolumeFormat::Vdb:
+        return "vdb";
+    case VolumeFormat::Nrrd:
+        return "nrrd";
+    case VolumeFormat::Nifti:
+        return "nifti";
+    case VolumeFormat::MetaImage:
+        return "metaimage";
+    case VolumeFormat::Unknown:
+        break;
     }
     return "unknown";
 }
@@ -84,14 +90,15 @@ Volume::GridPtr withAir(const Volume& raw, float background, float airBelow, boo
 {
     FloatGrid::Ptr g = huGrid(raw)->deepCopy();
     openvdb::tools::changeBackground(g->tree(), background);
-    openvdb::tree::LeafManager<FloatGrid::TreeType>(g->tree()).foreach([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            if (*it < airBelow || (atOrBelow && *it == airBelow)) {
-                it.setValue(background);
-                it.setValueOff();
+    openvdb::tree::LeafManager<FloatGrid::TreeType>(g->tree()).foreach (
+        [&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+            for (auto it = leaf.beginValueOn(); it; ++it) {
+                if (*it < airBelow || (atOrBelow && *it == airBelow)) {
+                    it.setValue(background);
+                    it.setValueOff();
+                }
             }
-        }
-    });
+        });
     for (auto it = g->tree().beginValueOn(); it; ++it) { // tiles
         if (!it.isVoxelValue() && (*it < airBelow || (atOrBelow && *it == airBelow))) {
             it.setValue(background);
@@ -107,9 +114,9 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
 {
     RasterOptions all = rasterOptions(options);
     all.airHu = -std::numeric_limits<float>::max(); // keep every voxel: the census needs the air
-    Volume raw = format == VolumeFormat::Nrrd        ? loadNrrd(path, all)
-                 : format == VolumeFormat::Nifti     ? loadNifti(path, all)
-                                                     : loadMetaImage(path, all);
+    Volume raw = format == VolumeFormat::Nrrd ? loadNrrd(path, all)
+        : format == VolumeFormat::Nifti       ? loadNifti(path, all)
+                                              : loadMetaImage(path, all);
     VolumeMetadata& rawMd = raw.metadata();
     // A voxhap NRRD names its channel: t1, label and intensity are read as they are.
     const bool declared = rawMd.extra.erase("declared_channel") > 0;
@@ -133,7 +140,8 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
         kind = guess.kind;
         why = "inferred from the data: " + guess.reason;
         if (kind == ModalityGuess::Kind::Unknown) {
-            throw IoError(name + ": modality: " + guess.reason + "; declare it with --channel hu (CT) or --channel mr (MR)");
+            throw IoError(
+                name + ": modality: " + guess.reason + "; declare it with --channel hu (CT) or --channel mr (MR)");
         }
     }
 
@@ -155,7 +163,7 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
         weighting.kind = MrWeightingKind::Unknown;
         weighting.name = std::string(mrWeightingName(MrWeightingKind::Unknown));
         weighting.reason = "no BIDS sidecar (" + bidsSidecarPath(path).filename().string() +
-                           ") beside the file: declare a T1-weighted image with --t1-weighted, a T1 map with --t1-map";
+            ") beside the file: declare a T1-weighted image with --t1-weighted, a T1 map with --t1-map";
     }
     MrMaterialOptions mo;
     mo.t1Map = options.dicom.t1Map;
@@ -178,25 +186,32 @@ Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options,
 {
     if (!std::filesystem::exists(path)) throw IoError(path.string() + ": no such file or directory");
     switch (const VolumeFormat f = formatOf(path)) {
-    case VolumeFormat::Dicom: return loadDicom({path}, options.dicom, report);
-    case VolumeFormat::Vdb: return loadVdb(path);
+    case VolumeFormat::Dicom:
+        return loadDicom({path}, options.dicom, report);
+    case VolumeFormat::Vdb:
+        return loadVdb(path);
     case VolumeFormat::Nrrd:
     case VolumeFormat::Nifti:
-    case VolumeFormat::MetaImage: return loadRasterVolume(path, f, options);
-    case VolumeFormat::Unknown: break;
+    case VolumeFormat::MetaImage:
+        return loadRasterVolume(path, f, options);
+    case VolumeFormat::Unknown:
+        break;
     }
-    throw IoError(path.string() + ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd, .mha, .mhd or .vdb)");
+    throw IoError(path.string() +
+        ": unknown format (expected a DICOM directory or file, .nii, .nii.gz, .nrrd, .mha, .mhd or .vdb)");
 }
 
 void saveVolume(const Volume& v, const std::filesystem::path& file)
 {
     switch (formatOf(file)) {
-    case VolumeFormat::Vdb: saveVdb(v, file); return;
+    case VolumeFormat::Vdb:
+        saveVdb(v, file);
+        return;
     case VolumeFormat::Nrrd: {
-        const Channel c = v.has(Channel::Hu)          ? Channel::Hu
-                          : v.has(Channel::T1)        ? Channel::T1
-                          : v.has(Channel::Intensity) ? Channel::Intensity
-                                                      : Channel::Label;
+        const Channel c = v.has(Channel::Hu) ? Channel::Hu
+            : v.has(Channel::T1)             ? Channel::T1
+            : v.has(Channel::Intensity)      ? Channel::Intensity
+                                             : Channel::Label;
         try {
             saveNrrd(v, c, file);
         } catch (const ValueError& e) {
@@ -204,7 +219,8 @@ void saveVolume(const Volume& v, const std::filesystem::path& file)
         }
         return;
     }
-    default: break;
+    default:
+        break;
     }
     throw IoError(file.string() + ": cannot write this format (expected .vdb or .nrrd)");
 }

@@ -14,7 +14,14 @@
 
 namespace voxhap::volume {
 
-enum class VolumeFormat { Dicom, Vdb, Nrrd, Nifti, MetaImage, Unknown };
+enum class VolumeFormat {
+    Dicom,
+    Vdb,
+    Nrrd,
+    Nifti,
+    MetaImage,
+    Unknown
+};
 
 /// @brief The format of @p path, from its kind, magic and extension.
 VolumeFormat formatOf(const std::filesystem::path& path);
@@ -50,7 +57,8 @@ RasterOptions rasterOptions(const LoadOptions& o);
 /// user's declaration, or none: an intensity grid of unknown weighting.
 /// @throw IoError naming the file and the field; for an unknown format, and
 ///        for values that are neither CT nor MR, naming --channel
-Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options = {}, DicomLoadReport* report = nullptr);
+Volume loadVolume(
+    const std::filesystem::path& path, const LoadOptions& options = {}, DicomLoadReport* report = nullptr);
 
 /// @brief Save @p v to a .vdb (every grid) or .nrrd (hu, else t1, else label).
 /// @throw IoError naming the file

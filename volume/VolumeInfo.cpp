@@ -15,8 +15,7 @@ namespace voxhap::volume {
 namespace {
 
 /// Min, max and mean over active values, tiles counted with their voxel count.
-template <typename GridT>
-ChannelSummary summarise(const GridT& grid, const std::string& name, const std::string& type)
+template <typename GridT> ChannelSummary summarise(const GridT& grid, const std::string& name, const std::string& type)
 {
     ChannelSummary s;
     s.name = name;

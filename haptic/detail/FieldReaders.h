@@ -42,8 +42,8 @@ struct FieldReaders {
     {
         lo = openvdb::Vec3d(std::numeric_limits<double>::max());
         hi = openvdb::Vec3d(std::numeric_limits<double>::lowest());
-        for (const openvdb::GridBase* g : {static_cast<const openvdb::GridBase*>(beta.get()),
-                                           static_cast<const openvdb::GridBase*>(labels.get())}) {
+        for (const openvdb::GridBase* g :
+            {static_cast<const openvdb::GridBase*>(beta.get()), static_cast<const openvdb::GridBase*>(labels.get())}) {
             if (!g) continue;
             openvdb::Vec3d l, h;
             activeBox(*g, pad, l, h);

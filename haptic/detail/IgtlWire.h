@@ -27,11 +27,11 @@ double steadySeconds();
 
 /// @brief The outcome of reading one message.
 enum class WireRead {
-    Pose,       ///< a TRANSFORM with a finite tip and a non-zero z column
-    Skipped,    ///< another message type, read and discarded
-    BadPose,    ///< a TRANSFORM whose pose is unusable: count it, keep the link
-    BadHeader,  ///< version, size or CRC wrong: count it, drop the link
-    Broken,     ///< timeout, error or close: drop the link
+    Pose,      ///< a TRANSFORM with a finite tip and a non-zero z column
+    Skipped,   ///< another message type, read and discarded
+    BadPose,   ///< a TRANSFORM whose pose is unusable: count it, keep the link
+    BadHeader, ///< version, size or CRC wrong: count it, drop the link
+    Broken,    ///< timeout, error or close: drop the link
 };
 
 /// @brief Read one message from @p fd. The raw header is checked before

@@ -13,15 +13,14 @@ namespace voxhap::haptic::detail {
 
 /// @brief Reads values of one tree, remembering the last leaf (or tile) touched.
 /// @warning Not thread-safe: one per thread. Owns its accessor (style.md §2).
-template <typename TreeT>
-class LeafReader {
+template <typename TreeT> class LeafReader {
 public:
     using LeafT = typename TreeT::LeafNodeType;
     using ValueT = typename TreeT::ValueType;
     static constexpr int kMask = ~int(LeafT::DIM - 1);
 
-    explicit LeafReader(const TreeT& tree) : mAcc(tree) {}
-    LeafReader(const LeafReader& o) : mAcc(o.mAcc.tree()) {}
+    explicit LeafReader(const TreeT& tree) : mAcc(tree) { }
+    LeafReader(const LeafReader& o) : mAcc(o.mAcc.tree()) { }
     LeafReader& operator=(const LeafReader&) = delete;
 
     /// @brief The value at @p c (active or not), as the tree stores it.
@@ -65,9 +64,15 @@ private:
             // tile (128³), 2 lower internal tile (8³); -1 background, i.e. no root
             // child, whose aligned 4096³ block is all background.
             switch (mAcc.getValueDepth(o)) {
-            case 1: mBlockDim = 128; break;
-            case 2: mBlockDim = int(LeafT::DIM); break;
-            default: mBlockDim = 4096; break;
+            case 1:
+                mBlockDim = 128;
+                break;
+            case 2:
+                mBlockDim = int(LeafT::DIM);
+                break;
+            default:
+                mBlockDim = 4096;
+                break;
             }
         }
     }

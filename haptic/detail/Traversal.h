@@ -60,7 +60,8 @@ inline IndexSegment toIndex(const openvdb::math::Transform& xf, const Segment& s
 
 /// @brief Clip [0, 1] to the t-range inside the box [lo, hi] (index space,
 /// slab method). @return false if the segment misses the box.
-inline bool clip(const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb::Vec3d& hi, double& t0, double& t1) noexcept
+inline bool clip(
+    const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb::Vec3d& hi, double& t0, double& t1) noexcept
 {
     t0 = 0.0;
     t1 = 1.0;
@@ -82,8 +83,7 @@ inline bool clip(const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb:
 /// visit(cell, ta, tb) for each with tb > ta (a cell touched only at an edge
 /// or corner has a zero chord and is skipped). Ties between axes go to the
 /// lowest axis index (openvdb::math::MinIndex): deterministic.
-template <typename Visit>
-inline void walkCells(const IndexSegment& s, double t0, double t1, Visit&& visit) noexcept
+template <typename Visit> inline void walkCells(const IndexSegment& s, double t0, double t1, Visit&& visit) noexcept
 {
     const RayT ray(s.a, s.d, 0.0, 1.0);
     openvdb::math::DDA<RayT, 0> dda(ray, t0, t1);
@@ -100,8 +100,8 @@ inline void walkCells(const IndexSegment& s, double t0, double t1, Visit&& visit
 /// cells whose far corners must stay inside) is handed to run(cell, ta, tExit)
 /// at once. Phantoms and air are mostly uniform tiles; dense CT leaves are not.
 template <typename Uniform, typename Visit, typename Run>
-inline void walkCellsSkipping(const IndexSegment& s, double t0, double t1, int shrink, Uniform&& uniform,
-                              Visit&& visit, Run&& run) noexcept
+inline void walkCellsSkipping(
+    const IndexSegment& s, double t0, double t1, int shrink, Uniform&& uniform, Visit&& visit, Run&& run) noexcept
 {
     const RayT ray(s.a, s.d, 0.0, 1.0);
     openvdb::math::DDA<RayT, 0> dda(ray, t0, t1);
@@ -148,7 +148,7 @@ inline void activeBox(const openvdb::GridBase& g, double pad, openvdb::Vec3d& lo
 /// @brief Accumulates label lengths and first hits, the air outside the box included.
 class LabelTally {
 public:
-    explicit LabelTally(ShaftIntegral& out, double lengthMm) noexcept : mOut(out), mLength(lengthMm) {}
+    explicit LabelTally(ShaftIntegral& out, double lengthMm) noexcept : mOut(out), mLength(lengthMm) { }
     void add(int label, double ta, double tb) noexcept
     {
         if (static_cast<unsigned>(label) >= static_cast<unsigned>(kMaxLabels)) label = 0;
@@ -168,7 +168,7 @@ private:
 /// A non-finite voxel contributes nothing.
 template <typename BetaReader, typename LabelReader>
 inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb::Vec3d& hi, BetaReader* beta,
-                      LabelReader* labels, ShaftIntegral& out) noexcept
+    LabelReader* labels, ShaftIntegral& out) noexcept
 {
     double t0 = 0.0, t1 = 0.0;
     const bool inside = clip(s, lo, hi, t0, t1);
@@ -199,8 +199,7 @@ inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const ope
 
 /// @brief The 8 values at the corners c + {0,1}³ of a trilinear cell; corner i is
 /// (i>>2 & 1, i>>1 & 1, i & 1). Non-finite voxels read as 0.
-template <typename Reader>
-inline void loadCorners(Reader& r, const openvdb::Coord& c, double (&corner)[8]) noexcept
+template <typename Reader> inline void loadCorners(Reader& r, const openvdb::Coord& c, double (&corner)[8]) noexcept
 {
     constexpr int kLast = 7; // a cell whose lower corner is not on a leaf's last plane has all 8 in that leaf
     if ((c.x() & kLast) != kLast && (c.y() & kLast) != kLast && (c.z() & kLast) != kLast) {

@@ -36,7 +36,7 @@ protected:
     {
         const std::filesystem::path out = mDir / "stdout.txt", err = mDir / "stderr.txt";
         const std::string cmd = "cd '" + mDir.string() + "' && " + env + " '" VOXHAP_BINARY_DIR "/bin/voxhap' " + args +
-                                " >'" + out.string() + "' 2>'" + err.string() + "'";
+            " >'" + out.string() + "' 2>'" + err.string() + "'";
         const int status = std::system(cmd.c_str());
         CliResult r;
         r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

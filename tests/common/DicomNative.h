@@ -22,7 +22,8 @@ inline void expectNativeEqualsGdcm(const std::vector<std::filesystem::path>& inp
     for (volume::DicomHeader& h : headers) {
         volume::completeDicomHeader(h);
         volume::DicomFrames native;
-        ASSERT_TRUE(volume::readNativeFrames(h, native)) << h.file << ": not read natively (" << h.transferSyntax << ")";
+        ASSERT_TRUE(volume::readNativeFrames(h, native))
+            << h.file << ": not read natively (" << h.transferSyntax << ")";
         const volume::DicomFrames gdcm = volume::decodeDicomFrames(h.file);
         EXPECT_EQ(native.type, gdcm.type) << h.file;
         EXPECT_EQ(native.bitsStored, gdcm.bitsStored) << h.file;

@@ -29,27 +29,27 @@ struct SyntheticSlice {
     std::string modality = "CT";
     std::string seriesDescription = "synthetic";
     int rows = 12, columns = 16;
-    Vec3d position{-20.0, -30.0, 0.0};   ///< centre of the first pixel [mm, LPS]
+    Vec3d position{-20.0, -30.0, 0.0}; ///< centre of the first pixel [mm, LPS]
     Vec3d rowDirection{1, 0, 0};
     Vec3d columnDirection{0, 1, 0};
     double pixelSpacing[2] = {0.75, 0.5}; ///< between rows, between columns [mm]
     double slope = 1.0, intercept = -1024.0;
-    double gantryTilt = 0.0;             ///< written to (0018,1120) [deg]
-    double fieldStrength = 0.0;          ///< written to (0018,0087) [T] if > 0
+    double gantryTilt = 0.0;    ///< written to (0018,1120) [deg]
+    double fieldStrength = 0.0; ///< written to (0018,0087) [T] if > 0
     /// MR sequence fields (written when not empty / > 0): what the weighting rule reads.
     std::string scanningSequence, sequenceVariant, sequenceName, imageType;
     double repetitionTimeMs = 0, echoTimeMs = 0, flipAngleDeg = 0;
-    int echoNumber = 0;                  ///< (0018,0086) if > 0
-    int acquisitionNumber = 0;           ///< (0020,0012) if > 0
-    int instanceNumber = 0;              ///< (0020,0013) if > 0
-    std::string seriesNumber;            ///< (0020,0011) if not empty
-    std::vector<std::int16_t> pixels;    ///< rows × columns stored values, column fastest
+    int echoNumber = 0;               ///< (0018,0086) if > 0
+    int acquisitionNumber = 0;        ///< (0020,0012) if > 0
+    int instanceNumber = 0;           ///< (0020,0013) if > 0
+    std::string seriesNumber;         ///< (0020,0011) if not empty
+    std::vector<std::int16_t> pixels; ///< rows × columns stored values, column fastest
 };
 
 /// @brief The image fields a single slice and a multi-frame file share: pixel format,
 /// geometry of @p s with slice step @p step, rescale and the pixel data @p pixels.
-inline void setImage(gdcm::Image& img, const SyntheticSlice& s, unsigned frames, double step,
-                     const std::vector<std::int16_t>& pixels)
+inline void setImage(
+    gdcm::Image& img, const SyntheticSlice& s, unsigned frames, double step, const std::vector<std::int16_t>& pixels)
 {
     img.SetNumberOfDimensions(frames > 1 ? 3 : 2); // 3: GDCM writes Enhanced CT with per-frame groups
     img.SetDimension(0, unsigned(s.columns));
@@ -59,8 +59,8 @@ inline void setImage(gdcm::Image& img, const SyntheticSlice& s, unsigned frames,
     img.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
     img.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
     const double origin[3] = {s.position.x(), s.position.y(), s.position.z()};
-    const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(),
-                              s.columnDirection.x(), s.columnDirection.y(), s.columnDirection.z()};
+    const double dircos[6] = {s.rowDirection.x(), s.rowDirection.y(), s.rowDirection.z(), s.columnDirection.x(),
+        s.columnDirection.y(), s.columnDirection.z()};
     const double spacing[3] = {s.pixelSpacing[1], s.pixelSpacing[0], step}; // GDCM: x (between columns), y
     img.SetOrigin(origin);
     img.SetDirectionCosines(dircos);
@@ -87,8 +87,7 @@ inline void setIdentity(gdcm::DataSet& ds, const SyntheticSlice& s, gdcm::UIDs::
 }
 
 /// @brief Read @p file, let @p edit change it, write it back.
-template <typename Edit>
-void rewrite(const std::filesystem::path& file, Edit&& edit)
+template <typename Edit> void rewrite(const std::filesystem::path& file, Edit&& edit)
 {
     gdcm::Reader r;
     r.SetFileName(file.string().c_str());
@@ -166,7 +165,8 @@ inline void relabelTransferSyntax(const std::filesystem::path& file, gdcm::Trans
 
 /// @brief Write @p frames (one slice each, same grid, positions along the
 /// normal with step @p step) as one multi-frame (enhanced) CT file.
-inline void writeSyntheticMultiFrame(const std::vector<SyntheticSlice>& frames, double step, const std::filesystem::path& file)
+inline void writeSyntheticMultiFrame(
+    const std::vector<SyntheticSlice>& frames, double step, const std::filesystem::path& file)
 {
     const SyntheticSlice& s = frames.front();
     std::vector<std::int16_t> all;

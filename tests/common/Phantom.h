@@ -18,9 +18,8 @@ namespace voxhap::test {
 /// (β_fat 3696, β_muscle 8152 N·s/m²) and twice β_muscle for the ligaments.
 inline const std::map<std::string, double>& testBeta()
 {
-    static const std::map<std::string, double> kBeta{
-        {"skin", 8152e-6}, {"fat", 3696e-6}, {"muscle", 8152e-6}, {"interspinous_ligament", 16304e-6},
-        {"ligamentum_flavum", 16304e-6}};
+    static const std::map<std::string, double> kBeta{{"skin", 8152e-6}, {"fat", 3696e-6}, {"muscle", 8152e-6},
+        {"interspinous_ligament", 16304e-6}, {"ligamentum_flavum", 16304e-6}};
     return kBeta;
 }
 

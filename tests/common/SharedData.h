@@ -19,7 +19,10 @@ inline std::filesystem::path realCtDir()
 }
 
 /// The shared data folder beside the project.
-inline std::filesystem::path sharedDataDir() { return std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data"; }
+inline std::filesystem::path sharedDataDir()
+{
+    return std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data";
+}
 
 /// Siemens Trio 3 T head: a T1-weighted MPRAGE (sagittal, 256 × 256 × 176).
 inline std::filesystem::path mprageDir() { return sharedDataDir() / "mr-head-trio" / "t1-mprage"; }
@@ -41,7 +44,7 @@ inline bool sharedDataRequired() { return std::getenv("VOXHAP_REQUIRE_SHARED_DAT
 } // namespace voxhap::test
 
 /// In a test body: skip (locally) or fail (in CI) when @p dir is absent.
-#define VOXHAP_REQUIRE_DIR(dir)                                                                                       \
+#define VOXHAP_REQUIRE_DIR(dir)                                                                                        \
     do {                                                                                                               \
         if (!std::filesystem::is_directory(dir)) {                                                                     \
             if (::voxhap::test::sharedDataRequired()) FAIL() << "shared data missing at " << (dir);                    \

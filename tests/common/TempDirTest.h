@@ -19,7 +19,7 @@ protected:
     {
         const auto* info = testing::UnitTest::GetInstance()->current_test_info();
         mDir = std::filesystem::temp_directory_path() /
-               ("voxhap-" + std::string(info->test_suite_name()) + "-" + std::to_string(::getpid()) + "-" + info->name());
+            ("voxhap-" + std::string(info->test_suite_name()) + "-" + std::to_string(::getpid()) + "-" + info->name());
         std::filesystem::create_directories(mDir);
     }
     void TearDown() override

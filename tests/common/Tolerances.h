@@ -42,8 +42,8 @@ inline testing::AssertionResult nearVec(const Vec3d& a, const Vec3d& b, double t
     for (int i = 0; i < 3; ++i) {
         if (!(std::abs(a[i] - b[i]) <= tol)) {
             std::ostringstream os;
-            os << "component " << i << ": " << a[i] << " vs " << b[i] << " (|diff| " << std::abs(a[i] - b[i])
-               << " > " << tol << ")";
+            os << "component " << i << ": " << a[i] << " vs " << b[i] << " (|diff| " << std::abs(a[i] - b[i]) << " > "
+               << tol << ")";
             return testing::AssertionFailure() << os.str();
         }
     }

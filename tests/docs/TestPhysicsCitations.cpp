@@ -56,7 +56,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSign = "\xC2\xA7";   // the section sign, UTF-8
+const std::string kSign = "\xC2\xA7"; // the section sign, UTF-8
 // The two page names, spelled in two pieces so that this file cites neither.
 const std::string kPhysics = std::string("physics") + ".md";
 const std::string kArchitecture = std::string("architecture") + ".md";
@@ -102,7 +102,8 @@ Flat flatten(std::string_view raw)
         std::size_t i = 0;
         while (i < line.size() && std::string_view(" \t\r/*#!").find(line[i]) != std::string_view::npos) ++i;
         line.remove_prefix(i);
-        while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.remove_suffix(1);
+        while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+            line.remove_suffix(1);
         f.lineStart.push_back(f.text.size());
         f.text.append(line);
         f.text.push_back(' ');
@@ -138,7 +139,7 @@ std::size_t skipSeparator(std::string_view t, std::size_t i)
 {
     i = skipSpaces(t, i);
     for (std::string_view sep : {std::string_view(","), std::string_view(";"), std::string_view("/"),
-                                 std::string_view("-"), std::string_view(kEnDash), std::string_view(kEmDash)}) {
+             std::string_view("-"), std::string_view(kEnDash), std::string_view(kEmDash)}) {
         if (startsWith(t, i, sep)) return skipSpaces(t, i + sep.size());
     }
     for (std::string_view word : {"and", "or", "to"}) {
@@ -186,8 +187,9 @@ bool belongsToPhysics(std::string_view t, std::size_t pos)
     auto [b, word] = wordBefore(e);
     while (!word.empty() && word.back() == '.') word.pop_back(); // "see style.md." is not a document name
     if (word.size() > 3 && word.compare(word.size() - 3, 3, ".md") == 0) {
-        return word == kPhysics || (word.size() > kPhysics.size() && word[word.size() - kPhysics.size() - 1] == '/' &&
-                                    word.compare(word.size() - kPhysics.size(), kPhysics.size(), kPhysics) == 0);
+        return word == kPhysics ||
+            (word.size() > kPhysics.size() && word[word.size() - kPhysics.size() - 1] == '/' &&
+                word.compare(word.size() - kPhysics.size(), kPhysics.size(), kPhysics) == 0);
     }
     static const std::vector<std::string> kStandards{"PS", "RFC", "ISO", "IEC", "IEEE", "DIN", "EN", "NEMA", "ASTM"};
     for (const std::string& s : kStandards) { // "PS3.5", "RFC1952"
@@ -203,7 +205,11 @@ bool belongsToPhysics(std::string_view t, std::size_t pos)
 }
 
 struct Citation {
-    enum Kind { Section, Case, ArchitectureName } kind;
+    enum Kind {
+        Section,
+        Case,
+        ArchitectureName
+    } kind;
     std::string id; ///< "1.2", "7" (Section), "1" (Case R1), a heading name (ArchitectureName)
     int line;
 };
@@ -304,7 +310,9 @@ PhysicsHeadings physicsHeadings(std::string_view md)
         if (startsWith(line, i, kSign)) i = skipSpaces(line, i + kSign.size());
         std::string number;
         const std::size_t end = parseNumber(line, i, number);
-        const auto endsWord = [&](std::size_t e) { return e >= line.size() || line[e] == '.' || line[e] == ' ' || line[e] == ':'; };
+        const auto endsWord = [&](std::size_t e) {
+            return e >= line.size() || line[e] == '.' || line[e] == ' ' || line[e] == ':';
+        };
         if (end != std::string::npos && endsWord(end)) {
             h.sections.insert(number);
             top = number.substr(0, number.find('.'));
@@ -343,7 +351,8 @@ std::set<std::string> architectureNames(std::string_view md)
 /// A file the checker reads (see the file comment).
 bool scanned(const fs::path& p)
 {
-    static const std::set<std::string> kExtensions{".h", ".hpp", ".cpp", ".cc", ".in", ".md", ".json", ".cmake", ".sh", ".py"};
+    static const std::set<std::string> kExtensions{
+        ".h", ".hpp", ".cpp", ".cc", ".in", ".md", ".json", ".cmake", ".sh", ".py"};
     return p.filename() == "CMakeLists.txt" || kExtensions.count(p.extension().string()) > 0;
 }
 
@@ -415,7 +424,10 @@ TEST(CitationMatcher, FindsSectionsListsAndRanges)
     EXPECT_EQ(ids(scanText(sample("PHYS $5.1/$5.4: fat")), Citation::Section), (Ids{"5.1", "5.4"}));
     EXPECT_EQ(ids(scanText(sample("`docs/PHYS` $7 rely on that")), Citation::Section), (Ids{"7"}));
     // Bare section signs are physics.md's unless another document is named.
-    EXPECT_EQ(ids(scanText(sample("the drop (\xC2\xA7" "3.1 T_f)")), Citation::Section), (Ids{"3.1"}));
+    EXPECT_EQ(ids(scanText(sample("the drop (\xC2\xA7"
+                                  "3.1 T_f)")),
+                  Citation::Section),
+        (Ids{"3.1"}));
     EXPECT_EQ(ids(scanText(sample("$3.2 step 2, 0.6 mm")), Citation::Section), (Ids{"3.2"}));
 }
 
@@ -424,15 +436,16 @@ TEST(CitationMatcher, FindsNumbersWithoutTheSectionSign)
     EXPECT_EQ(ids(scanText(sample("\"PHYS 5.1: fat and muscle\"")), Citation::Section), (Ids{"5.1"}));
     EXPECT_EQ(ids(scanText(sample("PHYS sections 2.1-2.3")), Citation::Section), (Ids{"2.1", "2.3"}));
     EXPECT_EQ(ids(scanText(sample("the bone force (PHYS 4)")), Citation::Section), (Ids{"4"}));
-    EXPECT_TRUE(ids(scanText(sample("PHYS tags it [chosen]; not in PHYS; PHYS: layer depths")), Citation::Section).empty());
+    EXPECT_TRUE(
+        ids(scanText(sample("PHYS tags it [chosen]; not in PHYS; PHYS: layer depths")), Citation::Section).empty());
     EXPECT_TRUE(ids(scanText(sample("(PHYS, 2 cases)")), Citation::Section).empty());
 }
 
 TEST(CitationMatcher, LeavesOtherDocumentsAlone)
 {
     for (const char* text : {"HighBit (PS3.5 $8.1.1): shifted", "one stream (RFC 1952 $2.2)", "magic (RFC 1952 $2.3.1)",
-                             "PS3.10 $7.1 uses only", "style.md $2, after CHAI3D", "(docs: style.md $6)",
-                             "Module PS3.3 C.7.6.16 and PS 3.5 $6.2", "see toolchain.md $3.1 and $3.2"}) {
+             "PS3.10 $7.1 uses only", "style.md $2, after CHAI3D", "(docs: style.md $6)",
+             "Module PS3.3 C.7.6.16 and PS 3.5 $6.2", "see toolchain.md $3.1 and $3.2"}) {
         EXPECT_TRUE(scanText(sample(text)).empty()) << text;
     }
     // The document named before a list owns the whole list; physics.md after it starts its own.
@@ -451,8 +464,9 @@ TEST(CitationMatcher, FollowsCitationsAcrossCommentLines)
 TEST(CitationMatcher, FindsRegressionCases)
 {
     EXPECT_EQ(ids(scanText(sample("slab stack (PHYS $7 R1)")), Citation::Case), (Ids{"1"}));
-    EXPECT_EQ(ids(scanText(sample("phantoms of PHYS $7: R2 (table),\n/// R3 (Conci), R4\nTEST(R6, X)")), Citation::Case),
-              (Ids{"2", "3", "4", "6"}));
+    EXPECT_EQ(
+        ids(scanText(sample("phantoms of PHYS $7: R2 (table),\n/// R3 (Conci), R4\nTEST(R6, X)")), Citation::Case),
+        (Ids{"2", "3", "4", "6"}));
     // Relaxation rates and files that do not cite section 7 are not cases.
     EXPECT_EQ(ids(scanText(sample("rate R1 = 1/T1, R2* maps (PHYS $7 R5)")), Citation::Case), (Ids{"5"}));
     EXPECT_TRUE(ids(scanText(sample("R1 and R9 of PHYS $5.1")), Citation::Case).empty());
@@ -461,7 +475,7 @@ TEST(CitationMatcher, FindsRegressionCases)
 TEST(CitationMatcher, FindsQuotedArchitectureHeadings)
 {
     EXPECT_EQ(ids(scanText(sample("(ARCH \"The\n/// force pipeline\", step 2)")), Citation::ArchitectureName),
-              (Ids{"The force pipeline"}));
+        (Ids{"The force pipeline"}));
     EXPECT_TRUE(ids(scanText(sample("(docs: ARCH). Reads")), Citation::ArchitectureName).empty());
 }
 
@@ -479,7 +493,8 @@ TEST(CitationMatcher, ReadsTheHeadingsOfThePhysicsDocument)
 TEST(PhysicsDocument, KeepsSectionsOneToEight)
 {
     ASSERT_TRUE(fs::exists(sourceDir() / "docs" / kPhysics));
-    for (const char* n : {"1", "2", "3", "4", "5", "6", "7", "8"}) EXPECT_TRUE(physics().sections.count(n)) << "section " << n;
+    for (const char* n : {"1", "2", "3", "4", "5", "6", "7", "8"})
+        EXPECT_TRUE(physics().sections.count(n)) << "section " << n;
     for (const char* r : {"1", "2", "3", "4", "5", "6", "7"}) {
         ASSERT_TRUE(physics().cases.count(r)) << "case R" << r;
         EXPECT_EQ(physics().cases.at(r), "7") << "case R" << r << " outside section 7";
@@ -490,7 +505,8 @@ TEST(PhysicsCitations, TheScanReadsTheTree)
 {
     int files = 0;
     const auto& found = tree(&files);
-    const long sections = std::count_if(found.begin(), found.end(), [](const Found& f) { return f.citation.kind == Citation::Section; });
+    const long sections =
+        std::count_if(found.begin(), found.end(), [](const Found& f) { return f.citation.kind == Citation::Section; });
     // The tree cites physics.md about 460 times in some 140 files: far fewer means the walk broke.
     EXPECT_GT(files, 300);
     EXPECT_GT(sections, 300);
@@ -502,7 +518,8 @@ TEST(PhysicsCitations, EveryCitedSectionHasAHeading)
     int n = 0;
     for (const Found& f : tree()) {
         if (f.citation.kind != Citation::Section || physics().sections.count(f.citation.id)) continue;
-        missing << "  " << f.file << ":" << f.citation.line << ": " << kPhysics << " " << kSign << f.citation.id << "\n";
+        missing << "  " << f.file << ":" << f.citation.line << ": " << kPhysics << " " << kSign << f.citation.id
+                << "\n";
         ++n;
     }
     EXPECT_EQ(n, 0) << "citations of sections docs/" << kPhysics << " has no heading for:\n" << missing.str();

@@ -20,9 +20,9 @@ TEST(R2, LumbarPunctureTableReproducesThePrintedForces)
 {
     // physics.md §4, reference |f| at v = 0.02 m/s, to 1e-6 N beyond the printed digits:
     // the printed values are rounded to 4 decimals, so compare with half a unit in the last place.
-    const std::vector<std::pair<double, double>> reference{
-        {6.0, 0.6300}, {6.99, 0.9568}, {10.0, 0.3001}, {20.0, 3.8006}, {29.99, 9.2957},
-        {32.0, 2.5613}, {34.99, 5.4917}, {40.0, 0.2017}, {50.0, 4.7419}, {54.99, 16.568}};
+    const std::vector<std::pair<double, double>> reference{{6.0, 0.6300}, {6.99, 0.9568}, {10.0, 0.3001},
+        {20.0, 3.8006}, {29.99, 9.2957}, {32.0, 2.5613}, {34.99, 5.4917}, {40.0, 0.2017}, {50.0, 4.7419},
+        {54.99, 16.568}};
     for (const auto& [depth, magnitude] : reference) {
         const double f = lumbarPunctureForce(lpTable(), depth, 20.0, +1);
         const double halfUlp = depth == 54.99 ? 5e-4 : 5e-5; // 16.568 has three decimals
@@ -50,7 +50,9 @@ TEST(R2, ClosedFormAtAnyDepthAndSpeed)
 TEST(R3, FittedTableMatchesThePrintedOne)
 {
     // physics.md §3.2 "Fitted table (computed)", to its printed digits.
-    struct Row { double zStart, zt, up, ce0, ce1, ce2, sfMax, tf, cp0; };
+    struct Row {
+        double zStart, zt, up, ce0, ce1, ce2, sfMax, tf, cp0;
+    };
     const std::vector<Row> printed{
         {0, 10.8, 6.48, 0, 0.4658, 0.07189, 6.037, 5.050, 0.987},
         {10.8, 2.8, 1.68, 0.987, 0.2938, 0.17485, 1.974, 0.987, 0.987},
@@ -139,7 +141,7 @@ TEST(R4, SenacNestedBoxesAndPrePunctureStiffness)
     NestedBoxCutting cut{{{0.0, 2.0}, {10.0, 4.0}, {13.0, 4.0}, {28.0, 6.0}}, 0.2};
     EXPECT_EQ(cut.forceN(30.0, 2.0), 16.0);
     EXPECT_EQ(cut.forceN(12.0, 2.0), 6.0);
-    EXPECT_EQ(cut.forceN(30.0, 0.1), 0.0); // below ε
+    EXPECT_EQ(cut.forceN(30.0, 0.1), 0.0);   // below ε
     EXPECT_EQ(cut.forceN(30.0, -2.0), 16.0); // opposes motion either way
 }
 

@@ -38,8 +38,7 @@ IgtlOptions anyPort()
     return o;
 }
 
-template <typename Pred>
-bool waitFor(Pred&& p, double seconds = 5.0)
+template <typename Pred> bool waitFor(Pred&& p, double seconds = 5.0)
 {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (std::chrono::steady_clock::now() < end) {
@@ -83,7 +82,7 @@ public:
         msg->SetMatrix(m);
         msg->Pack();
         std::vector<unsigned char> bytes(static_cast<unsigned char*>(msg->GetPackPointer()),
-                                         static_cast<unsigned char*>(msg->GetPackPointer()) + msg->GetPackSize());
+            static_cast<unsigned char*>(msg->GetPackPointer()) + msg->GetPackSize());
         if (corrupt) bytes[70] ^= 0x5a;
         send(bytes.data(), bytes.size());
     }
@@ -132,14 +131,15 @@ private:
 TEST(Igtl, DebianTrackerClientDrivesTheServer)
 {
 #ifndef VOXHAP_IGTL_TRACKER_CLIENT
-    GTEST_SKIP() << "Debian's openigtlink-examples is not installed: no TrackerClient to build (tools/setup.sh installs it)";
+    GTEST_SKIP()
+        << "Debian's openigtlink-examples is not installed: no TrackerClient to build (tools/setup.sh installs it)";
 #else
     IgtlDevice dev(anyPort(), DeviceLimits{});
     const pid_t child = ::fork();
     if (child == 0) {
         ::freopen("/dev/null", "w", stdout);
         ::execl(VOXHAP_IGTL_TRACKER_CLIENT, "TrackerClient", "127.0.0.1", std::to_string(dev.port()).c_str(), "50",
-                static_cast<char*>(nullptr));
+            static_cast<char*>(nullptr));
         ::_exit(127);
     }
     ASSERT_GT(child, 0);
@@ -184,10 +184,10 @@ TEST(Igtl, MalformedInputLeavesTheServerAlive)
         RawClient c(dev.port());
         ASSERT_TRUE(c.ok());
         ASSERT_TRUE(waitFor([&] { return dev.counters().connections.load() > connections; })); // this client, accepted
-        if (kind == 0) c.send(garbage.data(), garbage.size());    // garbage
-        if (kind == 1) c.send(huge, sizeof huge);                  // a huge body size
-        if (kind == 2) c.sendPose(Vec3d(99.0, 99.0, 99.0), true);  // a bad CRC
-        if (kind == 3) c.send(huge, 20), c.close();                // half a header, then gone
+        if (kind == 0) c.send(garbage.data(), garbage.size());                                 // garbage
+        if (kind == 1) c.send(huge, sizeof huge);                                              // a huge body size
+        if (kind == 2) c.sendPose(Vec3d(99.0, 99.0, 99.0), true);                              // a bad CRC
+        if (kind == 3) c.send(huge, 20), c.close(); // half a header, then gone
         EXPECT_TRUE(waitFor([&] { return !dev.connected(); })) << "kind " << kind;
         c.close();
         const DeviceReading r = dev.read(0.0);

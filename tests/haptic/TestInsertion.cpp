@@ -88,9 +88,8 @@ TEST(InsertionR2, LumbarPunctureTableThroughThePipeline)
     t.karnoppDeltaVMmPerS = 10.0; // the paper's Δv: 20 mm/s is above it
     NeedleForceModel m(fixedLayers(r, table()), kPath, t, Needle{}, benchDevice());
     // depth from the table's start (5 mm out of the skin) → |f| [N], physics.md §4
-    const std::pair<double, double> ref[] = {{6, 0.6300},   {6.99, 0.9568},  {10, 0.3001}, {20, 3.8006},
-                                             {29.99, 9.2957}, {32, 2.5613}, {34.99, 5.4917}, {40, 0.2017},
-                                             {50, 4.7419},   {54.99, 16.568}};
+    const std::pair<double, double> ref[] = {{6, 0.6300}, {6.99, 0.9568}, {10, 0.3001}, {20, 3.8006}, {29.99, 9.2957},
+        {32, 2.5613}, {34.99, 5.4917}, {40, 0.2017}, {50, 4.7419}, {54.99, 16.568}};
     int matched = 0;
     // 0.01 mm per tick at 20 mm/s and 2 kHz: every reference depth is a tick.
     drive(m, -5.0, 50.0, 20.0, 2000.0, [&](double d, const NeedleOutput& o) {
@@ -216,8 +215,9 @@ TEST(InsertionR6, BoneTransientAndNoSliding)
         }
         if (contactTick >= 0) {
             const double tn = double(tick - contactTick) * T;
-            const double expected =
-                tn > 0.0 ? 150.0 * std::exp(std::log(0.01) * tn / 0.040) * std::sin(2.0 * kPi * 100.0 * tn) * v * 1e-3 : 0.0;
+            const double expected = tn > 0.0
+                ? 150.0 * std::exp(std::log(0.01) * tn / 0.040) * std::sin(2.0 * kPi * 100.0 * tn) * v * 1e-3
+                : 0.0;
             EXPECT_NEAR(o.terms.transient, std::clamp(expected, -2.0, 2.0), 1e-12) << "tick " << tick - contactTick;
             EXPECT_NEAR(o.terms.bone, 0.5 * (d - 10.0), 1e-12);
         }

@@ -27,14 +27,15 @@ TEST(T1DampingLaw, ReproducesTheFittedFatAndMuscleValues)
 {
     for (FieldStrength f : {FieldStrength::T1_5, FieldStrength::T3}) {
         const T1DampingLaw law = t1DampingLaw(f);
-        const double fatT1 = f == FieldStrength::T3 ? 382.0 : 290.0;   // §5.1
+        const double fatT1 = f == FieldStrength::T3 ? 382.0 : 290.0; // §5.1
         const double muscleT1 = f == FieldStrength::T3 ? 898.0 : 856.0;
         // §5.4: beta_fat = 3696, beta_muscle = 8152 N·s/m² = 3696e-6, 8152e-6 N·s/mm².
         EXPECT_NEAR(law.dampingNsPerMm2(fatT1), 3696e-6, kFitRounding * 3696e-6);
         EXPECT_NEAR(law.dampingNsPerMm2(muscleT1), 8152e-6, kFitRounding * 8152e-6);
         // Ratio 4.354/1.974 = 2.206, the [C-ui] puncture-force ratio the fit targets; the
         // ratio of two values each off by kFitRounding is off by at most twice that.
-        EXPECT_NEAR(law.dampingNsPerMm2(muscleT1) / law.dampingNsPerMm2(fatT1), 4.354 / 1.974, 2.0 * kFitRounding * 2.206);
+        EXPECT_NEAR(
+            law.dampingNsPerMm2(muscleT1) / law.dampingNsPerMm2(fatT1), 4.354 / 1.974, 2.0 * kFitRounding * 2.206);
     }
 }
 
@@ -67,8 +68,7 @@ TEST(ModulusLaws, MatchThePhysicsExamples)
 }
 
 /// The value of a grid at a world point (its nearest voxel).
-template <typename GridT>
-double at(const GridT& g, const Vec3d& world)
+template <typename GridT> double at(const GridT& g, const Vec3d& world)
 {
     const auto ijk = g.transform().worldToIndex(volume::toVdb(world));
     return double(g.getConstAccessor().getValue(openvdb::Coord::round(ijk)));

@@ -22,8 +22,7 @@
 namespace voxhap::haptic {
 namespace {
 
-template <typename Pred>
-bool waitUntil(Pred&& p, double seconds = 5.0)
+template <typename Pred> bool waitUntil(Pred&& p, double seconds = 5.0)
 {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (std::chrono::steady_clock::now() < end) {

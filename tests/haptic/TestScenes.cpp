@@ -46,8 +46,9 @@ SceneRun simulate(const std::string& name, std::optional<double> depth = std::nu
     const Scene& scene = inst.scene();
     auto model = inst.makeModel();
     const double to = depth.value_or(scene.depthMm.value_or((inst.target() - inst.entry()).norm()));
-    SceneRun r{runInsertion(*model, InsertionScript::constantSpeed(-scene.approachMm, to, scene.speedMmPerS), scene.rateHz),
-          inst.layers()};
+    SceneRun r{
+        runInsertion(*model, InsertionScript::constantSpeed(-scene.approachMm, to, scene.speedMmPerS), scene.rateHz),
+        inst.layers()};
     return r;
 }
 
@@ -68,7 +69,8 @@ double first(const SceneRun& r, EventType t)
 TEST(Scenes, AllBuiltinScenesParse)
 {
     const std::vector<std::string> names = builtinSceneNames();
-    for (const char* expected : {"kyung", "senac-average", "senac-overweight", "senac-calcified", "conci", "lumbar-puncture"}) {
+    for (const char* expected :
+        {"kyung", "senac-average", "senac-overweight", "senac-calcified", "conci", "lumbar-puncture"}) {
         EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
     }
     for (const std::string& n : names) EXPECT_NO_THROW(loadScene(n)) << n;
@@ -195,18 +197,22 @@ TEST(Scenes, BadScenesNameFileAndField)
     const std::string head = R"({"schema": "voxhap-scene/1", "name": "x", "model": "senac", )";
     EXPECT_NE(message("{").find("bad.json: not valid JSON"), std::string::npos);
     EXPECT_NE(message(head + R"("terms": {"tip": true}, "colour": 1})").find("bad.json: colour: unknown field"),
-              std::string::npos);
-    EXPECT_NE(message(head + R"("terms": {"lor": {"time_constant_ms": -1}}})").find("terms.lor.time_constant_ms: must be positive"),
-              std::string::npos);
-    EXPECT_NE(message(head + R"("terms": {}, "needle": {"gauge": 40}})").find("needle: needle: gauge 40 outside 14..27"),
-              std::string::npos);
-    EXPECT_NE(message(R"({"schema": "voxhap-scene/1", "name": "x", "model": "magic", "terms": {}})").find("model: unknown force model"),
-              std::string::npos);
-    EXPECT_NE(message(R"({"schema": "voxhap-scene/1", "name": "x", "model": "senac"})").find("bad.json: terms: missing"),
-              std::string::npos);
+        std::string::npos);
+    EXPECT_NE(message(head + R"("terms": {"lor": {"time_constant_ms": -1}}})")
+                  .find("terms.lor.time_constant_ms: must be positive"),
+        std::string::npos);
+    EXPECT_NE(
+        message(head + R"("terms": {}, "needle": {"gauge": 40}})").find("needle: needle: gauge 40 outside 14..27"),
+        std::string::npos);
+    EXPECT_NE(message(R"({"schema": "voxhap-scene/1", "name": "x", "model": "magic", "terms": {}})")
+                  .find("model: unknown force model"),
+        std::string::npos);
+    EXPECT_NE(
+        message(R"({"schema": "voxhap-scene/1", "name": "x", "model": "senac"})").find("bad.json: terms: missing"),
+        std::string::npos);
     EXPECT_NE(message(head + R"("terms": {}, "overrides": {"dura": {"puncture_force_N": "8"}}})")
                   .find("overrides.dura.puncture_force_N: must be a finite number"),
-              std::string::npos);
+        std::string::npos);
     EXPECT_THROW(loadScene("no-such-scene"), IoError);
 }
 
@@ -227,15 +233,16 @@ TEST(Scenes, LockedProfileMatchesExactTraversal)
     IntegratorOptions o;
     o.trackLabels = true;
     NeedleForceModel exact(inst.layers(), withProfile->path(), scene.terms, scene.needle, scene.device,
-                           makeIntegrator(*inst.field(), o), inst.field());
+        makeIntegrator(*inst.field(), o), inst.field());
     const double depth = (inst.target() - inst.entry()).norm();
     const InsertionScript script = InsertionScript::constantSpeed(-5.0, depth, 10.0);
     const InsertionResult a = runInsertion(*withProfile, script, 1000.0);
     const InsertionResult b = runInsertion(exact, script, 1000.0);
     ASSERT_EQ(a.rows.size(), b.rows.size());
     double worst = 0.0;
-    for (std::size_t i = 0; i < a.rows.size(); ++i) worst = std::max(worst, std::abs(a.rows[i].axialN - b.rows[i].axialN));
-    EXPECT_LT(worst, 1e-9); // N: cumulative-sum round-off over ~100 mm of 0.5 mm voxels
+    for (std::size_t i = 0; i < a.rows.size(); ++i)
+        worst = std::max(worst, std::abs(a.rows[i].axialN - b.rows[i].axialN));
+    EXPECT_LT(worst, 1e-9);               // N: cumulative-sum round-off over ~100 mm of 0.5 mm voxels
     EXPECT_GT(a.summary.peakModelN, 0.1); // and there was damping to compare
 }
 

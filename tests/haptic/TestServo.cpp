@@ -84,7 +84,8 @@ TEST(Servo, HandStopsAtBone)
     DeviceLimits dev;
     dev.maxForceN = dev.maxContinuousForceN = 8.5;
     dev.maxStiffnessNPerMm = 2.0;
-    NeedleForceModel model(test::fatOverBone(20.0, 0.5), NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)}, terms, Needle{}, dev);
+    NeedleForceModel model(
+        test::fatOverBone(20.0, 0.5), NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)}, terms, Needle{}, dev);
     HandParams p;
     p.speedMmPerS = 10.0;
     p.stopOnLor = false;
@@ -106,7 +107,7 @@ TEST(Servo, HandStopsAtBone)
 /// A device that stops answering after a number of readings.
 class QuietDevice final : public Device {
 public:
-    QuietDevice(Device& inner, long answers) : mInner(inner), mLeft(answers) {}
+    QuietDevice(Device& inner, long answers) : mInner(inner), mLeft(answers) { }
     DeviceReading read(double t) noexcept override
     {
         DeviceReading r = mInner.read(t);
@@ -194,7 +195,8 @@ TEST(Session, RecordWriteReadReplay)
     loop.runTicks(15000);
     const Session original = record(loop);
     ASSERT_EQ(original.records.size(), 15000u);
-    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("voxhap-session-" + std::to_string(::getpid()));
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("voxhap-session-" + std::to_string(::getpid()));
     writeSession(original, model->layers(), dir);
     const std::vector<ServoRecord> poses = readSessionPoses(dir / "session.csv");
     std::filesystem::remove_all(dir);

@@ -211,7 +211,7 @@ TEST_P(R1, ExactTrilinearIsTheLimitOfTheTrilinearMarch)
             const auto [sumJump, maxJump] = r1Jumps(s * cosT + 0.5 * h);
             // Against the fine march: only its trapezoid term remains (§7 R1, second term).
             EXPECT_LE(std::abs(a.dampingIntegral - b.dampingIntegral),
-                      sumJump * cosT * fine.stepMm * fine.stepMm / (4.0 * h) + 1e-14);
+                sumJump * cosT * fine.stepMm * fine.stepMm / (4.0 * h) + 1e-14);
             // Against the piecewise-constant closed form: only the smearing term (Δs -> 0), which
             // this exact integral attains with the tip on a boundary (1e-9 relative for round-off).
             EXPECT_LE(std::abs(a.dampingIntegral - r1Exact(s, cosT)), maxJump * h / (8.0 * cosT) * (1.0 + 1e-9));
@@ -239,7 +239,7 @@ TEST_P(R1, ProfileOnTheLockedLineIsExact)
 }
 
 INSTANTIATE_TEST_SUITE_P(Spacings, R1, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),
-                         [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
+    [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
 /// physics.md §7 R5: sphere of radius R (β_s) in a slab (β0), isotropic and anisotropic voxels.
 class R5 : public testing::TestWithParam<Vec3d> {
@@ -315,7 +315,7 @@ TEST_P(R5, ExactVoxelEqualsSupersampledVoxelField)
 }
 
 INSTANTIATE_TEST_SUITE_P(Spacings, R5, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.5)),
-                         [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
+    [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
 } // namespace
 } // namespace voxhap::haptic

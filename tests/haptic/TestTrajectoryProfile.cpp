@@ -41,7 +41,7 @@ std::vector<std::pair<Vec3d, Vec3d>> paths()
     for (double tilt : {0.0, 8.0, 15.0, 25.0}) {
         for (double az : {0.0, 70.0, 200.0}) {
             const Vec3d u = Eigen::AngleAxisd(degToRad(az), Vec3d::UnitY()) *
-                            (Eigen::AngleAxisd(degToRad(tilt), Vec3d::UnitX()) * Vec3d(0, -1, 0));
+                (Eigen::AngleAxisd(degToRad(tilt), Vec3d::UnitX()) * Vec3d(0, -1, 0));
             out.emplace_back(Vec3d(0.31, 0.0, -0.17), u);
         }
     }
@@ -99,8 +99,7 @@ TEST_F(Profile, OffTheLineWithinTheDocumentedBound)
             const double bound = profile.errorBound(seg);
             // The bound covers the sampling difference; 1e-12 relative covers round-off in the
             // ℓ'/ℓ rescaling and the cumulative sums (a few ulps over ~300 runs).
-            ASSERT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), bound + 1e-12 * b.dampingIntegral)
-                << "s " << s;
+            ASSERT_LE(std::abs(a.dampingIntegral - b.dampingIntegral), bound + 1e-12 * b.dampingIntegral) << "s " << s;
             nonZeroBounds += bound > 0.0;
             zeroError += a.dampingIntegral == b.dampingIntegral;
             ++count;

@@ -16,7 +16,7 @@ namespace voxhap::planning {
 namespace {
 
 const std::vector<MarkupLine> kLines{{"best", Vec3d(31.5, 1.25, -2.0), Vec3d(5.0, -78.0, 0.0)},
-                                     {"second", Vec3d(-40.0, -3.0, 10.0), Vec3d(5.0, -78.0, 0.0)}};
+    {"second", Vec3d(-40.0, -3.0, 10.0), Vec3d(5.0, -78.0, 0.0)}};
 
 TEST(Markups, HasTheFieldsSlicersSchemaRequires)
 {
@@ -44,7 +44,7 @@ TEST(Markups, HasTheFieldsSlicersSchemaRequires)
     }
 }
 
-class MarkupsFile : public test::TempDirTest {};
+class MarkupsFile : public test::TempDirTest { };
 
 TEST_F(MarkupsFile, RoundTripsThroughAFile)
 {
@@ -82,11 +82,13 @@ TEST(Markups, BadFieldsAreNamed)
     };
     EXPECT_NE(message("{").find("bad.mrk.json: not valid JSON"), std::string::npos);
     EXPECT_NE(message(R"({"markups": 3})").find("markups: must be an array"), std::string::npos);
-    EXPECT_NE(message(R"({"markups": [{"type": "Line", "controlPoints": [{"position": [1, 2]}, {"position": [1, 2, 3]}]}]})")
-                  .find("markups[0].controlPoints[0].position"),
-              std::string::npos);
-    EXPECT_NE(message(R"({"markups": [{"type": "Line", "coordinateUnits": "um", "controlPoints": []}]})").find("coordinateUnits"),
-              std::string::npos);
+    EXPECT_NE(
+        message(R"({"markups": [{"type": "Line", "controlPoints": [{"position": [1, 2]}, {"position": [1, 2, 3]}]}]})")
+            .find("markups[0].controlPoints[0].position"),
+        std::string::npos);
+    EXPECT_NE(message(R"({"markups": [{"type": "Line", "coordinateUnits": "um", "controlPoints": []}]})")
+                  .find("coordinateUnits"),
+        std::string::npos);
     EXPECT_NE(message(R"({"markups": [{"type": "Fiducial"}]})").find("no Line markup"), std::string::npos);
 }
 

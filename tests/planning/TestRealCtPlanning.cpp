@@ -78,7 +78,8 @@ TEST_F(RealCtPlanning, PosteriorPathToAVertebralBodyCrossesOnlySkinFatMuscleAndB
     // Independent of the distance fields the search relied on: voxel-centre
     // distances of each segmented critical structure to the path.
     for (const auto& c : best.clearances) {
-        EXPECT_GE(test::bruteForceClearance(*s.v, c.tissue, best.entry, best.target), s.planner->options().minClearanceMm)
+        EXPECT_GE(
+            test::bruteForceClearance(*s.v, c.tissue, best.entry, best.target), s.planner->options().minClearanceMm)
             << c.tissue;
     }
 }

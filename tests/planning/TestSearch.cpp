@@ -27,13 +27,15 @@ TEST(DirectionGrid, CoversTheCapEvenly)
     for (std::size_t i = 0; i < dirs.size(); ++i) {
         EXPECT_NEAR(dirs[i].norm(), 1.0, 1e-12);
         EXPECT_LE(deg(std::acos(std::clamp(dirs[i].dot(axis), -1.0, 1.0))), maxDeg + 1e-9);
-        for (std::size_t j = 0; j < i; ++j) minPair = std::min(minPair, deg(std::acos(std::clamp(dirs[i].dot(dirs[j]), -1.0, 1.0))));
+        for (std::size_t j = 0; j < i; ++j)
+            minPair = std::min(minPair, deg(std::acos(std::clamp(dirs[i].dot(dirs[j]), -1.0, 1.0))));
     }
     // Rings are `step` apart and each ring's azimuths about `step` apart: no two
     // directions closer than half a step, and the count is near the cap's area over step².
     EXPECT_GT(minPair, 0.5 * step);
     const double capArea = 2 * kPi * (1 - std::cos(degToRad(maxDeg)));
-    EXPECT_NEAR(double(dirs.size()), capArea / std::pow(degToRad(step), 2), 0.25 * capArea / std::pow(degToRad(step), 2));
+    EXPECT_NEAR(
+        double(dirs.size()), capArea / std::pow(degToRad(step), 2), 0.25 * capArea / std::pow(degToRad(step), 2));
 }
 
 TEST(Pareto, KeepsExactlyTheNonDominated)
@@ -44,8 +46,8 @@ TEST(Pareto, KeepsExactlyTheNonDominated)
         return r;
     };
     // b dominates d (better clearance, same length, less force); a, b, c trade off.
-    const std::vector<TrajectoryReport> v{make(10, 80, 3), make(20, 90, 2), make(5, 70, 4), make(15, 90, 2.5),
-                                          make(40, 100, 5)};
+    const std::vector<TrajectoryReport> v{
+        make(10, 80, 3), make(20, 90, 2), make(5, 70, 4), make(15, 90, 2.5), make(40, 100, 5)};
     const auto front = paretoFront(v, 30.0);
     // With the band at 30 mm, e's clearance counts as 30: still the best, so kept.
     EXPECT_EQ(front, (std::vector<std::size_t>{0, 1, 2, 4}));
@@ -56,7 +58,8 @@ TEST(Pareto, AgreesWithTheDefinitionOnRandomCandidates)
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> c(0, 40), l(60, 150), f(0, 8);
     std::vector<TrajectoryReport> v(300);
-    for (auto& r : v) r.minClearanceMm = std::round(c(rng)), r.lengthMm = std::round(l(rng)), r.peakForceN = std::round(f(rng));
+    for (auto& r : v)
+        r.minClearanceMm = std::round(c(rng)), r.lengthMm = std::round(l(rng)), r.peakForceN = std::round(f(rng));
     const double band = 30.0;
     // The definition, pair by pair: kept unless another is no worse in all three and better in one.
     std::vector<std::size_t> expected;
@@ -65,7 +68,7 @@ TEST(Pareto, AgreesWithTheDefinitionOnRandomCandidates)
         for (std::size_t j = 0; j < v.size() && !dominated; ++j) {
             const double ci = std::min(v[i].minClearanceMm, band), cj = std::min(v[j].minClearanceMm, band);
             dominated = cj >= ci && v[j].lengthMm <= v[i].lengthMm && v[j].peakForceN <= v[i].peakForceN &&
-                        (cj > ci || v[j].lengthMm < v[i].lengthMm || v[j].peakForceN < v[i].peakForceN);
+                (cj > ci || v[j].lengthMm < v[i].lengthMm || v[j].peakForceN < v[i].peakForceN);
         }
         if (!dominated) expected.push_back(i);
     }

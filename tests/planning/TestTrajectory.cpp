@@ -46,8 +46,10 @@ TEST(Trajectory, ReferencePathSegmentsFollowThePhantomGeometry)
             EXPECT_EQ(f.model.classify(f.entry + mid * u), s.label) << s.tissue << " at " << mid << " mm";
         }
         if (i + 1 < r.segments.size()) {
-            EXPECT_EQ(f.model.classify(f.entry + (s.endMm - kBoundaryMm) * u), s.label) << "before the end of " << s.tissue;
-            EXPECT_NE(f.model.classify(f.entry + (s.endMm + kBoundaryMm) * u), s.label) << "after the end of " << s.tissue;
+            EXPECT_EQ(f.model.classify(f.entry + (s.endMm - kBoundaryMm) * u), s.label)
+                << "before the end of " << s.tissue;
+            EXPECT_NE(f.model.classify(f.entry + (s.endMm + kBoundaryMm) * u), s.label)
+                << "after the end of " << s.tissue;
         }
     }
     // The vertebral body's shell and marrow hold the lesion: bone, but not an obstacle.
@@ -85,7 +87,8 @@ TEST(Trajectory, PathThroughTheKidneyIsFlagged)
     EXPECT_TRUE(r.hasWarning("critical_breach"));
     EXPECT_EQ(r.nearestStructure, "kidney");
     EXPECT_LT(r.minClearanceMm, 0.0);
-    const bool crossesKidney = std::any_of(r.segments.begin(), r.segments.end(), [](const auto& s) { return s.tissue == "kidney"; });
+    const bool crossesKidney =
+        std::any_of(r.segments.begin(), r.segments.end(), [](const auto& s) { return s.tissue == "kidney"; });
     EXPECT_TRUE(crossesKidney);
     EXPECT_GE(r.risk.total, 100.0); // the breach term alone (RiskScore.h)
 }
@@ -94,8 +97,8 @@ TEST(Trajectory, TooShortNeedleAndForceLimitAreWarned)
 {
     const auto& f = torso();
     haptic::Scene short_ = f.scene;
-    short_.needle.lengthMm = 40.0;      // shorter than the ~80 mm path
-    short_.device.maxForceN = 1e-3;     // any resistance exceeds it
+    short_.needle.lengthMm = 40.0;  // shorter than the ~80 mm path
+    short_.device.maxForceN = 1e-3; // any resistance exceeds it
     const Planner p(f.volume, test::table(), short_);
     const TrajectoryReport r = p.analyze(f.entry, f.lesion);
     EXPECT_TRUE(r.hasWarning("needle_too_short"));
@@ -136,8 +139,8 @@ TEST(ForcePrediction, MatchesTheSimulatedInsertionBeforeBoneContact)
 
     const haptic::SceneInstance inst(f.scene, f.volume, test::table(), f.entry, f.lesion);
     auto model = inst.makeModel();
-    const auto sim = haptic::runInsertion(
-        *model, haptic::InsertionScript::constantSpeed(-f.scene.approachMm, r.contactMm, f.scene.speedMmPerS), f.scene.rateHz);
+    const auto sim = haptic::runInsertion(*model,
+        haptic::InsertionScript::constantSpeed(-f.scene.approachMm, r.contactMm, f.scene.speedMmPerS), f.scene.rateHz);
     // The stick-slip proxy lags its slip point by F/k (k the device's stiffness) and
     // the damping integral changes by at most β_max·v_ref per mm of lag; the skin's
     // first mm is where that lag is largest. 0.15 N is about 2% of the 6 N cap.

@@ -19,8 +19,8 @@ namespace voxhap::test {
 /// A sphere of @p core tissue (a cortical-bone core inside shells when @p graded)
 /// in fat, in an asymmetric box; air outside.
 struct SpherePhantom {
-    Vec3d centre{8.0, -12.0, 5.0};              ///< [mm, LPS]
-    double radius = 6.0;                        ///< [mm]
+    Vec3d centre{8.0, -12.0, 5.0}; ///< [mm, LPS]
+    double radius = 6.0;           ///< [mm]
     volume::WorldBox box{Vec3d(-30, -40, -25), Vec3d(20, 10, 35)};
     bool graded = false; ///< cortical core r/3, cancellous to 2r/3, aorta to r: a peak at the centre
 
@@ -45,7 +45,8 @@ struct SpherePhantom {
 /// of @p pixelMm pixels whose field of view is the box [@p lo, @p hi]:
 /// axial from the feet (x = L, y = P), coronal and 3D from the front (x = L, y = I),
 /// sagittal from the patient's left (x = P, y = I).
-inline render::Vec2d expectedPixel(const std::string& view, const Vec3d& p, const Vec3d& lo, const Vec3d& hi, double pixelMm)
+inline render::Vec2d expectedPixel(
+    const std::string& view, const Vec3d& p, const Vec3d& lo, const Vec3d& hi, double pixelMm)
 {
     const auto at = [&](double fromEdgeMm) { return fromEdgeMm / pixelMm - 0.5; };
     if (view == "axial") return {at(p.x() - lo.x()), at(p.y() - lo.y())};
@@ -54,8 +55,7 @@ inline render::Vec2d expectedPixel(const std::string& view, const Vec3d& p, cons
 }
 
 /// Centroid of the pixels for which @p keep is true; NaN if none.
-template <typename Keep>
-render::Vec2d centroid(const render::Image& img, Keep&& keep)
+template <typename Keep> render::Vec2d centroid(const render::Image& img, Keep&& keep)
 {
     double sx = 0, sy = 0, n = 0;
     for (int y = 0; y < img.height(); ++y) {

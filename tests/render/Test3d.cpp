@@ -59,7 +59,8 @@ protected:
         style.caster = caster;
         style.window = {2000.0, 900.0}; // the core (1850 HU) near white, the shells darker
         style.criticalSurfaces = labels;
-        VolumeView3d view(rv, mFrame, style, volume::TissueTable::builtin(), Overlays{{}, {}, {}, "", false, false, ""});
+        VolumeView3d view(
+            rv, mFrame, style, volume::TissueTable::builtin(), Overlays{{}, {}, {}, "", false, false, ""});
         return view.render();
     }
     static DisplayGuard* sDisplay;

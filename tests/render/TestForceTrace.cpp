@@ -23,17 +23,18 @@ TEST_F(Recordings, SessionWithEventsBeside)
 {
     // Pulled back once in the fat, then on into the muscle.
     write("session.csv",
-          "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,fault,"
-          "critical,plunger_fraction\n"
-          "0.0,0,1,0,0,-1,0,0,0,0,0,-1,0,,outside,0,0,nan\n"
-          "0.1,0,-1,0,0,-1,0,0,3,4,0.5,1,2,skin,punctured,0,0,nan\n"
-          "0.2,0,-3,0,0,-1,0,0,0,0,0,3,1,fat,punctured,0,0,nan\n"
-          "0.3,0,-5,0,0,-1,0,0,0,0,0,5,1,fat,punctured,0,0,nan\n"
-          "0.4,0,-4,0,0,-1,0,0,0,0,0,4,1,fat,punctured,0,0,nan\n"
-          "0.5,0,-7,0,0,-1,0,0,0,0,0,7,1,fat,punctured,0,0,nan\n"
-          "0.6,0,-9,0,0,-1,0,0,0,0,0,9,1,muscle,punctured,0,0,nan\n");
-    write("events.csv", "t_s,depth_mm,event,layer\n0.05,0,skin_contact,skin\n0.1,1,pop,skin\n0.1,1,skin_entry,skin\n"
-                        "0.6,9,pop,muscle\n");
+        "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,fault,"
+        "critical,plunger_fraction\n"
+        "0.0,0,1,0,0,-1,0,0,0,0,0,-1,0,,outside,0,0,nan\n"
+        "0.1,0,-1,0,0,-1,0,0,3,4,0.5,1,2,skin,punctured,0,0,nan\n"
+        "0.2,0,-3,0,0,-1,0,0,0,0,0,3,1,fat,punctured,0,0,nan\n"
+        "0.3,0,-5,0,0,-1,0,0,0,0,0,5,1,fat,punctured,0,0,nan\n"
+        "0.4,0,-4,0,0,-1,0,0,0,0,0,4,1,fat,punctured,0,0,nan\n"
+        "0.5,0,-7,0,0,-1,0,0,0,0,0,7,1,fat,punctured,0,0,nan\n"
+        "0.6,0,-9,0,0,-1,0,0,0,0,0,9,1,muscle,punctured,0,0,nan\n");
+    write("events.csv",
+        "t_s,depth_mm,event,layer\n0.05,0,skin_contact,skin\n0.1,1,pop,skin\n0.1,1,skin_entry,skin\n"
+        "0.6,9,pop,muscle\n");
     const ForceTrace t = readForceTrace(mDir);
     ASSERT_EQ(t.samples.size(), 7u);
     EXPECT_DOUBLE_EQ(t.samples[1].renderedN, 5.0); // |(0, 3, 4)|
@@ -50,10 +51,11 @@ TEST_F(Recordings, SessionWithEventsBeside)
 
 TEST_F(Recordings, InsertionCsvEventsPerRow)
 {
-    write("insertion.csv", "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n"
-                           "0,-1,2,0,0,0,0,0,0,outside,,\n"
-                           "1,2,2,0,1.5,0,1.5,1.6,0,punctured,skin,pop;skin_entry\n"
-                           "2,4,2,0,2,0,2,2.1,0,punctured,fat,\n");
+    write("insertion.csv",
+        "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n"
+        "0,-1,2,0,0,0,0,0,0,outside,,\n"
+        "1,2,2,0,1.5,0,1.5,1.6,0,punctured,skin,pop;skin_entry\n"
+        "2,4,2,0,2,0,2,2.1,0,punctured,fat,\n");
     const ForceTrace t = readForceTrace(mDir / "insertion.csv");
     ASSERT_EQ(t.samples.size(), 3u);
     EXPECT_DOUBLE_EQ(t.samples[2].renderedN, 2.0);
@@ -65,12 +67,14 @@ TEST_F(Recordings, InsertionCsvEventsPerRow)
 
 TEST_F(Recordings, RefusedWithFileLineAndColumn)
 {
-    write("a.csv", "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n"
-                   "0,oops,2,0,0,0,0,0,0,outside,,\n");
+    write("a.csv",
+        "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n"
+        "0,oops,2,0,0,0,0,0,0,outside,,\n");
     test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "a.csv", "line 2: depth_mm");
     write("b.csv", "t_s,depth_mm\n0,1\n");
     test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "b.csv", "neither");
-    write("c.csv", "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n0,1\n");
+    write("c.csv",
+        "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n0,1\n");
     test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "c.csv", "line 2: 2 fields");
     test::expectRefused<IoError>([](const auto& p) { readForceTrace(p); }, mDir / "absent.csv", "cannot open");
 }

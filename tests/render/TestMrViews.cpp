@@ -41,10 +41,7 @@ double ramp(double x) { return 0.5 * (kRampLow + kRampHigh) + x * (kRampHigh - k
 // the body, which a robust range ignores and a min..max range does not.
 constexpr double kSpike = 5000.0;
 bool inSpike(const Vec3d& p) { return p.x() > 20 && p.x() < 30 && p.y() > -5 && p.y() < 5 && p.z() > 4 && p.z() < 14; }
-bool inBody(const Vec3d& p)
-{
-    return std::hypot(p.x() / kHalfX, p.y() / kHalfY) < 1.0 && std::abs(p.z()) < kHalfZ;
-}
+bool inBody(const Vec3d& p) { return std::hypot(p.x() / kHalfX, p.y() / kHalfY) < 1.0 && std::abs(p.z()) < kHalfZ; }
 
 /// The phantom on a 1 mm lattice in @p channel; air is the inactive background.
 volume::Volume mrPhantom(volume::Channel channel)
@@ -178,7 +175,8 @@ int legendLinePixels(const Image& img)
     const int scale = 1, th = textHeight(scale);
     int n = 0;
     for (int y = kMarginPx + th + 2; y < kMarginPx + 2 * th + 2; ++y) {
-        for (int x = kMarginPx; x < std::min(img.width(), kMarginPx + 20 * 6); ++x) n += img.at(x, y) == Rgb{255, 255, 255};
+        for (int x = kMarginPx; x < std::min(img.width(), kMarginPx + 20 * 6); ++x)
+            n += img.at(x, y) == Rgb{255, 255, 255};
     }
     return n;
 }
@@ -213,7 +211,8 @@ TEST(MrViewer, TheWKeyKeepsTheBodysWindowAndSaysWhy)
     // The panes (the status bar changed) are the same pictures.
     const PaneRect& axial = viewer.layout().pane(ViewKind::Axial);
     for (int y = axial.y; y < axial.y + axial.height; ++y) {
-        for (int x = axial.x; x < axial.x + axial.width; ++x) ASSERT_EQ(before.at(x, y), after.at(x, y)) << x << "," << y;
+        for (int x = axial.x; x < axial.x + axial.width; ++x)
+            ASSERT_EQ(before.at(x, y), after.at(x, y)) << x << "," << y;
     }
 }
 

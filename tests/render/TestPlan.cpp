@@ -54,9 +54,10 @@ TEST_F(PlanFiles, RefusesWithFileAndField)
     refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3]}]})", "paths[0].target");
     refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [1, 2, 3]}]})", "paths[0].target");
     refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [0, 0, 0], "colour": 1}]})",
-            "paths[0].colour");
+        "paths[0].colour");
     refused(R"({"schema": "voxhap-plan/1", "paths": [{"entry": [1, 2, 3], "target": [0, 0, 0],
-              "needle": {"tip": [0, 0, 0], "direction": [0, 0, 0]}}]})", "paths[0].needle.direction");
+              "needle": {"tip": [0, 0, 0], "direction": [0, 0, 0]}}]})",
+        "paths[0].needle.direction");
     refused(R"({"schema": "voxhap-plan/1", "paths": [)", "not valid JSON");
     test::expectRefused<IoError>([](const auto& p) { loadPlan(p); }, mDir / "absent.json", "cannot open");
 }
@@ -75,7 +76,7 @@ TEST_F(PlanFiles, SlicerLineMarkupsInRasBecomeLps)
     EXPECT_TRUE(nearVec(plan.paths[0].entry, Vec3d(-10, -20, 30), 0.0));
     EXPECT_TRUE(nearVec(plan.paths[0].target, Vec3d(5, 6, 7), 0.0));
     test::expectRefused<ValueError>([](const auto& p) { loadPlan(p); },
-                                    write("none.mrk.json", R"({"markups": [{"type": "Fiducial"}]})"), "markups");
+        write("none.mrk.json", R"({"markups": [{"type": "Fiducial"}]})"), "markups");
 }
 
 } // namespace

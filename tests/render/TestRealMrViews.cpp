@@ -44,8 +44,7 @@ struct MprageViews {
     std::unique_ptr<volume::Volume> v;
     std::unique_ptr<Snapshot> snapshot;
 
-    explicit MprageViews(std::unique_ptr<volume::Volume> volume)
-        : v(std::move(volume))
+    explicit MprageViews(std::unique_ptr<volume::Volume> volume) : v(std::move(volume))
     {
         RenderRequest r;
         r.views = {ViewKind::Axial, ViewKind::Sagittal};

@@ -121,8 +121,9 @@ TEST_F(Slices, ObliqueAnisotropicVolumeKeepsWorldPositions)
 {
     volume::GridSpec grid;
     grid.spacing = Vec3d(0.8, 1.0, 1.5);
-    grid.direction = (Eigen::AngleAxisd(degToRad(20.0), Vec3d::UnitZ()) * Eigen::AngleAxisd(degToRad(10.0), Vec3d::UnitX()))
-                         .toRotationMatrix();
+    grid.direction =
+        (Eigen::AngleAxisd(degToRad(20.0), Vec3d::UnitZ()) * Eigen::AngleAxisd(degToRad(10.0), Vec3d::UnitX()))
+            .toRotationMatrix();
     const volume::Volume v = mPhantom.make(grid);
     const RenderVolume rv(v, false);
     // The same field of view as the aligned volume, so that the closed form is unchanged.
@@ -137,9 +138,9 @@ TEST_F(Slices, ObliqueAnisotropicVolumeKeepsWorldPositions)
 TEST_F(Slices, WindowMapsLevelToMidGrey)
 {
     const WindowLevel w = windowLevel(WindowPreset::SoftTissue); // W 400, L 40
-    EXPECT_EQ(windowed(40.0, w), 128);   // 0.5 · 255 = 127.5, rounded half away from zero
-    EXPECT_EQ(windowed(-160.0, w), 0);   // level − width/2
-    EXPECT_EQ(windowed(240.0, w), 255);  // level + width/2
+    EXPECT_EQ(windowed(40.0, w), 128);                           // 0.5 · 255 = 127.5, rounded half away from zero
+    EXPECT_EQ(windowed(-160.0, w), 0);                           // level − width/2
+    EXPECT_EQ(windowed(240.0, w), 255);                          // level + width/2
     EXPECT_EQ(windowed(-1000.0, w), 0);
     EXPECT_EQ(windowed(1850.0, w), 255);
 }
@@ -156,14 +157,17 @@ TEST_F(Slices, LabelsBlendTheTissueColour)
     // ((1850 − (400 − 900)) / 1800 > 1), mixed with the bone colour.
     const auto& bone = table().at("cortical_bone").colour;
     const Rgb got = img.at(int(std::lround(c.x())), int(std::lround(c.y())));
-    const auto mix = [&](double grey, int colour) { return std::lround((1 - s.labelOpacity) * grey + s.labelOpacity * colour); };
+    const auto mix = [&](double grey, int colour) {
+        return std::lround((1 - s.labelOpacity) * grey + s.labelOpacity * colour);
+    };
     EXPECT_EQ(got.r, mix(255, bone[0]));
     EXPECT_EQ(got.g, mix(255, bone[1]));
     EXPECT_EQ(got.b, mix(255, bone[2]));
     // Fat inside the box: its grey through the bone window, 255 · (−100 + 500) / 1800
     // = 56.7 → 57, mixed with the fat colour.
     const auto& fat = table().at("fat").colour;
-    EXPECT_EQ(img.at(6, 6), (Rgb{std::uint8_t(mix(57, fat[0])), std::uint8_t(mix(57, fat[1])), std::uint8_t(mix(57, fat[2]))}));
+    EXPECT_EQ(img.at(6, 6),
+        (Rgb{std::uint8_t(mix(57, fat[0])), std::uint8_t(mix(57, fat[1])), std::uint8_t(mix(57, fat[2]))}));
     // Outside the volume (air, label 0): black, no colour.
     EXPECT_EQ(img.at(2, 2), Rgb{});
 }
@@ -175,7 +179,8 @@ char readGlyph(const Image& img, int x0, int y0, int x1, int y1, Rgb colour)
     int bx0 = x1, by0 = y1, bx1 = -1, by1 = -1;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
-            if (img.at(x, y) == colour) bx0 = std::min(bx0, x), by0 = std::min(by0, y), bx1 = std::max(bx1, x), by1 = std::max(by1, y);
+            if (img.at(x, y) == colour)
+                bx0 = std::min(bx0, x), by0 = std::min(by0, y), bx1 = std::max(bx1, x), by1 = std::max(by1, y);
         }
     }
     if (bx1 < 0) return '?';
@@ -220,9 +225,9 @@ TEST_F(Slices, OrientationLettersOnTheRadiologicalSides)
         drawAnnotations(img, f, o, style);
         const int w = img.width(), h = img.height(), q = std::min(w, h) / 4;
         const std::string got{readGlyph(img, 0, h / 2 - q / 2, q, h / 2 + q / 2, style.letters),
-                              readGlyph(img, w - q, h / 2 - q / 2, w, h / 2 + q / 2, style.letters),
-                              readGlyph(img, w / 2 - q / 2, 0, w / 2 + q / 2, q, style.letters),
-                              readGlyph(img, w / 2 - q / 2, h - q, w / 2 + q / 2, h, style.letters)};
+            readGlyph(img, w - q, h / 2 - q / 2, w, h / 2 + q / 2, style.letters),
+            readGlyph(img, w / 2 - q / 2, 0, w / 2 + q / 2, q, style.letters),
+            readGlyph(img, w / 2 - q / 2, h - q, w / 2 + q / 2, h, style.letters)};
         EXPECT_EQ(got, c.letters) << c.view;
     }
 }
@@ -315,7 +320,8 @@ TEST_F(Slices, PointDefaultsToThePathTarget)
 
 TEST(ContactSheet, TwoByTwoInRequestOrder)
 {
-    const Image a(40, 30, Rgb{255, 0, 0}), b(20, 50, Rgb{0, 255, 0}), c(40, 50, Rgb{0, 0, 255}), d(10, 10, Rgb{9, 9, 9});
+    const Image a(40, 30, Rgb{255, 0, 0}), b(20, 50, Rgb{0, 255, 0}), c(40, 50, Rgb{0, 0, 255}),
+        d(10, 10, Rgb{9, 9, 9});
     const Image sheet = contactSheet({a, b, c, d});
     // Cells of 40 × 50 with a 4 px gap.
     EXPECT_EQ(sheet.width(), 84);
@@ -326,7 +332,7 @@ TEST(ContactSheet, TwoByTwoInRequestOrder)
     EXPECT_EQ(sheet.at(44 + 20, 54 + 25), d.at(0, 0));
 }
 
-class PngFiles : public test::TempDirTest {};
+class PngFiles : public test::TempDirTest { };
 
 TEST_F(PngFiles, RoundTripAndNoPartialFile)
 {

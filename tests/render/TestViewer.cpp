@@ -50,8 +50,8 @@ TEST(Measurement, AngleBetweenSegments)
     EXPECT_NEAR(*angleDeg(x, {Vec3d(0, 0, 0), Vec3d(0, 0, -2)}), 90.0, kMeasureTol);
     EXPECT_NEAR(*angleDeg(x, {Vec3d(2, 0, 0), Vec3d(-7, 0, 0)}), 180.0, kMeasureTol);
     // The angle of the unit cube's diagonal with an edge: acos(1/sqrt(3)).
-    EXPECT_NEAR(*angleDeg(x, {Vec3d(0, 0, 0), Vec3d(1, 1, 1)}), std::acos(1.0 / std::sqrt(3.0)) * 180.0 / std::numbers::pi,
-                kMeasureTol);
+    EXPECT_NEAR(*angleDeg(x, {Vec3d(0, 0, 0), Vec3d(1, 1, 1)}),
+        std::acos(1.0 / std::sqrt(3.0)) * 180.0 / std::numbers::pi, kMeasureTol);
     // Nearly parallel: 1e-7 rad. acos(cos θ) would lose it (cos θ = 1 − 5e-15);
     // atan2 keeps it to round-off relative to θ.
     const double theta = 1e-7;
@@ -154,7 +154,7 @@ TEST(ViewerScript, ParsesStepsAndNamesTheBadLine)
 {
     const auto steps = parseViewerScript("# plan\nkey p\nclick axial 12.5 30  # entry\n\nscroll coronal -3\n"
                                          "wait-pose 2\nsleep 0.1\n",
-                                         "ev.txt");
+        "ev.txt");
     ASSERT_EQ(steps.size(), 5u);
     EXPECT_EQ(steps[0].event.key, "p");
     EXPECT_EQ(steps[1].event.kind, ViewerEvent::Kind::Click);
@@ -206,7 +206,8 @@ protected:
         mVolume = std::make_unique<volume::Volume>(mPhantom.make(grid));
         const auto b = mVolume->worldBounds();
         mLo = b[0], mHi = b[1];
-        mOpt.width = 244, mOpt.height = 268; // panes of 120 × 120 px: the box's 60 mm side fills one at 0.5 mm per pixel
+        mOpt.width = 244,
+        mOpt.height = 268; // panes of 120 × 120 px: the box's 60 mm side fills one at 0.5 mm per pixel
         mOpt.threeD = false;
         mOpt.point = mPhantom.centre;
         mOpt.planOut = mDir / "plan.json";
@@ -351,7 +352,8 @@ TEST_F(ViewerTest, LiveNeedleIsDrawnWhereItsProjectionFalls)
     EXPECT_TRUE(v.dirty());
     const Image after = v.render();
     EXPECT_TRUE(colourNear(after, windowPixel(v, ViewKind::Coronal, onShaft), colour));
-    EXPECT_TRUE(colourNear(after, windowPixel(v, ViewKind::Sagittal, onShaft), colour)) << "and projected on the sagittal";
+    EXPECT_TRUE(colourNear(after, windowPixel(v, ViewKind::Sagittal, onShaft), colour))
+        << "and projected on the sagittal";
 }
 
 TEST_F(ViewerTest, ThreeDPaneUnderXvfbShowsTheVolumeAndTheNeedle)
@@ -378,7 +380,8 @@ TEST_F(ViewerTest, ThreeDPaneUnderXvfbShowsTheVolumeAndTheNeedle)
     bool found = false;
     for (int dx = -2; dx <= 2 && !found; ++dx) { // a 3 px line, placed by GL to within a pixel
         const Rgb p = second.at(int(std::lround(at.x())) + dx, int(std::lround(at.y())));
-        found = p.r > 200 && p.r > p.b + 100 && !(p == first.at(int(std::lround(at.x())) + dx, int(std::lround(at.y()))));
+        found =
+            p.r > 200 && p.r > p.b + 100 && !(p == first.at(int(std::lround(at.x())) + dx, int(std::lround(at.y()))));
     }
     EXPECT_TRUE(found) << "no needle at the projected shaft";
 }

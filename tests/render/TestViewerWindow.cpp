@@ -40,7 +40,9 @@ TEST(ViewerWindow, ShowsTheImageAndReportsClicksWheelAndKeys)
     const Window id = win.windowId();
     XImage* shot = XGetImage(other, id, 0, 0, w, h, AllPlanes, ZPixmap);
     ASSERT_NE(shot, nullptr);
-    const auto channel = [&](unsigned long pixel, unsigned long mask) { return int((pixel & mask) >> std::countr_zero(mask)); };
+    const auto channel = [&](unsigned long pixel, unsigned long mask) {
+        return int((pixel & mask) >> std::countr_zero(mask));
+    };
     for (const auto& [x, y] : {std::pair{17, 23}, std::pair{0, 0}, std::pair{w - 1, h - 1}}) {
         const unsigned long p = XGetPixel(shot, x, y);
         const Rgb want = img.at(x, y);

@@ -55,7 +55,7 @@ inline void addNoise(volume::FloatGrid& grid, double sigma, unsigned seed)
 /// Dice overlap 2|A∩B| / (|A| + |B|) of the voxels of @p box whose truth label
 /// is in @p truthIds and whose result label is in @p resultIds.
 inline double dice(const volume::LabelGrid& truth, const volume::LabelGrid& result, const volume::IndexBox& box,
-                   const std::set<int>& truthIds, const std::set<int>& resultIds)
+    const std::set<int>& truthIds, const std::set<int>& resultIds)
 {
     auto t = truth.getConstAccessor();
     auto r = result.getConstAccessor();

@@ -63,10 +63,9 @@ TEST(CtSegmentation, TorsoPhantomEveryClassDiceAtLeast095)
     // The phantom's soft tissues that CT numbers cannot tell from muscle (ligaments,
     // dura, CSF, cord, disc, the lytic lesion) form one class with it; the result's
     // soft_tissue and spinal_cord belong to it too (the canal is tested below).
-    const std::set<int> lean{id("muscle"),       id("supraspinous_ligament"), id("interspinous_ligament"),
-                             id("ligamentum_flavum"), id("dura"),           id("csf"),
-                             id("spinal_cord"),  id("intervertebral_disc"),   id("lesion"),
-                             id("soft_tissue"),  id("epidural_space")};
+    const std::set<int> lean{id("muscle"), id("supraspinous_ligament"), id("interspinous_ligament"),
+        id("ligamentum_flavum"), id("dura"), id("csf"), id("spinal_cord"), id("intervertebral_disc"), id("lesion"),
+        id("soft_tissue"), id("epidural_space")};
     const std::map<std::string, std::set<int>> classes{
         {"air", {0}},
         {"skin", {id("skin")}},
@@ -101,8 +100,8 @@ TEST(CtSegmentation, DistanceFieldsOfTheCriticalStructuresPresent)
     const auto sdf = openvdb::gridConstPtrCast<volume::FloatGrid>(c.v->derived(distanceFieldName("aorta")));
     const auto sample = [&](const Vec3d& w) {
         const Vec3d ijk = c.v->worldToIndex(w);
-        return sdf->getConstAccessor().getValue(openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())),
-                                                               int(std::lround(ijk.z()))));
+        return sdf->getConstAccessor().getValue(
+            openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
     };
     const Vec3d aorta = *volume::phantomLandmark(*c.v, "aorta");
     const Vec3d lesion = *volume::phantomLandmark(*c.v, "lesion");

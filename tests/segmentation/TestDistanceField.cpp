@@ -39,7 +39,7 @@ TEST(DistanceField, SphereWithinHalfAVoxelOfTheClosedForm)
             ++checked;
             ASSERT_EQ(got < 0, labels[n] != 0) << "sign at " << p.transpose();
         } else if (exact > band + 0.5 * h) { // the field may undershoot by half a voxel
-            EXPECT_EQ(got, float(band)); // the far outside reads as the band
+            EXPECT_EQ(got, float(band));     // the far outside reads as the band
         }
     }
     EXPECT_GT(checked, 10000);

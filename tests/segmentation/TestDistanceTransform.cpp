@@ -43,7 +43,8 @@ double bruteForce(const Lattice& lat, const Mask& f, std::size_t n, Span span)
 
 TEST(DistanceTransform, MatchesBruteForceOnAnisotropicVoxels)
 {
-    const Lattice lat = lattice(17, 13, 9, Vec3d(1.07421875, 0.7, 3.0)); // the real CT's 1.07 x 1.07 x 3 mm, and a third
+    const Lattice lat =
+        lattice(17, 13, 9, Vec3d(1.07421875, 0.7, 3.0)); // the real CT's 1.07 x 1.07 x 3 mm, and a third
     std::mt19937 rng(7);
     Mask f(lat.size(), 0);
     for (auto& x : f) x = (rng() % 23 == 0) ? 1 : 0;
@@ -113,9 +114,9 @@ TEST(Components, CountsSizesAndConnectivity)
 {
     const Lattice lat = lattice(6, 6, 3, Vec3d(1, 1, 1));
     Mask m(lat.size(), 0);
-    m[lat.index(0, 0, 0)] = m[lat.index(1, 0, 0)] = 1;          // two voxels, face-connected
-    m[lat.index(3, 3, 0)] = m[lat.index(3, 3, 1)] = 1;          // joined across slices
-    m[lat.index(5, 5, 2)] = m[lat.index(4, 4, 2)] = 1;          // diagonal only: two components
+    m[lat.index(0, 0, 0)] = m[lat.index(1, 0, 0)] = 1; // two voxels, face-connected
+    m[lat.index(3, 3, 0)] = m[lat.index(3, 3, 1)] = 1; // joined across slices
+    m[lat.index(5, 5, 2)] = m[lat.index(4, 4, 2)] = 1; // diagonal only: two components
     const Components v = connectedComponents(lat, m, Span::Volume);
     EXPECT_EQ(v.list.size(), 4u);
     const Components s = connectedComponents(lat, m, Span::Slice);

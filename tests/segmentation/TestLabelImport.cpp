@@ -24,7 +24,8 @@ using test::table;
 TEST(LabelMapping, ParsesNamesAndIds)
 {
     const LabelMapping m = parseLabelMapping(
-        R"({"schema": "voxhap.label-mapping/1", "file": "seg.nrrd", "labels": {"1": "kidney", "7": 15}})", "map.json", table());
+        R"({"schema": "voxhap.label-mapping/1", "file": "seg.nrrd", "labels": {"1": "kidney", "7": 15}})", "map.json",
+        table());
     EXPECT_EQ(m.tissueOf.at(1), table().at("kidney").id);
     EXPECT_EQ(m.tissueOf.at(7), 15);
     EXPECT_EQ(m.file, "seg.nrrd");
@@ -52,7 +53,7 @@ TEST(LabelMapping, RefusesBadFieldsWithOneLineNamingThem)
     refuses("not json", "not JSON");
 }
 
-class LabelImport : public test::TempDirTest {};
+class LabelImport : public test::TempDirTest { };
 
 /// A label map on its own lattice (2 mm voxels, offset) holding value @p value in a box.
 volume::Volume boxLabelMap(const Vec3d& lo, const Vec3d& hi, int value)
@@ -87,18 +88,19 @@ TEST_F(LabelImport, ImportedLabelsTakePrecedenceInTheirExtentOnly)
     const volume::Volume map = volume::loadVolume(file);
 
     SegmentOptions o;
-    o.imported = ImportedLabels{&map, parseLabelMapping(R"({"schema": "voxhap.label-mapping/1", "labels": {"3": "lesion"}})",
-                                                        "map.json", table()),
-                                file.string()};
+    o.imported = ImportedLabels{&map,
+        parseLabelMapping(R"({"schema": "voxhap.label-mapping/1", "labels": {"3": "lesion"}})", "map.json", table()),
+        file.string()};
     const SegmentReport r = segment(v, table(), o);
     EXPECT_GT(r.importedVoxels, 0);
     auto acc = volume::labelGrid(v)->getConstAccessor();
     const auto at = [&](const Vec3d& w) {
         const Vec3d ijk = v.worldToIndex(w);
-        return acc.getValue(openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
+        return acc.getValue(
+            openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
     };
     const int lesion = table().at("lesion").id;
-    EXPECT_EQ(at(Vec3d(0, -15, 0)), lesion);  // inside the imported box: imported wins over muscle
+    EXPECT_EQ(at(Vec3d(0, -15, 0)), lesion);                  // inside the imported box: imported wins over muscle
     EXPECT_EQ(at(Vec3d(0, -25, 0)), table().at("muscle").id); // 10 mm fat then muscle (slab phantom), outside the box
     EXPECT_EQ(at(Vec3d(12, -15, 0)), table().at("muscle").id);
 }
@@ -109,14 +111,15 @@ TEST_F(LabelImport, AValueMissingFromTheMappingIsRefused)
     volume::Volume v = volume::makePhantom(volume::slabModel(p, table()), p.grid, table());
     const volume::Volume map = boxLabelMap(Vec3d(-5, -20, -5), Vec3d(5, -10, 5), 9);
     SegmentOptions o;
-    o.imported = ImportedLabels{&map, parseLabelMapping(R"({"schema": "voxhap.label-mapping/1", "labels": {"3": "lesion"}})",
-                                                        "map.json", table()),
-                                "imported.nrrd"};
+    o.imported = ImportedLabels{&map,
+        parseLabelMapping(R"({"schema": "voxhap.label-mapping/1", "labels": {"3": "lesion"}})", "map.json", table()),
+        "imported.nrrd"};
     try {
         segment(v, table(), o);
         FAIL() << "accepted an unmapped value";
     } catch (const ValueError& e) {
-        EXPECT_NE(std::string(e.what()).find("imported.nrrd: value 9 is not in the label mapping"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("imported.nrrd: value 9 is not in the label mapping"), std::string::npos)
+            << e.what();
     }
 }
 

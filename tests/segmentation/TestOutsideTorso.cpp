@@ -53,8 +53,8 @@ bool withinCylinder(const Vec3d& p, const Vec3d& semi, double depthMm)
 /// A volume over the ellipsoid of semi-axes @p semi (plus the air margin),
 /// centred on the world origin, whose @p channel holds value(p); voxels equal to
 /// @p background stay inactive.
-volume::Volume raster(const Vec3d& semi, volume::Channel channel, float background,
-                      const std::function<float(const Vec3d&)>& value)
+volume::Volume raster(
+    const Vec3d& semi, volume::Channel channel, float background, const std::function<float(const Vec3d&)>& value)
 {
     volume::Geometry g;
     g.spacing = kSpacing;
@@ -175,7 +175,8 @@ volume::Volume headCt(double halfWidthMm, bool trunk = false)
         if (!inLayer(p, semi, d += L.fat)) return float(t.at("fat").huTypical);
         if (!inLayer(p, semi, d += L.skull)) return float(t.at("cortical_bone").huTypical);
         if (!inLayer(p, semi, d += L.csf)) return float(t.at("csf").huTypical);
-        if (p.head<2>().norm() < kTubeRadiusMm && std::abs(p.z()) < kTubeHalfLengthMm) return float(t.at("aorta").huTypical);
+        if (p.head<2>().norm() < kTubeRadiusMm && std::abs(p.z()) < kTubeHalfLengthMm)
+            return float(t.at("aorta").huTypical);
         if ((p - Vec3d(kBlobX, 0, 0)).norm() < kBlobRadiusMm) return float(t.at("kidney").huTypical);
         return 35.0f; // brain: grey and white matter 30–40 HU
     });
@@ -220,12 +221,12 @@ TEST(OutsideTorso, HeadCtLabelsEachLayerByWhatItsNumbersSay)
     const SegmentedHead& s = head();
     const auto id = [](const char* n) { return table().at(n).id; };
     // On the lateral axis, at the middle of each layer (depths from the phantom's drawing).
-    EXPECT_EQ(labelOf(*s.v, Vec3d(90.0 - 4.0, 0, 0)), id("fat"));            // fat 2–6 mm deep
-    EXPECT_EQ(labelOf(*s.v, Vec3d(90.0 - 9.0, 0, 0)), id("cortical_bone"));  // skull 6–12 mm
-    EXPECT_EQ(labelOf(*s.v, Vec3d(-20.0, 60.0, 0)), id("soft_tissue"));      // brain
-    EXPECT_EQ(labelOf(*s.v, Vec3d(0, 0, 0)), id("soft_tissue"));             // the tube's axis: no aorta
-    EXPECT_EQ(labelOf(*s.v, Vec3d(kBlobX, 0, 0)), id("soft_tissue"));        // the blob's centre: no kidney
-    EXPECT_EQ(labelOf(*s.v, Vec3d(0, 0, 60.0 + 5.0)), 0);                    // air above the vertex
+    EXPECT_EQ(labelOf(*s.v, Vec3d(90.0 - 4.0, 0, 0)), id("fat"));           // fat 2–6 mm deep
+    EXPECT_EQ(labelOf(*s.v, Vec3d(90.0 - 9.0, 0, 0)), id("cortical_bone")); // skull 6–12 mm
+    EXPECT_EQ(labelOf(*s.v, Vec3d(-20.0, 60.0, 0)), id("soft_tissue"));     // brain
+    EXPECT_EQ(labelOf(*s.v, Vec3d(0, 0, 0)), id("soft_tissue"));            // the tube's axis: no aorta
+    EXPECT_EQ(labelOf(*s.v, Vec3d(kBlobX, 0, 0)), id("soft_tissue"));       // the blob's centre: no kidney
+    EXPECT_EQ(labelOf(*s.v, Vec3d(0, 0, 60.0 + 5.0)), 0);                   // air above the vertex
 }
 
 TEST(OutsideTorso, TheSamePhantomTorsoWideGetsTheTorsoRules)
@@ -287,14 +288,15 @@ void expectScalpFatOnly(const volume::Volume& v, const SegmentReport& r)
     EXPECT_TRUE(hasNote(r, "fat | muscle split not applied")) << ::testing::PrintToString(r.notes);
     const auto ml = mlByName(r);
     EXPECT_EQ(ml.count("muscle"), 0u);
-    for (const auto& l : r.labels) EXPECT_TRUE(l.name == "skin" || l.name == "fat" || l.name == "soft_tissue") << l.name;
+    for (const auto& l : r.labels)
+        EXPECT_TRUE(l.name == "skin" || l.name == "fat" || l.name == "soft_tissue") << l.name;
     const double fat = ml.count("fat") ? ml.at("fat") : 0.0;
     EXPECT_GT(fat, kFatShellLow * fatShellMl());
     EXPECT_LT(fat, kFatShellHigh * fatShellMl()) << "fat beyond the scalp: white matter taken for fat";
     const auto id = [](const char* n) { return table().at(n).id; };
-    EXPECT_EQ(labelOf(v, Vec3d(kMrHalfWidthMm - 4.0, 0, 0)), id("fat"));  // the scalp fat's middle
-    EXPECT_EQ(labelOf(v, Vec3d(0, 0, 0)), id("soft_tissue"));             // white matter
-    EXPECT_EQ(labelOf(v, Vec3d(0, 95.0 - 20.0, 0)), id("soft_tissue"));   // deep in the head, behind
+    EXPECT_EQ(labelOf(v, Vec3d(kMrHalfWidthMm - 4.0, 0, 0)), id("fat")); // the scalp fat's middle
+    EXPECT_EQ(labelOf(v, Vec3d(0, 0, 0)), id("soft_tissue"));            // white matter
+    EXPECT_EQ(labelOf(v, Vec3d(0, 95.0 - 20.0, 0)), id("soft_tissue"));  // deep in the head, behind
 }
 
 TEST(OutsideTorso, MrT1HeadHasScalpFatAndNoMuscle)

@@ -47,7 +47,8 @@ float sdfAt(const volume::Volume& v, const std::string& tissue, const Vec3d& w)
 {
     const auto g = openvdb::gridConstPtrCast<volume::FloatGrid>(v.derived(distanceFieldName(tissue)));
     const Vec3d ijk = v.worldToIndex(w);
-    return g->getConstAccessor().getValue(openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
+    return g->getConstAccessor().getValue(
+        openvdb::Coord(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z()))));
 }
 
 class RealCtSegmentation : public testing::Test {

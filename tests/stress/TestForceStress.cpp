@@ -135,7 +135,7 @@ TEST(ForceStress, ServoTickNeverAllocates)
 /// displacement, Σ F_n·(x_{n+1} − x_n) (zero-order hold, the sampled-data truth).
 class EnergyMeter {
 public:
-    EnergyMeter(NeedleForceModel& m, double rateHz) : mModel(m), mDt(1.0 / rateHz) {}
+    EnergyMeter(NeedleForceModel& m, double rateHz) : mModel(m), mDt(1.0 / rateHz) { }
     void move(const Vec3d& tip, const Vec3d& dir)
     {
         const Vec3d hub = tip - mModel.needle().lengthMm * dir;
@@ -263,8 +263,8 @@ TEST(CriticalStructures, OneLungVoxelZeroesForceWithinOneTick)
     io.trackLabels = true;
     DeviceLimits dev;
     dev.maxForceN = dev.maxContinuousForceN = 100.0;
-    NeedleForceModel model(layersFromRuns(traceLabelRuns(field, entry, dir, 40.0), table(), recipe), NeedlePath{entry, dir},
-                           terms, Needle{}, dev, makeIntegrator(field, io), &field);
+    NeedleForceModel model(layersFromRuns(traceLabelRuns(field, entry, dir, 40.0), table(), recipe),
+        NeedlePath{entry, dir}, terms, Needle{}, dev, makeIntegrator(field, io), &field);
     NeedleOutput out;
     double breachDepth = kNoLimit;
     const double lungFace = 9.5 + 0.5; // depth of the voxel's face z = 9.5 from the entry z = -0.5

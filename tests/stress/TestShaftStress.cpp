@@ -19,14 +19,13 @@
 #include <numeric>
 #include <random>
 
-
 namespace voxhap::haptic {
 namespace {
 
 using test::kChordSumRelative;
 
 const std::vector<Strategy> kAll{Strategy::ExactVoxel, Strategy::ExactTrilinear, Strategy::MarchNearest,
-                                 Strategy::MarchTrilinear, Strategy::Profile};
+    Strategy::MarchTrilinear, Strategy::Profile};
 
 class Stress : public testing::Test {
 protected:
@@ -61,8 +60,7 @@ TEST_F(Stress, ShaftsAlongFacesAndEdgesAreDeterministicAndComplete)
     // Faces are at multiples of h. A vertical shaft on the face x = 0, on the edge x = z = 0,
     // and a horizontal one along y = -5 (inside fat) on the face z = 1.
     const std::vector<Segment> shafts{
-        {{0.0, 1.0, 0.3}, {0.0, -19.0, 0.3}},
-        {{0.0, 1.0, 0.0}, {0.0, -19.0, 0.0}},
+        {{0.0, 1.0, 0.3}, {0.0, -19.0, 0.3}}, {{0.0, 1.0, 0.0}, {0.0, -19.0, 0.0}},
         {{-20.0, -5.0, 1.0}, {20.0, -5.0, 1.0}},
         {{-20.0, -5.5, 1.0}, {20.0, -5.5, 1.0}}, // a face between two fat voxels in y as well
     };
@@ -94,8 +92,9 @@ TEST_F(Stress, ExactCornersSkipAndDoubleNothing)
         exact->integrate({Vec3d::Zero(), s * u}, r);
         const double depth = s * cosT;
         const double expected = (double(float(8152e-6)) * std::clamp(depth, 0.0, 2.0) +
-                                 double(float(3696e-6)) * std::clamp(depth - 2.0, 0.0, 8.0) +
-                                 double(float(8152e-6)) * std::clamp(depth - 10.0, 0.0, 10.0)) / cosT;
+                                    double(float(3696e-6)) * std::clamp(depth - 2.0, 0.0, 8.0) +
+                                    double(float(8152e-6)) * std::clamp(depth - 10.0, 0.0, 10.0)) /
+            cosT;
         EXPECT_NEAR(r.dampingIntegral, expected, test::kExactRelative * expected);
         EXPECT_NEAR(labelSum(r), s, kChordSumRelative * s);
     }
@@ -139,8 +138,8 @@ TEST_F(Stress, OutsideAndFarAwayShaftsAreAirAndCheap)
         EXPECT_NEAR(r.dampingIntegral, expected, march ? jumps * 0.25 * kH / 2.0 : 1e-6 * expected) << integ->name();
         // Non-finite or overflowing coordinates: zero, never NaN.
         for (const Segment& bad : {Segment{{std::nan(""), 0, 0}, {0, 0, 0}},
-                                   Segment{{0, 0, 0}, {std::numeric_limits<double>::infinity(), 0, 0}},
-                                   Segment{{-1e308, 0, 0}, {1e308, 0, 0}}}) {
+                 Segment{{0, 0, 0}, {std::numeric_limits<double>::infinity(), 0, 0}},
+                 Segment{{-1e308, 0, 0}, {1e308, 0, 0}}}) {
             integ->integrate(bad, r);
             EXPECT_EQ(r.dampingIntegral, 0.0) << integ->name();
         }
@@ -199,11 +198,21 @@ TEST_F(Stress, RandomShaftsStayFiniteAndComplete)
     for (int n = 0; n < 20000; ++n) {
         Vec3d a(coord(rng), coord(rng), coord(rng)), b(coord(rng), coord(rng), coord(rng));
         switch (pick(rng)) { // snap to faces, edges, corners and degenerate cases
-        case 0: a = (a / kH).array().round() * kH; break;
-        case 1: b = a; break;
-        case 2: b = a + Vec3d(0, 0, 1e-300); break;
-        case 3: b = (b / kH).array().round() * kH; a = (a / kH).array().round() * kH; break;
-        default: break;
+        case 0:
+            a = (a / kH).array().round() * kH;
+            break;
+        case 1:
+            b = a;
+            break;
+        case 2:
+            b = a + Vec3d(0, 0, 1e-300);
+            break;
+        case 3:
+            b = (b / kH).array().round() * kH;
+            a = (a / kH).array().round() * kH;
+            break;
+        default:
+            break;
         }
         for (auto& integ : integrators) {
             integ->integrate({a, b}, r);

@@ -30,7 +30,8 @@ TEST_F(Cli, HelpExplainsTheCommands)
 {
     const Result top = run("--help");
     EXPECT_EQ(top.exitCode, 0);
-    for (const char* cmd : {"phantom", "info", "demo", "simulate"}) EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
+    for (const char* cmd : {"phantom", "info", "demo", "simulate"})
+        EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
     const Result phantom = run("phantom --help");
     EXPECT_EQ(phantom.exitCode, 0);
     for (const char* word : {"lumbar", "torso", "--preset", "--bmi", "--spacing", "--out"}) {
@@ -66,7 +67,8 @@ TEST_F(Cli, BadFilesExitOneNamingTheFile)
     expectFailure(run("info missing.vdb"), "missing.vdb");
     std::ofstream(mDir / "garbage.vdb") << "garbage";
     expectFailure(run("info garbage.vdb"), "garbage.vdb");
-    std::ofstream(mDir / "bad-tissues.json") << R"({"tissues": [{"id": 0, "name": "air", "colour": [0,0,0], "hu": {}}]})";
+    std::ofstream(mDir / "bad-tissues.json")
+        << R"({"tissues": [{"id": 0, "name": "air", "colour": [0,0,0], "hu": {}}]})";
     expectFailure(run("phantom slab --tissues bad-tissues.json"), "bad-tissues.json");
     EXPECT_FALSE(fs::exists(mDir / "slab.vdb"));
     expectFailure(run("phantom slab --layers skin:2,nothing:3"), "nothing");
@@ -121,9 +123,9 @@ TEST_F(Cli, DemoWritesItsOutputsAndSaysWhere)
     const Result r = run("demo --out demo-out --json");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
-    for (const char* f : {"torso-segmented.vdb", "plan/report.json", "plan/paths.mrk.json", "plan/views.png",
-                          "plan/force-depth.png", "insertion/insertion.csv", "insertion/summary.json",
-                          "insertion/force-depth.png"}) {
+    for (const char* f :
+        {"torso-segmented.vdb", "plan/report.json", "plan/paths.mrk.json", "plan/views.png", "plan/force-depth.png",
+            "insertion/insertion.csv", "insertion/summary.json", "insertion/force-depth.png"}) {
         EXPECT_TRUE(fs::exists(mDir / "demo-out" / f)) << f;
     }
     // The best path to the lesion keeps clear of every critical structure, and the
@@ -225,8 +227,9 @@ namespace {
 // the metrics say the run was interrupted.
 TEST_F(Cli, ServeStopsCleanlyOnInterrupt)
 {
-    const std::string cmd = "cd '" + mDir.string() + "' && timeout --preserve-status -s INT 1.5 '" VOXHAP_BINARY_DIR
-                            "/bin/voxhap' serve --scene senac-average --out stopped --json > out.json 2> err.txt";
+    const std::string cmd = "cd '" + mDir.string() +
+        "' && timeout --preserve-status -s INT 1.5 '" VOXHAP_BINARY_DIR
+        "/bin/voxhap' serve --scene senac-average --out stopped --json > out.json 2> err.txt";
     const int status = std::system(cmd.c_str());
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 0) << slurp(mDir / "err.txt");

@@ -43,7 +43,10 @@ protected:
     }
 };
 
-void expectFailure(const Result& r, int code, const std::string& fragment) { voxhap::test::expectError(r, code, fragment); }
+void expectFailure(const Result& r, int code, const std::string& fragment)
+{
+    voxhap::test::expectError(r, code, fragment);
+}
 
 TEST_F(CliConvert, RealCtToVdbAndNrrd)
 {

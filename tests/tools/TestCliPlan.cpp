@@ -41,7 +41,8 @@ TEST_F(CliPlan, SearchWritesReportAndMarkupsThatReadBackAsInput)
     EXPECT_EQ(best["target_tissue"], "lesion");
     EXPECT_GE(best["min_clearance_mm"].get<double>(), 5.0); // the default --min-clearance
     EXPECT_FALSE(best["force"]["force_N"].empty());
-    EXPECT_TRUE(fs::exists(mDir / "out/force-depth.png")) << r.err; // gnuplot is one of the packages tools/setup.sh installs
+    EXPECT_TRUE(fs::exists(mDir / "out/force-depth.png"))
+        << r.err; // gnuplot is one of the packages tools/setup.sh installs
 
     // The markups go back in: the same paths, analysed again, give the same lengths.
     const Result again = run("plan torso.vdb --entries out/paths.mrk.json --out again --no-views --json");

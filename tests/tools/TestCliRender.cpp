@@ -56,9 +56,8 @@ TEST_F(CliRender, FourViewsAndContactSheet)
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["views"].size(), 4u);
     // 1 mm pixels over the 50 × 45 × 50 mm box (x, y, z).
-    const std::pair<const char*, std::array<int, 2>> expected[] = {
-        {"axial.png", {50, 45}}, {"sagittal.png", {45, 50}}, {"coronal.png", {50, 50}}, {"3d-mip.png", {50, 50}},
-        {"sheet.png", {50 + 4 + 50, 50 + 4 + 50}}};
+    const std::pair<const char*, std::array<int, 2>> expected[] = {{"axial.png", {50, 45}}, {"sagittal.png", {45, 50}},
+        {"coronal.png", {50, 50}}, {"3d-mip.png", {50, 50}}, {"sheet.png", {50 + 4 + 50, 50 + 4 + 50}}};
     for (const auto& [name, size] : expected) EXPECT_EQ(pngSize(mDir / "out" / name), size) << name;
     for (const auto& e : fs::directory_iterator(mDir / "out")) {
         EXPECT_EQ(e.path().extension(), ".png") << "no temporary left: " << e.path();
@@ -117,7 +116,8 @@ TEST_F(CliPlot, ForceDepthFromSimulateAndFromASession)
     // A served session: session.csv and events.csv as `voxhap serve` writes them.
     fs::create_directories(mDir / "srv");
     std::ofstream(mDir / "srv" / "session.csv")
-        << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,fault,"
+        << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
+           "fault,"
            "critical,plunger_fraction\n0,0,1,0,0,-1,0,0,0,0,0,-1,0,,outside,0,0,nan\n"
            "0.1,0,-2,0,0,-1,0,0,1,0,0,2,1,skin,punctured,0,0,nan\n";
     std::ofstream(mDir / "srv" / "events.csv") << "t_s,depth_mm,event,layer\n0.1,2,pop,skin\n";

@@ -19,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 using Result = voxhap::test::CliResult;
 
-class CliSegment : public voxhap::test::CliTest {};
+class CliSegment : public voxhap::test::CliTest { };
 
 TEST_F(CliSegment, PhantomToLabelsDistanceFieldsAndNrrd)
 {
@@ -44,9 +44,11 @@ TEST_F(CliSegment, PhantomToLabelsDistanceFieldsAndNrrd)
 
     // Re-import the exported map with a mapping that keeps every id but turns aorta (15)
     // into lesion: the imported labels win.
-    nlohmann::json map = {{"schema", "voxhap.label-mapping/1"}, {"file", "labels.nrrd"}, {"labels", nlohmann::json::object()}};
+    nlohmann::json map = {
+        {"schema", "voxhap.label-mapping/1"}, {"file", "labels.nrrd"}, {"labels", nlohmann::json::object()}};
     for (const auto& l : j["labels"]) {
-        map["labels"][std::to_string(l["id"].get<int>())] = l["name"] == "aorta" ? "lesion" : l["name"].get<std::string>();
+        map["labels"][std::to_string(l["id"].get<int>())] =
+            l["name"] == "aorta" ? "lesion" : l["name"].get<std::string>();
     }
     std::ofstream(mDir / "map.json") << map.dump();
     const Result imp = run("segment torso.vdb --out seg2.vdb --labels map.json --json");
@@ -67,7 +69,8 @@ TEST_F(CliSegment, BadInputIsOneLineAndLeavesNoOutput)
     ASSERT_EQ(run("phantom slab --spacing 1 -o slab.vdb").exitCode, 0);
     voxhap::test::expectError(run("segment slab.vdb --out seg.nrrd"), 2, "--out");
     std::ofstream(mDir / "bad.json") << R"({"schema": "voxhap.label-mapping/1", "labels": {"1": "spleen"}})";
-    voxhap::test::expectError(run("segment slab.vdb --out seg.vdb --labels bad.json --label-map slab.vdb"), 1, "labels.1");
+    voxhap::test::expectError(
+        run("segment slab.vdb --out seg.vdb --labels bad.json --label-map slab.vdb"), 1, "labels.1");
     voxhap::test::expectError(run("segment missing.vdb --out seg.vdb"), 1, "missing.vdb");
     voxhap::test::expectError(run("segment slab.vdb --out seg.vdb --critical spleen"), 1, "spleen");
     EXPECT_FALSE(fs::exists(mDir / "seg.vdb"));

@@ -114,8 +114,9 @@ protected:
 TEST_F(CliView, ScriptedClicksWriteThePlanAndASnapshot)
 {
     write("ev.txt", "key p\n" + axialClick(mEntry) + axialClick(mTarget) + "key s\n");
-    const Result r = run("view s.vdb --script ev.txt --snapshot shot.png --save plan.json " + std::string(kViewSize) + " "
-                         "--point 0,-20,0 --json");
+    const Result r = run("view s.vdb --script ev.txt --snapshot shot.png --save plan.json " + std::string(kViewSize) +
+        " "
+        "--point 0,-20,0 --json");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     const auto plan = voxhap::render::loadPlan(mDir / "plan.json");
@@ -139,15 +140,17 @@ TEST_F(CliView, ScriptedClicksWriteThePlanAndASnapshot)
     const auto& p3 = j["panes"][3];
     ASSERT_EQ(p3["view"], "3d");
     const int x0 = p3["image_origin"][0], y0 = p3["image_origin"][1];
-    EXPECT_GT(viewGreySpread(shot, x0, y0, x0 + p3["image_size"][0].get<int>(), y0 + p3["image_size"][1].get<int>()), 5.0)
+    EXPECT_GT(
+        viewGreySpread(shot, x0, y0, x0 + p3["image_size"][0].get<int>(), y0 + p3["image_size"][1].get<int>()), 5.0)
         << "blank 3D pane";
 }
 
 TEST_F(CliView, WindowRunsUnderXvfbAndQuitsFromTheScript)
 {
     write("ev.txt", "key p\n" + axialClick(mEntry) + axialClick(mTarget) + "key s\nkey q\n");
-    const Result r = run("view s.vdb --no-3d --script ev.txt --save w.json " + std::string(kViewSize) + " --point 0,-20,0 --timeout 60 --json",
-                         "xvfb-run -a -s '-screen 0 640x480x24'");
+    const Result r = run("view s.vdb --no-3d --script ev.txt --save w.json " + std::string(kViewSize) +
+            " --point 0,-20,0 --timeout 60 --json",
+        "xvfb-run -a -s '-screen 0 640x480x24'");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["ended"], "quit") << "the script's q, not the timeout";
@@ -168,8 +171,8 @@ TEST_F(CliView, StreamedNeedleIsDrawnInTheSnapshot)
     Result r;
     std::atomic<bool> done{false};
     std::thread viewer([&] {
-        r = run("view s.vdb --no-3d --listen " + std::to_string(port) +
-                " --script wait.txt --snapshot n.png " + std::string(kViewSize) + " --point 0,-20,0 --json");
+        r = run("view s.vdb --no-3d --listen " + std::to_string(port) + " --script wait.txt --snapshot n.png " +
+            std::string(kViewSize) + " --point 0,-20,0 --json");
         done = true;
     });
     // A vertical needle in the coronal plane through the crosshair (y = −20).
@@ -185,7 +188,8 @@ TEST_F(CliView, StreamedNeedleIsDrawnInTheSnapshot)
     const Image shot = voxhap::render::readImage(mDir / "n.png");
     const Rgb needle = voxhap::render::OverlayStyle{}.needle;
     EXPECT_TRUE(viewColourNear(shot, viewWindowPixel(j, "coronal", Vec3d(-10, -20, 15)), needle));
-    EXPECT_FALSE(viewColourNear(shot, viewWindowPixel(j, "coronal", Vec3d(10, -20, 15)), needle)) << "and not elsewhere";
+    EXPECT_FALSE(viewColourNear(shot, viewWindowPixel(j, "coronal", Vec3d(10, -20, 15)), needle))
+        << "and not elsewhere";
 }
 
 TEST_F(CliView, ServeStreamsTheNeedleToAViewer)
@@ -193,7 +197,7 @@ TEST_F(CliView, ServeStreamsTheNeedleToAViewer)
     voxhap::haptic::PoseReceiver rx(0);
     // -5 to 60 mm at 50 mm/s: about 1.3 s of real time.
     const Result r = run("serve --scene senac-average --device sim --speed 50 --out served --json --viewer 127.0.0.1:" +
-                         std::to_string(rx.port()));
+        std::to_string(rx.port()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     ASSERT_GE(rx.poses(), 1);
     const auto pose = rx.latest();
@@ -214,10 +218,11 @@ TEST_F(CliView, ServeStreamsTheNeedleToAViewer)
             x = std::stod(cell);
         }
         found = voxhap::test::nearVec(Vec3d(v[1], v[2], v[3]), pose->tip, kStreamMm) &&
-                voxhap::test::nearVec(Vec3d(v[4], v[5], v[6]), pose->direction, kStreamMm);
+            voxhap::test::nearVec(Vec3d(v[4], v[5], v[6]), pose->direction, kStreamMm);
     }
     EXPECT_TRUE(found) << "the streamed tip " << pose->tip.transpose() << " is no recorded pose";
-    voxhap::test::expectUsageError(run("serve --scene senac-average --device sim --viewer 127.0.0.1:99999"), "--viewer");
+    voxhap::test::expectUsageError(
+        run("serve --scene senac-average --device sim --viewer 127.0.0.1:99999"), "--viewer");
 }
 
 TEST_F(CliView, RefusesWithOneLine)
@@ -234,7 +239,8 @@ TEST_F(CliView, RefusesWithOneLine)
     voxhap::test::expectFailure(run("view s.vdb --no-3d --script wait.txt --snapshot x.png"), "wait.txt:1: wait-pose");
     voxhap::test::expectFailure(run("view missing.vdb --no-3d --snapshot x.png"), "missing.vdb");
     write("save.txt", "key p\nclick axial 10 10\nclick axial 20 20\nkey s\n");
-    voxhap::test::expectFailure(run("view s.vdb --no-3d --script save.txt --save nodir/p.json --snapshot x.png"), "nodir/p.json");
+    voxhap::test::expectFailure(
+        run("view s.vdb --no-3d --script save.txt --save nodir/p.json --snapshot x.png"), "nodir/p.json");
 }
 
 } // namespace

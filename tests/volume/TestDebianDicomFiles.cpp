@@ -45,27 +45,27 @@ TEST_F(DebianDicomFiles, OneImageInEveryEncodingGivesTheSameVoxels)
     VOXHAP_REQUIRE_DIR(kFiles);
     const Volume reference = loadDicom({folder("le", {"MR_small.dcm"})}, keepEveryVoxel());
     ASSERT_TRUE(reference.has(Channel::Intensity) || reference.has(Channel::T1));
-    const auto values = [](const Volume& v) {
-        return v.has(Channel::Intensity) ? intensityGrid(v) : t1Grid(v);
-    };
+    const auto values = [](const Volume& v) { return v.has(Channel::Intensity) ? intensityGrid(v) : t1Grid(v); };
     // Implicit and explicit VR, big endian, RLE, JPEG-LS, JPEG 2000 lossless,
     // trailing padding (a (FFFC,FFFC) element), and gzip around the whole file.
-    for (const std::string f : {"MR_small_implicit.dcm", "MR_small_bigendian.dcm", "MR_small_expb.dcm", "MR_small_RLE.dcm",
-                                "MR_small_jpeg_ls_lossless.dcm", "MR_small_jp2klossless.dcm", "MR_small_padded.dcm",
-                                "zipMR.gz"}) {
+    for (const std::string f :
+        {"MR_small_implicit.dcm", "MR_small_bigendian.dcm", "MR_small_expb.dcm", "MR_small_RLE.dcm",
+            "MR_small_jpeg_ls_lossless.dcm", "MR_small_jp2klossless.dcm", "MR_small_padded.dcm", "zipMR.gz"}) {
         const Volume v = loadDicom({folder(f, {f})}, keepEveryVoxel());
         ASSERT_EQ(v.indexBox(), reference.indexBox()) << f;
         auto a = values(v)->getConstAccessor(), b = values(reference)->getConstAccessor();
         for (int j = 0; j < 64; ++j)
-            for (int i = 0; i < 64; ++i) ASSERT_EQ(a.getValue({i, j, 0}), b.getValue({i, j, 0})) << f << " at " << i << "," << j;
+            for (int i = 0; i < 64; ++i)
+                ASSERT_EQ(a.getValue({i, j, 0}), b.getValue({i, j, 0})) << f << " at " << i << "," << j;
     }
 }
 
 TEST_F(DebianDicomFiles, AFolderOfEverythingLoadsItsImagesAndSaysWhatItSetAside)
 {
     VOXHAP_REQUIRE_DIR(kFiles);
-    const fs::path dir = folder("mixed", {"CT_small.dcm", "MR_small.dcm", "MR_truncated.dcm", "rtdose.dcm", "rtplan.dcm",
-                                          "rtstruct.dcm", "test-SR.dcm", "liver_1frame.dcm", "waveform_ecg.dcm"});
+    const fs::path dir = folder("mixed",
+        {"CT_small.dcm", "MR_small.dcm", "MR_truncated.dcm", "rtdose.dcm", "rtplan.dcm", "rtstruct.dcm", "test-SR.dcm",
+            "liver_1frame.dcm", "waveform_ecg.dcm"});
     DicomLoadReport report;
     const Volume ct = loadDicom({dir}, {}, &report);
     EXPECT_EQ(ct.metadata().modality, "CT"); // the default: CT first

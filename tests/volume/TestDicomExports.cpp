@@ -24,9 +24,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace voxhap::volume;
-using voxhap::test::SyntheticSlice;
 using voxhap::Vec3d;
 using voxhap::Vec3i;
+using voxhap::test::SyntheticSlice;
 
 /// Stored value of voxel (i, j) of slice k: distinct everywhere, so that a
 /// misplaced or missing slice shows.
@@ -48,7 +48,8 @@ SyntheticSlice ctSlice(int k, const std::string& uid = "1.2.826.0.1.3680043.2.11
 void writeCt(const fs::path& dir, int n, const std::string& uid = "1.2.826.0.1.3680043.2.1125.27.1")
 {
     fs::create_directories(dir);
-    for (int k = 0; k < n; ++k) voxhap::test::writeSyntheticSlice(ctSlice(k, uid), dir / ("s" + std::to_string(k) + ".dcm"));
+    for (int k = 0; k < n; ++k)
+        voxhap::test::writeSyntheticSlice(ctSlice(k, uid), dir / ("s" + std::to_string(k) + ".dcm"));
 }
 
 /// Every voxel of @p v against storedAt (slice k at index k).
@@ -58,7 +59,8 @@ void expectStored(const Volume& v, int slices)
     auto acc = huGrid(v)->getConstAccessor();
     for (int k = 0; k < slices; ++k)
         for (int j = 0; j < 12; ++j)
-            for (int i = 0; i < 16; ++i) ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), float(storedAt(i, j, k))) << i << "," << j << "," << k;
+            for (int i = 0; i < 16; ++i)
+                ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), float(storedAt(i, j, k))) << i << "," << j << "," << k;
 }
 
 /// Write @p in gzip-compressed to @p out (one member).
@@ -78,9 +80,12 @@ std::string readAll(const fs::path& p)
     return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 
-void writeAll(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes; }
+void writeAll(const fs::path& p, const std::string& bytes)
+{
+    std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
+}
 
-class DicomExports : public voxhap::test::TempDirTest {};
+class DicomExports : public voxhap::test::TempDirTest { };
 
 TEST_F(DicomExports, CdExportOfTheRealCtLoadsAsTheFolderDoes)
 {
@@ -145,7 +150,8 @@ TEST_F(DicomExports, CdExportOfTheRealCtLoadsAsTheFolderDoes)
 
     // The same voxels as the folder the files came from, by every way of naming the series.
     const Volume original = loadDicom({voxhap::test::realCtDir()});
-    for (const std::string& choice : {std::string(), std::string("#1"), std::string("1"), c.series.front().number, c.series.front().uid}) {
+    for (const std::string& choice :
+        {std::string(), std::string("#1"), std::string("1"), c.series.front().number, c.series.front().uid}) {
         DicomOptions o;
         o.series = choice;
         DicomLoadReport report;
@@ -188,7 +194,7 @@ TEST_F(DicomExports, SeriesAreChosenByIndexUidOrNumberAndAmbiguityIsRefused)
         o.series = choice;
         return loadDicom({mDir}, o).indexBox().dims().z();
     };
-    EXPECT_EQ(depth(""), 5);  // the default: the largest loadable (all CT)
+    EXPECT_EQ(depth(""), 5);   // the default: the largest loadable (all CT)
     EXPECT_EQ(depth("#1"), 2); // index 1: SeriesNumber 1
     EXPECT_EQ(depth("#3"), 3);
     EXPECT_EQ(depth(b), 3);
@@ -234,7 +240,8 @@ TEST_F(DicomExports, DefaultSeriesIsTheLargestLoadableCtThenT1WeightedMr)
                 s.echoTimeMs = te * e;
                 s.echoNumber = e;
                 s.seriesNumber = number;
-                voxhap::test::writeSyntheticSlice(s, mDir / (number + "-" + std::to_string(e) + "-" + std::to_string(k) + ".dcm"));
+                voxhap::test::writeSyntheticSlice(
+                    s, mDir / (number + "-" + std::to_string(e) + "-" + std::to_string(k) + ".dcm"));
             }
         }
     };
@@ -263,7 +270,8 @@ TEST_F(DicomExports, DefaultSeriesIsTheLargestLoadableCtThenT1WeightedMr)
     const Volume echo2 = loadDicom({mDir}, second, &report);
     EXPECT_EQ(report.volume, 2u);
     EXPECT_EQ(echo2.indexBox().dims().z(), 8);
-    EXPECT_NE(echo2.metadata().extra.at("volume").find("echo 2"), std::string::npos) << echo2.metadata().extra.at("volume");
+    EXPECT_NE(echo2.metadata().extra.at("volume").find("echo 2"), std::string::npos)
+        << echo2.metadata().extra.at("volume");
 }
 
 TEST_F(DicomExports, DamagedSliceIsNamedWithItsOffsetAndSkipBadLoadsTheRest)
@@ -335,14 +343,16 @@ TEST_F(DicomExports, GzipCompressedFilesLoadAsDicomAndDamagedStreamsAreRefused)
     writeCt(mDir / "plain", 4);
     fs::create_directories(mDir / "gz");
     for (int k = 0; k < 4; ++k) {
-        gzipFile(mDir / "plain" / ("s" + std::to_string(k) + ".dcm"), mDir / "gz" / ("s" + std::to_string(k) + ".dcm.gz"));
+        gzipFile(
+            mDir / "plain" / ("s" + std::to_string(k) + ".dcm"), mDir / "gz" / ("s" + std::to_string(k) + ".dcm.gz"));
     }
     expectStored(loadDicom({mDir / "gz"}), 4);
     // No inflated copy is left behind.
-    EXPECT_TRUE(std::none_of(fs::directory_iterator(fs::temp_directory_path()), fs::directory_iterator(), [](const auto& e) {
-        return e.path().filename().string().rfind("voxhap-dicom-gz-", 0) == 0 && fs::exists(e.path() / "0.dcm") &&
-               fs::last_write_time(e.path()) > fs::file_time_type::clock::now() - std::chrono::seconds(60);
-    }));
+    EXPECT_TRUE(
+        std::none_of(fs::directory_iterator(fs::temp_directory_path()), fs::directory_iterator(), [](const auto& e) {
+            return e.path().filename().string().rfind("voxhap-dicom-gz-", 0) == 0 && fs::exists(e.path() / "0.dcm") &&
+                fs::last_write_time(e.path()) > fs::file_time_type::clock::now() - std::chrono::seconds(60);
+        }));
 
     // One member's trailer cut, then bytes after the last member: each is
     // refused naming the .gz file the user has, never loaded as other voxels.
@@ -373,7 +383,8 @@ TEST_F(DicomExports, NonImageObjectsInASeriesFolderDoNotStopIt)
 {
     // Philips and Siemens exports put raw data and reports among the images.
     writeCt(mDir, 3);
-    for (const auto& [name, sop] : {std::pair{"raw.dcm", "1.2.840.10008.5.1.4.1.1.66"}, std::pair{"sr.dcm", "1.2.840.10008.5.1.4.1.1.88.22"}}) {
+    for (const auto& [name, sop] :
+        {std::pair{"raw.dcm", "1.2.840.10008.5.1.4.1.1.66"}, std::pair{"sr.dcm", "1.2.840.10008.5.1.4.1.1.88.22"}}) {
         voxhap::test::writeSyntheticSlice(ctSlice(0), mDir / name);
         voxhap::test::rewrite(mDir / name, [sop = std::string(sop)](gdcm::File& f) {
             gdcm::Attribute<0x0008, 0x0016> a;
@@ -458,7 +469,8 @@ TEST_F(DicomExports, EnhancedMultiFrameTimeSeriesLoadsOneTimePoint)
         ASSERT_EQ(v.indexBox().dims().z(), 3);
         auto acc = huGrid(v)->getConstAccessor();
         // Slice k of time point t is frame 3·(t − 1) + k, whose stored values are storedAt(·, ·, frame).
-        for (int k = 0; k < 3; ++k) EXPECT_EQ(acc.getValue({5, 4, k}), float(storedAt(5, 4, int(3 * (t - 1)) + k))) << t << "," << k;
+        for (int k = 0; k < 3; ++k)
+            EXPECT_EQ(acc.getValue({5, 4, k}), float(storedAt(5, 4, int(3 * (t - 1)) + k))) << t << "," << k;
         EXPECT_NE(v.metadata().extra.at("volume").find("time point " + std::to_string(t)), std::string::npos);
     }
 }

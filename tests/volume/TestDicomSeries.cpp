@@ -44,11 +44,13 @@ constexpr double kLinearResampleHu = 1e-2;
 
 /// The stored value the synthetic slices hold at column i, row j of slice k.
 /// Column 0 is air (0 → HU = intercept, far below the air threshold).
-std::int16_t storedValue(int i, int j, int k) { return i == 0 ? std::int16_t(0) : std::int16_t(900 + 7 * i + 13 * j + 31 * k); }
+std::int16_t storedValue(int i, int j, int k)
+{
+    return i == 0 ? std::int16_t(0) : std::int16_t(900 + 7 * i + 13 * j + 31 * k);
+}
 
 class DicomSeries : public voxhap::test::TempDirTest {
 protected:
-
     /// A slice k of the standard series at position base + k·step·normal.
     static SyntheticSlice slice(int k, double step = 2.5)
     {
@@ -97,7 +99,8 @@ TEST_F(DicomSeries, ShuffledFilesLoadInPositionOrderWithPerSliceRescale)
     for (int k = 0; k < 10; ++k) {
         for (int j = 0; j < 12; ++j) {
             for (int i = 0; i < 16; ++i) {
-                const double hu = slices[std::size_t(k)].slope * storedValue(i, j, k) + slices[std::size_t(k)].intercept;
+                const double hu =
+                    slices[std::size_t(k)].slope * storedValue(i, j, k) + slices[std::size_t(k)].intercept;
                 const openvdb::Coord c(i, j, k);
                 if (hu < -950.0) {
                     EXPECT_FALSE(acc.isValueOn(c)) << i << "," << j << "," << k;
@@ -131,14 +134,14 @@ TEST_F(DicomSeries, MultiFrameFileLoadsEveryFrameAtItsPosition)
     EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(0, 0, 4)), frames[4].position, kDicomDecimalMm));
     auto acc = huGrid(v)->getConstAccessor();
     for (int k = 0; k < 5; ++k) {
-        for (int i = 1; i < 16; i += 4) EXPECT_EQ(acc.getValue(openvdb::Coord(i, 7, k)), float(storedValue(i, 7, k) - 1024)) << i << "," << k;
+        for (int i = 1; i < 16; i += 4)
+            EXPECT_EQ(acc.getValue(openvdb::Coord(i, 7, k)), float(storedValue(i, 7, k) - 1024)) << i << "," << k;
     }
 }
 
 /// @brief Apply @p edit to the first item of every functional group of an
 /// enhanced file (shared, then each frame's), writing the result back.
-template <typename Edit>
-void editFunctionalGroups(const fs::path& file, Edit&& edit)
+template <typename Edit> void editFunctionalGroups(const fs::path& file, Edit&& edit)
 {
     voxhap::test::rewrite(file, [&](gdcm::File& f) {
         gdcm::DataSet& ds = f.GetDataSet();
@@ -242,13 +245,15 @@ TEST_F(DicomSeries, ImagesThatAreNotCtOrMrAreSetAsideByClass)
     EXPECT_TRUE(c.series.empty());
     ASSERT_EQ(c.skipped.size(), 1u);
     EXPECT_EQ(c.skipped.front().category, "Ultrasound Image Storage");
-    EXPECT_NE(c.skipped.front().reason.find("1.2.840.10008.5.1.4.1.1.6.1"), std::string::npos) << c.skipped.front().reason;
+    EXPECT_NE(c.skipped.front().reason.find("1.2.840.10008.5.1.4.1.1.6.1"), std::string::npos)
+        << c.skipped.front().reason;
     try {
         loadDicom({file});
         FAIL() << "an ultrasound image loaded";
     } catch (const voxhap::IoError& e) {
         const std::string msg = e.what();
-        EXPECT_EQ(msg.rfind(file.string() + ": no DICOM image found (set aside: 1 Ultrasound Image Storage)", 0), 0u) << msg;
+        EXPECT_EQ(msg.rfind(file.string() + ": no DICOM image found (set aside: 1 Ultrasound Image Storage)", 0), 0u)
+            << msg;
     }
 }
 
@@ -265,7 +270,7 @@ TEST_F(DicomSeries, CompressedSeriesLoadExactlyAsUncompressed)
     for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
     const Volume plain = loadDicom({mDir});
     for (const auto ts : {gdcm::TransferSyntax::JPEGLSLossless, gdcm::TransferSyntax::RLELossless,
-                          gdcm::TransferSyntax::JPEGLosslessProcess14_1}) {
+             gdcm::TransferSyntax::JPEGLosslessProcess14_1}) {
         const fs::path dir = mDir / ("ts" + std::to_string(int(ts)));
         fs::create_directories(dir);
         for (int k = 0; k < 3; ++k) {
@@ -302,7 +307,8 @@ TEST_F(DicomSeries, CodecAbortInsideGdcmBecomesOneLineAndTheProcessLivesOn)
     // A fuzzing finding: a corrupt JPEG stream on which GDCM's JPEG codec
     // asserts. The decode runs in a child process, so this test survives it.
     const fs::path file = mDir / "corrupt-jpeg.dcm";
-    fs::copy_file(fs::path(VOXHAP_SOURCE_DIR) / "fuzz/regressions/DicomPreflight/jpeg-stream-gdcm-asserts-on.dcm", file);
+    fs::copy_file(
+        fs::path(VOXHAP_SOURCE_DIR) / "fuzz/regressions/DicomPreflight/jpeg-stream-gdcm-asserts-on.dcm", file);
     try {
         loadDicom({file});
         FAIL() << "a corrupt JPEG stream loaded";
@@ -366,7 +372,8 @@ TEST_F(DicomSeries, MissingSliceIsRefusedOrResampled)
     auto acc = huGrid(v)->getConstAccessor();
     for (int k : {3, 4, 5}) {
         for (int i = 1; i < 16; i += 5) {
-            EXPECT_NEAR(acc.getValue(openvdb::Coord(i, 6, k)), storedValue(i, 6, k) - 1024.0, kLinearResampleHu) << i << "," << k;
+            EXPECT_NEAR(acc.getValue(openvdb::Coord(i, 6, k)), storedValue(i, 6, k) - 1024.0, kLinearResampleHu)
+                << i << "," << k;
         }
     }
 }
@@ -500,7 +507,8 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     EXPECT_FALSE(unknown.has(Channel::T1));
     ASSERT_TRUE(unknown.has(Channel::Intensity));
     EXPECT_EQ(unknown.metadata().mrWeighting, "unknown");
-    EXPECT_EQ(intensityGrid(unknown)->getConstAccessor().getValue(openvdb::Coord(3, 2, 1)), float(storedValue(3, 2, 1)));
+    EXPECT_EQ(
+        intensityGrid(unknown)->getConstAccessor().getValue(openvdb::Coord(3, 2, 1)), float(storedValue(3, 2, 1)));
 
     // A T2-weighted turbo spin echo: intensity, named as such.
     fs::remove_all(mDir);
@@ -580,7 +588,9 @@ TEST_F(DicomSeries, T1WeightedIntensityIsNormalisedPerScanFromFatAndMuscle)
 {
     // physics.md §5.1/§5.4: fat and muscle of the scan take the table's T1 at
     // its field strength; between them intensity is linear in 1/T1.
-    const auto t1At = [](const Volume& v, int i) { return double(t1Grid(v)->getConstAccessor().getValue(openvdb::Coord(i, 4, 1))); };
+    const auto t1At = [](const Volume& v, int i) {
+        return double(t1Grid(v)->getConstAccessor().getValue(openvdb::Coord(i, 4, 1)));
+    };
     // Float storage of values of order 1e3 ms: relative rounding 6e-8.
     constexpr double kFloatMs = 1e-3;
     for (const auto& [tesla, fatMs, muscleMs] : {std::tuple{1.5, 290.0, 856.0}, std::tuple{3.0, 382.0, 898.0}}) {
@@ -688,7 +698,8 @@ TEST_F(DicomSeries, UnsupportedOrContradictoryTransferSyntaxIsRefused)
     for (auto ts : {gdcm::TransferSyntax::MPEG2MainProfile, gdcm::TransferSyntax::JPEG2000Lossless}) {
         fs::remove_all(mDir);
         fs::create_directories(mDir);
-        for (int k = 0; k < 3; ++k) voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
+        for (int k = 0; k < 3; ++k)
+            voxhap::test::writeSyntheticSlice(slice(k), mDir / ("s" + std::to_string(k) + ".dcm"));
         voxhap::test::relabelTransferSyntax(mDir / "s2.dcm", ts);
         try {
             loadDicom({mDir});

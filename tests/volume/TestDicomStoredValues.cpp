@@ -54,7 +54,7 @@ std::string decimals(const Vec3d& p, int decimals)
     return buf;
 }
 
-class DicomStoredValues : public voxhap::test::TempDirTest {};
+class DicomStoredValues : public voxhap::test::TempDirTest { };
 
 TEST_F(DicomStoredValues, LastDigitUnitsAndTolerancesFollowTheStoredDigits)
 {
@@ -148,7 +148,7 @@ TEST_F(DicomStoredValues, ResamplingATiltedStackKeepsEverySourceVoxel)
                 const Vec3d ijk = v.worldToIndex(p0 + Vec3d(i * dx, j * dy, 0));
                 // Inside the grid: within half a voxel of its extent (1e-9: float noise of the transform).
                 const bool in = (ijk.array() >= box.min.cast<double>().array() - 0.5 - 1e-9).all() &&
-                                (ijk.array() <= box.max.cast<double>().array() + 0.5 + 1e-9).all();
+                    (ijk.array() <= box.max.cast<double>().array() + 0.5 + 1e-9).all();
                 outside += in ? 0 : 1;
             }
         }
@@ -203,7 +203,8 @@ TEST_F(DicomStoredValues, OneImageStoredThreeWaysGivesOneVolume)
         auto acc = huGrid(v)->getConstAccessor();
         for (int k = 0; k < 3; ++k)
             for (int j = 0; j < 12; ++j)
-                for (int i = 0; i < 16; ++i) ASSERT_EQ(acc.getValue({i, j, k}), float(value(i, j, k))) << "variant " << variant;
+                for (int i = 0; i < 16; ++i)
+                    ASSERT_EQ(acc.getValue({i, j, k}), float(value(i, j, k))) << "variant " << variant;
     }
 }
 

@@ -29,9 +29,11 @@ using namespace voxhap::volume;
 
 class MetaImage : public voxhap::test::TempDirTest {
 protected:
-
     static constexpr int kNx = 9, kNy = 6, kNz = 5;
-    static std::int16_t stored(int i, int j, int k) { return i == 0 ? std::int16_t(-1000) : std::int16_t(-300 + 41 * i + 17 * j + 3 * k); }
+    static std::int16_t stored(int i, int j, int k)
+    {
+        return i == 0 ? std::int16_t(-1000) : std::int16_t(-300 + 41 * i + 17 * j + 3 * k);
+    }
     static Mat3d direction() { return Eigen::AngleAxisd(-0.7, Vec3d(3, -1, 2).normalized()).toRotationMatrix(); }
 
     static std::string samples(bool bigEndian)
@@ -55,7 +57,8 @@ protected:
         h << "TransformMatrix =";
         for (int a = 0; a < 3; ++a) h << ' ' << d(0, a) << ' ' << d(1, a) << ' ' << d(2, a); // axis a, as ITK writes
         h << "\nOffset = -12.5 30 7.25\nElementSpacing = 0.6 0.9 1.5\nDimSize = " << kNx << ' ' << kNy << ' ' << kNz
-          << "\nElementType = MET_SHORT\n" << extra << "ElementDataFile = " << dataFile << "\n";
+          << "\nElementType = MET_SHORT\n"
+          << extra << "ElementDataFile = " << dataFile << "\n";
         return h.str();
     }
     void write(const fs::path& p, const std::string& bytes) const { std::ofstream(p, std::ios::binary) << bytes; }
@@ -67,7 +70,8 @@ protected:
         const Mat3d d = direction();
         for (const Vec3d& ijk : {Vec3d(0, 0, 0), Vec3d(kNx - 1, 2, 4)}) {
             const Vec3d expected = Vec3d(-12.5, 30, 7.25) + d * Vec3d(0.6, 0.9, 1.5).asDiagonal() * ijk;
-            EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(ijk), expected, voxhap::test::kRoundTripMm)) << ijk.transpose();
+            EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(ijk), expected, voxhap::test::kRoundTripMm))
+                << ijk.transpose();
         }
         auto acc = huGrid(v)->getConstAccessor();
         for (int k = 0; k < kNz; ++k)
@@ -101,7 +105,9 @@ TEST_F(MetaImage, ZlibCompressedData)
     const std::string raw = samples(false);
     uLongf size = compressBound(uLong(raw.size()));
     std::string z(size, '\0');
-    ASSERT_EQ(compress2(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size()), 6), Z_OK);
+    ASSERT_EQ(compress2(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
+                  uLong(raw.size()), 6),
+        Z_OK);
     z.resize(size);
     write(mDir / "z.mha", header("CompressedData = True\nCompressedDataSize = " + std::to_string(size) + "\n") + z);
     expectVolume(mDir / "z.mha");
@@ -130,17 +136,20 @@ TEST_F(MetaImage, BadFilesAreRefusedNamingTheField)
     write(mDir / "type.mha", h.replace(h.find("MET_SHORT"), 9, "MET_RGB") + data);
     expectRefused(mDir / "type.mha", "ElementType");
     h = header("");
-    write(mDir / "flat.mha", h.replace(h.find("TransformMatrix ="), 17, "TransformMatrix = 1 0 0 1 0 0 0 0 1\nX =") + data);
+    write(mDir / "flat.mha",
+        h.replace(h.find("TransformMatrix ="), 17, "TransformMatrix = 1 0 0 1 0 0 0 0 1\nX =") + data);
     expectRefused(mDir / "flat.mha", "TransformMatrix");
     write(mDir / "missing.mhd", header("", "gone.raw"));
     expectRefused(mDir / "missing.mhd", "ElementDataFile");
-    write(mDir / "huge.mha", "ObjectType = Image\nNDims = 3\nDimSize = 100000 100000 100000\nElementType = MET_FLOAT\n"
-                             "ElementDataFile = LOCAL\n");
+    write(mDir / "huge.mha",
+        "ObjectType = Image\nNDims = 3\nDimSize = 100000 100000 100000\nElementType = MET_FLOAT\n"
+        "ElementDataFile = LOCAL\n");
     expectRefused(mDir / "huge.mha", "memory cap");
     std::vector<float> nan(8, 1.0f);
     nan[3] = std::numeric_limits<float>::infinity(); // voxel (1, 1, 0)
-    write(mDir / "inf.mha", "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n" +
-                                std::string(reinterpret_cast<const char*>(nan.data()), nan.size() * 4));
+    write(mDir / "inf.mha",
+        "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n" +
+            std::string(reinterpret_cast<const char*>(nan.data()), nan.size() * 4));
     expectRefused(mDir / "inf.mha", "voxel (1, 1, 0) is not a finite number");
 }
 

@@ -25,8 +25,8 @@ using namespace voxhap::volume;
 constexpr int kN = 32;
 
 /// A head-sized ball in a 32³ grid: @p f(r, i, j, k) gives each voxel's value, r the distance from the centre [voxels].
-fs::path writeNifti(const fs::path& file, int datatype, const std::function<double(double, int, int, int)>& f,
-                    double voxelMm = 1.0)
+fs::path writeNifti(
+    const fs::path& file, int datatype, const std::function<double(double, int, int, int)>& f, double voxelMm = 1.0)
 {
     nifti_set_debug_level(0);
     const int64_t dims[8] = {3, kN, kN, kN, 1, 1, 1, 1};
@@ -37,8 +37,10 @@ fs::path writeNifti(const fs::path& file, int datatype, const std::function<doub
                 const double r = std::sqrt(double((i - 16) * (i - 16) + (j - 16) * (j - 16) + (k - 16) * (k - 16)));
                 const std::size_t n = std::size_t((k * kN + j) * kN + i);
                 const double v = f(r, i, j, k);
-                if (datatype == DT_UINT8) static_cast<std::uint8_t*>(nim->data)[n] = std::uint8_t(v);
-                else static_cast<float*>(nim->data)[n] = float(v);
+                if (datatype == DT_UINT8)
+                    static_cast<std::uint8_t*>(nim->data)[n] = std::uint8_t(v);
+                else
+                    static_cast<float*>(nim->data)[n] = float(v);
             }
         }
     }
@@ -61,9 +63,9 @@ double airNoise(int i, int j, int k) { return double((i * 7 + j * 13 + k * 29) %
 double t1wHead(double r, int i, int j, int k)
 {
     if (r > 13) return airNoise(i, j, k);
-    if (r > 11) return 220;  // fat
-    if (r < 3) return 40;    // fluid
-    return 110;              // muscle-like grey
+    if (r > 11) return 220; // fat
+    if (r < 3) return 40;   // fluid
+    return 110;             // muscle-like grey
 }
 
 /// A CT of the same ball: air, a bone shell, soft tissue.
@@ -81,7 +83,7 @@ void writeSidecar(const fs::path& image, const std::string& json)
     std::ofstream(image.parent_path() / (name + ".json")) << json;
 }
 
-class ModalityInference : public voxhap::test::TempDirTest {};
+class ModalityInference : public voxhap::test::TempDirTest { };
 
 TEST_F(ModalityInference, CtIsInferredFromAirAndWater)
 {
@@ -152,7 +154,8 @@ TEST_F(ModalityInference, BidsSidecarGivesTheWeightingAndFieldStrength)
 TEST_F(ModalityInference, ValuesThatAreNeitherAreRefusedNamingChannel)
 {
     // A z-scored image: negative values without the air of a CT.
-    const fs::path p = writeNifti(mDir / "z.nii", DT_FLOAT32, [](double r, int, int, int) { return r < 10 ? 1.5 : -0.8; });
+    const fs::path p =
+        writeNifti(mDir / "z.nii", DT_FLOAT32, [](double r, int, int, int) { return r < 10 ? 1.5 : -0.8; });
     try {
         loadVolume(p);
         FAIL() << "a z-scored image loaded as CT or MR";

@@ -201,7 +201,8 @@ TEST(MrBackground, NoAirRemovesNothing)
     // Tissue to every face, with the dark ventricle (Rician values that look
     // like a little Rayleigh noise, 0.35 % of the voxels): the low end of the
     // histogram below BET's threshold is the flank of the tissue peak.
-    auto grid = denseGrid(box, [&](int x, int y, int z) { return rician(Head::ventricle(x, y, z) ? kSigma : kTissue, kSigma, rng); });
+    auto grid = denseGrid(
+        box, [&](int x, int y, int z) { return rician(Head::ventricle(x, y, z) ? kSigma : kTissue, kSigma, rng); });
     const auto before = grid->deepCopy();
     const MrBackgroundResult r = run(*grid, box);
     EXPECT_FALSE(r.applied) << r.rule;
@@ -226,10 +227,12 @@ TEST(MrBackground, EnclosedAirOnlyRemovesNothing)
         const double dx = x - Head::kCentre, dy = y - Head::kCentre, dz = z - Head::kCentre;
         return dx * dx + dy * dy + dz * dz < 144.0;
     };
-    auto grid = denseGrid(box, [&](int x, int y, int z) { return rician(cavity(x, y, z) ? 0.0 : kTissue, kSigma, rng); });
+    auto grid =
+        denseGrid(box, [&](int x, int y, int z) { return rician(cavity(x, y, z) ? 0.0 : kTissue, kSigma, rng); });
     const MrBackgroundResult r = run(*grid, box);
     EXPECT_FALSE(r.applied) << r.rule;
-    EXPECT_NEAR(r.noiseFloor / kSigma, 1.0, 3 * kSigmaRelTolerance) << "7000 noise voxels: 3 times the tolerance; " << r.rule;
+    EXPECT_NEAR(r.noiseFloor / kSigma, 1.0, 3 * kSigmaRelTolerance)
+        << "7000 noise voxels: 3 times the tolerance; " << r.rule;
     EXPECT_NE(r.rule.find("reach the volume border"), std::string::npos) << r.rule;
     EXPECT_EQ(r.activeAfter, box.voxelCount());
 }
@@ -295,7 +298,8 @@ TEST(MrBackground, LittleAirBodyTouchingTheBorders)
     auto grid = denseGrid(box, [&](int x, int y, int) { return rician(inBody(x, y) ? kTissue : 0.0, kSigma, rng); });
     const MrBackgroundResult r = run(*grid, box);
     ASSERT_TRUE(r.applied) << r.rule;
-    EXPECT_NEAR(r.noiseFloor / kSigma, 1.0, 2 * kSigmaRelTolerance) << "fewer noise voxels: twice the tolerance; " << r.rule;
+    EXPECT_NEAR(r.noiseFloor / kSigma, 1.0, 2 * kSigmaRelTolerance)
+        << "fewer noise voxels: twice the tolerance; " << r.rule;
     std::int64_t body = 0, wrong = 0;
     for (int z = 0; z < kSize; ++z) {
         for (int y = 0; y < kSize; ++y) {
@@ -375,9 +379,10 @@ RealFigures runOnSeries(const std::filesystem::path& dir, std::size_t volume = 0
     f.memoryRatio = double(grid->memUsage()) / (4.0 * double(f.dense));
     const voxhap::Vec3i centre = (box.min + box.max) / 2;
     f.centreActive = grid->tree().isValueOn(toCoord(centre));
-    std::printf("[ figures  ] %s%s: %.1f %% active, %.3f of the leaves, memory %.3f of dense float, %.3f s\n[ rule     ] %s\n",
-                dir.filename().string().c_str(), volume ? (" volume " + std::to_string(volume)).c_str() : "", 100 * f.activeFraction, f.leafFraction, f.memoryRatio, f.result.seconds,
-                f.result.rule.c_str());
+    std::printf(
+        "[ figures  ] %s%s: %.1f %% active, %.3f of the leaves, memory %.3f of dense float, %.3f s\n[ rule     ] %s\n",
+        dir.filename().string().c_str(), volume ? (" volume " + std::to_string(volume)).c_str() : "",
+        100 * f.activeFraction, f.leafFraction, f.memoryRatio, f.result.seconds, f.result.rule.c_str());
     return f;
 }
 

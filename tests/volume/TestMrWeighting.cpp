@@ -229,7 +229,8 @@ TEST(MrWeighting, SharedFlash2dSidecarIsT1WeightedAndAgreesWithTheHeaders)
 
     VOXHAP_REQUIRE_DIR(voxhap::test::flash2dDir());
     const MrSequenceFields d = dicomFields(dicomFiles(voxhap::test::flash2dDir()).front());
-    EXPECT_NEAR(*s.fields.repetitionTimeMs, *d.repetitionTimeMs, *d.repetitionTimeMs * voxhap::test::kUnitConversionRelative);
+    EXPECT_NEAR(
+        *s.fields.repetitionTimeMs, *d.repetitionTimeMs, *d.repetitionTimeMs * voxhap::test::kUnitConversionRelative);
     EXPECT_NEAR(*s.fields.echoTimeMs, *d.echoTimeMs, *d.echoTimeMs * voxhap::test::kUnitConversionRelative);
     EXPECT_EQ(s.fields.flipAngleDeg, d.flipAngleDeg);
     EXPECT_EQ(classify(d).kind, w.kind);
@@ -237,8 +238,8 @@ TEST(MrWeighting, SharedFlash2dSidecarIsT1WeightedAndAgreesWithTheHeaders)
 
 // ---------------------------------------------------------------- other vendors and weightings
 
-MrSequenceFields fields(std::string ss, std::string sv, std::string name, std::optional<double> tr, std::optional<double> te,
-    std::optional<double> ti = std::nullopt, std::optional<double> flip = std::nullopt)
+MrSequenceFields fields(std::string ss, std::string sv, std::string name, std::optional<double> tr,
+    std::optional<double> te, std::optional<double> ti = std::nullopt, std::optional<double> flip = std::nullopt)
 {
     MrSequenceFields f;
     f.scanningSequence = std::move(ss);
@@ -278,7 +279,9 @@ TEST(MrWeighting, InversionTimeSeparatesStirT1AndFlair)
     EXPECT_KIND(stir, MrWeightingKind::Stir);
     EXPECT_FALSE(stir.fillsT1());
     // The boundaries, on an inversion-prepared gradient echo.
-    const auto atTi = [](double ti) { return classify(fields("GR\\IR", "SK\\SP\\MP", "*tfl3d1", 2300, 3, ti, 9)).kind; };
+    const auto atTi = [](double ti) {
+        return classify(fields("GR\\IR", "SK\\SP\\MP", "*tfl3d1", 2300, 3, ti, 9)).kind;
+    };
     EXPECT_EQ(atTi(kMrStirMaxTiMs), MrWeightingKind::Stir);
     EXPECT_EQ(atTi(kMrStirMaxTiMs + 1), MrWeightingKind::T1Weighted);
     EXPECT_EQ(atTi(kMrFlairMinTiMs - 1), MrWeightingKind::T1Weighted);
@@ -473,14 +476,16 @@ TEST(MrWeighting, T1SensitivityMatchesItsClosedForms)
     const double t1 = kMrReferenceT1Ms, tr = 1.0; // TR ≪ T1
     const double ernst = std::acos(std::exp(-tr / t1)) * 180.0 / std::numbers::pi;
     EXPECT_EQ(spoiledGreT1Sensitivity(tr, 0.0, t1), 0.0) << "no flip, no T1 weighting";
-    EXPECT_NEAR(spoiledGreT1Sensitivity(tr, ernst, t1), 0.5, kShortTrLimit) << "T1 and PD weigh equally at the Ernst angle";
+    EXPECT_NEAR(spoiledGreT1Sensitivity(tr, ernst, t1), 0.5, kShortTrLimit)
+        << "T1 and PD weigh equally at the Ernst angle";
     EXPECT_NEAR(spoiledGreT1Sensitivity(tr, 2 * ernst, t1), 0.8, kShortTrLimit) << "r²/(1 + r²) with r = 2";
     EXPECT_NEAR(spoiledGreT1Sensitivity(tr, 90.0, t1), 1.0, kShortTrLimit) << "S ∝ TR/T1";
     // 90° at the spin-echo short-TR limit: (TR/T1)·E1/(1 − E1), exactly.
     const double x = kMrSeShortTrMaxMs / t1, e = std::exp(-x);
     EXPECT_NEAR(spoiledGreT1Sensitivity(kMrSeShortTrMaxMs, 90.0, t1), x * e / (1 - e), 1e-12);
     EXPECT_GE(spoiledGreT1Sensitivity(kMrSeShortTrMaxMs, 90.0, t1), kMrMinT1Sensitivity) << "the two rules agree";
-    EXPECT_LT(spoiledGreT1Sensitivity(2 * kMrSeShortTrMaxMs, 90.0, t1), kMrMinT1Sensitivity) << "long TR: no T1 weighting";
+    EXPECT_LT(spoiledGreT1Sensitivity(2 * kMrSeShortTrMaxMs, 90.0, t1), kMrMinT1Sensitivity)
+        << "long TR: no T1 weighting";
 }
 
 // ---------------------------------------------------------------- BIDS sidecars
@@ -542,7 +547,8 @@ TEST_F(MrWeightingSidecar, MalformedJsonIsRefusedNamingTheFile)
 TEST_F(MrWeightingSidecar, WrongFieldTypesAreRefusedNamingTheField)
 {
     const auto refused = [&](const char* name, const std::string& text, const std::string& field) {
-        voxhap::test::expectRefused<voxhap::IoError>([](const fs::path& f) { readBidsSidecar(f); }, write(name, text), field);
+        voxhap::test::expectRefused<voxhap::IoError>(
+            [](const fs::path& f) { readBidsSidecar(f); }, write(name, text), field);
     };
     refused("tr-string.json", R"({"RepetitionTime": "2.3"})", "RepetitionTime: must be a number");
     refused("flip-negative.json", R"({"FlipAngle": -9})", "FlipAngle");

@@ -70,7 +70,7 @@ protected:
         nim->sto_xyz = mat;
         nim->qform_code = qform ? NIFTI_XFORM_SCANNER_ANAT : 0;
         nifti_dmat44_to_quatern(mat, &nim->quatern_b, &nim->quatern_c, &nim->quatern_d, &nim->qoffset_x,
-                                &nim->qoffset_y, &nim->qoffset_z, &nim->dx, &nim->dy, &nim->dz, &nim->qfac);
+            &nim->qoffset_y, &nim->qoffset_z, &nim->dx, &nim->dy, &nim->dz, &nim->qfac);
         nim->pixdim[1] = nim->dx;
         nim->pixdim[2] = nim->dy;
         nim->pixdim[3] = nim->dz;
@@ -94,7 +94,8 @@ protected:
         auto acc = huGrid(v)->getConstAccessor();
         for (int k = 0; k < kNz; ++k)
             for (int j = 0; j < kNy; ++j)
-                for (int i = 1; i < kNx; ++i) ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), value(i, j, k)) << i << j << k;
+                for (int i = 1; i < kNx; ++i)
+                    ASSERT_EQ(acc.getValue(openvdb::Coord(i, j, k)), value(i, j, k)) << i << j << k;
         EXPECT_FALSE(acc.isValueOn(openvdb::Coord(0, 3, 3))) << "air is inactive";
     }
     /// Load @p p expecting an IoError whose one-line message names the file and contains @p field.
@@ -132,7 +133,8 @@ TEST_F(Nifti, ScaledIntegersBecomeExactValues)
 TEST_F(Nifti, BadFilesAreRefusedNamingTheField)
 {
     const fs::path good = write("good.nii", true, false);
-    const auto copy = [&](const std::string& name, std::size_t keep, std::size_t patchAt = 0, const std::string& patch = {}) {
+    const auto copy = [&](const std::string& name, std::size_t keep, std::size_t patchAt = 0,
+                          const std::string& patch = {}) {
         std::ifstream in(good, std::ios::binary);
         std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         bytes.resize(std::min(bytes.size(), keep));

@@ -30,9 +30,11 @@ using namespace voxhap::volume;
 
 class Nrrd : public voxhap::test::TempDirTest {
 protected:
-
     /// Value at voxel (i, j, k): varied, with an air corner (i = 0) below the threshold.
-    static float value(int i, int j, int k) { return i == 0 ? -1000.0f : float(-900 + 37 * i + 11 * j - 5 * k) + 0.25f; }
+    static float value(int i, int j, int k)
+    {
+        return i == 0 ? -1000.0f : float(-900 + 37 * i + 11 * j - 5 * k) + 0.25f;
+    }
 
     /// A 11 × 9 × 10 volume (not multiples of the 8-voxel leaf) with oblique axes.
     static Volume makeVolume()
@@ -78,7 +80,8 @@ TEST_F(Nrrd, RoundTripIsExactWithObliqueDirections)
         EXPECT_TRUE(voxhap::test::nearVec(b.origin, a.origin, voxhap::test::kRoundTripMm));
         EXPECT_TRUE(voxhap::test::nearVec(b.spacing, a.spacing, voxhap::test::kGeometryRelative * 10));
         for (int c = 0; c < 3; ++c) {
-            EXPECT_TRUE(voxhap::test::nearVec(b.direction.col(c), a.direction.col(c), voxhap::test::kGeometryRelative)) << c;
+            EXPECT_TRUE(voxhap::test::nearVec(b.direction.col(c), a.direction.col(c), voxhap::test::kGeometryRelative))
+                << c;
         }
         EXPECT_EQ(back.metadata().modality, "CT");
         auto acc = huGrid(back)->getConstAccessor();
@@ -141,7 +144,8 @@ TEST_F(Nrrd, HeaderGivesSlicerTheLpsGeometry)
     std::istringstream ds(directions), os(origin);
     const Geometry g = v.geometry();
     for (int a = 0; a < 3; ++a) {
-        EXPECT_TRUE(voxhap::test::nearVec(parse(ds), g.direction.col(a) * g.spacing[a], voxhap::test::kRoundTripMm)) << a;
+        EXPECT_TRUE(voxhap::test::nearVec(parse(ds), g.direction.col(a) * g.spacing[a], voxhap::test::kRoundTripMm))
+            << a;
     }
     EXPECT_TRUE(voxhap::test::nearVec(parse(os), v.indexToWorld(Vec3d::Zero()), voxhap::test::kRoundTripMm))
         << "space origin is the centre of voxel (0,0,0)";
@@ -156,13 +160,14 @@ TEST_F(Nrrd, RasSpaceIsConvertedToLps)
     // right (RAS +x), so in LPS it runs along -x, and the origin's x and y flip.
     const float data[2] = {10.0f, 20.0f};
     writeText(mDir / "ras.nrrd",
-              "NRRD0004\ntype: float\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 1 1\n"
-              "space directions: (1.5,0,0) (0,2,0) (0,0,3)\nkinds: domain domain domain\nendian: little\n"
-              "encoding: raw\nspace origin: (10,20,30)\n\n",
-              std::string(reinterpret_cast<const char*>(data), sizeof data));
+        "NRRD0004\ntype: float\ndimension: 3\nspace: right-anterior-superior\nsizes: 2 1 1\n"
+        "space directions: (1.5,0,0) (0,2,0) (0,0,3)\nkinds: domain domain domain\nendian: little\n"
+        "encoding: raw\nspace origin: (10,20,30)\n\n",
+        std::string(reinterpret_cast<const char*>(data), sizeof data));
     const Volume v = loadNrrd(mDir / "ras.nrrd");
     EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(0, 0, 0)), Vec3d(-10, -20, 30), voxhap::test::kRoundTripMm));
-    EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(Vec3d(1, 0, 0)), Vec3d(-11.5, -20, 30), voxhap::test::kRoundTripMm));
+    EXPECT_TRUE(
+        voxhap::test::nearVec(v.indexToWorld(Vec3d(1, 0, 0)), Vec3d(-11.5, -20, 30), voxhap::test::kRoundTripMm));
     EXPECT_EQ(huGrid(v)->getConstAccessor().getValue(openvdb::Coord(1, 0, 0)), 20.0f);
 }
 
@@ -208,14 +213,16 @@ TEST_F(Nrrd, BadFilesAreRefusedNamingTheField)
 TEST_F(Nrrd, DimensionsOverTheMemoryCapAreRefusedBeforeReading)
 {
     // 100000³ floats would be 4e15 bytes: refused from the header alone (no data follows).
-    writeText(mDir / "huge.nrrd", "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 100000 100000 100000\n"
-                                  "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n");
+    writeText(mDir / "huge.nrrd",
+        "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 100000 100000 100000\n"
+        "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n");
     expectRefused(mDir / "huge.nrrd", "memory cap");
     RasterOptions small;
     small.memoryCapBytes = 100; // 4×4×2 floats = 128 bytes
-    writeText(mDir / "small.nrrd", "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
-                                   "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
-              std::string(128, '\0'));
+    writeText(mDir / "small.nrrd",
+        "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
+        "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
+        std::string(128, '\0'));
     expectRefused(mDir / "small.nrrd", "memory cap", small);
 }
 
@@ -224,9 +231,9 @@ TEST_F(Nrrd, NanVoxelIsRefusedWithItsIndex)
     std::vector<float> data(4 * 4 * 2, 0.0f);
     data[4 * 4 + 4 + 2] = std::numeric_limits<float>::quiet_NaN(); // voxel (2, 1, 1)
     writeText(mDir / "nan.nrrd",
-              "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
-              "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
-              std::string(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float)));
+        "NRRD0004\ntype: float\ndimension: 3\nspace: LPS\nsizes: 4 4 2\n"
+        "space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n",
+        std::string(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float)));
     expectRefused(mDir / "nan.nrrd", "voxel (2, 1, 1) is not a finite number");
 }
 

@@ -31,8 +31,8 @@ std::string labelAt(const Volume& v, const Vec3d& world)
 }
 
 struct Boundary {
-    std::string below;  ///< tissue on the deeper side
-    double depth;       ///< [mm] along the path
+    std::string below; ///< tissue on the deeper side
+    double depth;      ///< [mm] along the path
 };
 
 /// Tissue transitions along entry + s·dir, sampled every 0.01 mm through the voxels.
@@ -60,13 +60,13 @@ std::vector<std::pair<std::string, double>> expectedMidline(double dermaMm, doub
         for (double* t : {&skin, &fat, &supra, &inter, &flavum}) *t *= s;
     }
     return {{"skin", skin}, {"fat", fat}, {"supraspinous_ligament", supra}, {"interspinous_ligament", inter},
-            {"ligamentum_flavum", flavum}, {"epidural_space", epiduralMm}, {"dura", 1.0}, {"csf", 13.0}, {"dura", 1.0}};
+        {"ligamentum_flavum", flavum}, {"epidural_space", epiduralMm}, {"dura", 1.0}, {"csf", 13.0}, {"dura", 1.0}};
 }
 
 /// Walk down the column through (x, z) from 1 mm above the skin; the boundaries
 /// (air -> skin first) must match @p expected within @p tolerance.
-void expectMidline(const Volume& v, const std::vector<std::pair<std::string, double>>& expected, double tolerance,
-                   double x, double z)
+void expectMidline(
+    const Volume& v, const std::vector<std::pair<std::string, double>>& expected, double tolerance, double x, double z)
 {
     constexpr double kAbove = 1.0;
     const auto found = voxelBoundaries(v, Vec3d(x, kAbove, z), Vec3d(0, -1, 0), 120.0);
@@ -289,7 +289,7 @@ TEST(TorsoPhantom, OrgansOfTheSpineBiopsySimulator)
     const Volume v = makePhantom(model, p.grid, table());
     const auto n = census(v);
     for (const char* organ : {"skin", "fat", "muscle", "cortical_bone", "cancellous_bone", "lesion", "lung", "kidney",
-                              "aorta", "csf", "spinal_cord"}) {
+             "aorta", "csf", "spinal_cord"}) {
         EXPECT_GT(n.count(organ) ? n.at(organ) : 0, 0) << organ;
     }
     std::map<std::string, Vec3d> marks(model.landmarks.begin(), model.landmarks.end());
@@ -308,7 +308,7 @@ TEST(TorsoPhantom, OrgansOfTheSpineBiopsySimulator)
     for (auto it = label->cbeginValueOn(); it; ++it) {
         if (*it != lesion) continue;
         for (const auto& off : {openvdb::Coord(1, 0, 0), openvdb::Coord(-1, 0, 0), openvdb::Coord(0, 1, 0),
-                                openvdb::Coord(0, -1, 0), openvdb::Coord(0, 0, 1), openvdb::Coord(0, 0, -1)}) {
+                 openvdb::Coord(0, -1, 0), openvdb::Coord(0, 0, 1), openvdb::Coord(0, 0, -1)}) {
             EXPECT_TRUE(allowed.count(acc.getValue(it.getCoord() + off)));
         }
     }

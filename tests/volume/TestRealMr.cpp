@@ -128,7 +128,8 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     const fs::path first = dicomFiles(dir).front();
     const std::string bytes = readAll(first);
     const auto coordinate = [&](int k, const char* axis) {
-        const std::regex re("sSliceArray\\.asSlice\\[" + std::to_string(k) + "\\]\\.sPosition\\." + axis + "\\s*=\\s*([-0-9.eE]+)");
+        const std::regex re(
+            "sSliceArray\\.asSlice\\[" + std::to_string(k) + "\\]\\.sPosition\\." + axis + "\\s*=\\s*([-0-9.eE]+)");
         std::smatch m;
         return std::regex_search(bytes, m, re) ? std::stod(m[1]) : 0.0; // an absent coordinate is 0
     };
@@ -171,7 +172,8 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     // Every volume loads, b = 1000 after the b = 0.
     o.volume = 13;
     const Volume last = loadDicom({dir}, o);
-    EXPECT_NE(last.metadata().extra.at("volume").find("13 of 13 (b=1000)"), std::string::npos) << last.metadata().extra.at("volume");
+    EXPECT_NE(last.metadata().extra.at("volume").find("13 of 13 (b=1000)"), std::string::npos)
+        << last.metadata().extra.at("volume");
 }
 
 TEST(RealMr, Flash2dIsT1WeightedAndAHead)

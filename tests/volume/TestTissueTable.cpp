@@ -66,7 +66,8 @@ TEST(TissueTable, BuiltinIsConsistent)
 }
 
 // A minimal valid table with air and one tissue; each test breaks one thing.
-std::string table(const std::string& fatExtra, const std::string& fatThickness = R"({"value": 2.8, "unit": "mm", "source": "s"})")
+std::string table(
+    const std::string& fatExtra, const std::string& fatThickness = R"({"value": 2.8, "unit": "mm", "source": "s"})")
 {
     return R"({"schema": "voxhap.tissues/1", "tissues": [
       {"id": 0, "name": "air", "colour": [0,0,0],
@@ -75,7 +76,8 @@ std::string table(const std::string& fatExtra, const std::string& fatThickness =
       {"id": 2, "name": "fat", "colour": [250,220,120],
        "hu": {"min": -190, "typical": -100, "max": -30, "unit": "HU", "source": "s"},
        "t1_1.5T": {"value": 290, "unit": "ms", "source": "s"}, "t1_3T": {"value": 382, "unit": "ms", "source": "s"},
-       "thickness": )" + fatThickness + fatExtra + R"(}]})";
+       "thickness": )" +
+        fatThickness + fatExtra + R"(}]})";
 }
 
 /// Parsing must fail with a ValueError whose message names the file, the entry and the fault.
@@ -94,7 +96,8 @@ void expectRejected(const std::string& json, const std::vector<std::string>& fra
 
 TEST(TissueTable, MinimalTableParsesAndConvertsUnits)
 {
-    const TissueTable t = TissueTable::parse(table("", R"({"value": 1.2, "unit": "cm", "source": "s", "chosen": true})"), "x");
+    const TissueTable t =
+        TissueTable::parse(table("", R"({"value": 1.2, "unit": "cm", "source": "s", "chosen": true})"), "x");
     expectRel(t.at("fat").thickness->value, 12.0);
     EXPECT_TRUE(t.at("fat").thickness->chosen);
     EXPECT_EQ(t.maxId(), 2);
@@ -104,14 +107,15 @@ TEST(TissueTable, MinimalTableParsesAndConvertsUnits)
 TEST(TissueTable, RejectsUnknownKey)
 {
     expectRejected(table(R"(, "thicknes": {"value": 1, "unit": "mm", "source": "s"})"),
-                   {"tissue 'fat' (id 2)", "unknown key 'thicknes'"});
+        {"tissue 'fat' (id 2)", "unknown key 'thicknes'"});
     expectRejected(table("", R"({"value": 2.8, "unit": "mm", "source": "s", "sorce": "x"})"),
-                   {"field 'thickness'", "unknown key 'sorce'"});
+        {"field 'thickness'", "unknown key 'sorce'"});
 }
 
 TEST(TissueTable, RejectsMissingUnit)
 {
-    expectRejected(table("", R"({"value": 2.8, "source": "s"})"), {"tissue 'fat'", "field 'thickness'", "missing 'unit'"});
+    expectRejected(
+        table("", R"({"value": 2.8, "source": "s"})"), {"tissue 'fat'", "field 'thickness'", "missing 'unit'"});
 }
 
 TEST(TissueTable, RejectsUnitOfTheWrongKind)
@@ -127,8 +131,10 @@ TEST(TissueTable, RejectsNegativeValue)
 TEST(TissueTable, RejectsNonFiniteValue)
 {
     // JSON has no NaN literal; an overflowing literal is the way a non-finite number arrives.
-    expectRejected(table("", R"({"value": 1e999, "unit": "mm", "source": "s"})"), {"tissue 'fat'", "1e999", "not finite"});
-    expectRejected(table("", R"({"value": "NaN", "unit": "mm", "source": "s"})"), {"field 'thickness'", "not a number"});
+    expectRejected(
+        table("", R"({"value": 1e999, "unit": "mm", "source": "s"})"), {"tissue 'fat'", "1e999", "not finite"});
+    expectRejected(
+        table("", R"({"value": "NaN", "unit": "mm", "source": "s"})"), {"field 'thickness'", "not a number"});
 }
 
 TEST(TissueTable, RejectsMissingSource)
@@ -138,7 +144,8 @@ TEST(TissueTable, RejectsMissingSource)
 
 TEST(TissueTable, RejectsInconsistentEntries)
 {
-    expectRejected(table(R"(, "colour": [1,2])"), {"tissue 'fat'"}); // duplicate key: the last one wins in JSON, and it is bad
+    expectRejected(
+        table(R"(, "colour": [1,2])"), {"tissue 'fat'"}); // duplicate key: the last one wins in JSON, and it is bad
     std::string dup = table("");
     dup.replace(dup.find("\"id\": 2"), 7, "\"id\": 0");
     expectRejected(dup, {"duplicate id 0"});

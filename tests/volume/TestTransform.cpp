@@ -23,8 +23,8 @@ Geometry obliqueGeometry()
     Geometry g;
     g.spacing = Vec3d(0.7, 1.074, 3.0); // CT-like anisotropy
     g.origin = Vec3d(-251.3, 17.25, -1043.5);
-    g.direction = (Eigen::AngleAxisd(0.3, Vec3d(1, 2, 3).normalized()) *
-                   Eigen::AngleAxisd(-0.2, Vec3d::UnitX())).toRotationMatrix();
+    g.direction = (Eigen::AngleAxisd(0.3, Vec3d(1, 2, 3).normalized()) * Eigen::AngleAxisd(-0.2, Vec3d::UnitX()))
+                      .toRotationMatrix();
     return g;
 }
 

@@ -27,8 +27,8 @@ public:
     TempDir()
     {
         mPath = fs::temp_directory_path() /
-                ("voxhap-test-" + std::to_string(::getpid()) + "-" +
-                 testing::UnitTest::GetInstance()->current_test_info()->name());
+            ("voxhap-test-" + std::to_string(::getpid()) + "-" +
+                testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::create_directories(mPath);
     }
     ~TempDir() { fs::remove_all(mPath); }
@@ -39,8 +39,7 @@ private:
     fs::path mPath;
 };
 
-template <typename GridT>
-void expectSameVoxels(const GridT& a, const GridT& b)
+template <typename GridT> void expectSameVoxels(const GridT& a, const GridT& b)
 {
     EXPECT_EQ(a.activeVoxelCount(), b.activeVoxelCount());
     EXPECT_EQ(a.background(), b.background());
@@ -117,7 +116,7 @@ TEST(VdbFile, BadFilesGiveOneClearError)
     initializeOpenVdb();
     auto density = FloatGrid::create(0.0f);
     density->setName("density");
-    openvdb::io::File(( dir / "foreign.vdb").string()).write({density});
+    openvdb::io::File((dir / "foreign.vdb").string()).write({density});
     expectIoError(dir / "foreign.vdb", "found: density");
 }
 
