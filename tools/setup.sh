@@ -36,6 +36,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # libFuzzer targets of the parsers (clang's runtime: fuzzer, address, undefined)
   clang libclang-rt-14-dev
+  # the format check of the sources (.clang-format)
+  clang-format
   # benchmark plots (pngcairo, no X needed)
   gnuplot-nox
   # real DICOM test files of other encodings and object classes (pydicom's test data)
