@@ -7,7 +7,7 @@
 #include "render/Display.h"
 #include "render/Viewer.h"
 #include "core/Errors.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/Volume.h"
 #include "volume/VolumeFile.h"
 

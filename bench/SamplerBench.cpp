@@ -10,7 +10,7 @@
 #include "haptic/ShaftIntegration.h"
 #include "haptic/TrajectoryProfile.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 

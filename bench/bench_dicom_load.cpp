@@ -8,7 +8,7 @@
 ///   bench_dicom_load [DIR] [--repeat N] [--json FILE]
 /// DIR defaults to ../shared/data/ct-abdomen-tcia/dicom beside the project.
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <gdcmImageReader.h>
 #include <gdcmTrace.h>

@@ -15,7 +15,7 @@
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include "bench/SamplerBench.h" // machineDescription
 #include "bench/Stats.h"

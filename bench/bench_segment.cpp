@@ -11,7 +11,7 @@
 
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include "bench/Stats.h"

@@ -5,8 +5,8 @@
 /// Run: build/bin/bench_volume [--benchmark_repetitions=5]. Figures are
 /// reported per voxel of the dense extent, so that spacings compare.
 
-#include "volume/Phantoms.h"
-#include "volume/VdbFile.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/io/VdbFile.h"
 
 #include <benchmark/benchmark.h>
 

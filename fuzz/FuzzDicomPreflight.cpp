@@ -8,7 +8,7 @@
 
 #include "FuzzInput.h"
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <gdcmTrace.h>
 

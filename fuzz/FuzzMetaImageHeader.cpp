@@ -4,7 +4,7 @@
 
 #include "FuzzInput.h"
 
-#include "volume/MetaImageHeader.h"
+#include "volume/io/MetaImageHeader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {

@@ -5,7 +5,7 @@
 
 #include "FuzzInput.h"
 
-#include "volume/NiftiHeader.h"
+#include "volume/io/NiftiHeader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {

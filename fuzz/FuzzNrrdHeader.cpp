@@ -4,7 +4,7 @@
 
 #include "FuzzInput.h"
 
-#include "volume/NrrdHeader.h"
+#include "volume/io/NrrdHeader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {

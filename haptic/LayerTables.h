@@ -13,7 +13,7 @@
 #include "haptic/Layer.h"
 #include "haptic/MaterialField.h"
 #include "core/Math.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <map>

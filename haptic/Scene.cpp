@@ -7,7 +7,7 @@
 
 #include "core/Errors.h"
 #include "core/JsonFields.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <nlohmann/json.hpp>

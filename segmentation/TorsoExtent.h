@@ -42,7 +42,7 @@
 #pragma once
 
 #include "segmentation/Lattice.h"
-#include "volume/BodyWidth.h"
+#include "volume/mr/BodyWidth.h"
 #include "volume/Volume.h"
 
 #include <cstdint>

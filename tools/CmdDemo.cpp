@@ -15,8 +15,8 @@
 #include "segmentation/Segmentation.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
-#include "volume/VdbFile.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/io/VdbFile.h"
 
 #include <nlohmann/json.hpp>
 

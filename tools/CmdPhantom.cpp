@@ -5,8 +5,8 @@
 #include "tools/Cli.h"
 #include "tools/InfoReport.h"
 
-#include "volume/Phantoms.h"
-#include "volume/VdbFile.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/io/VdbFile.h"
 
 #include <iostream>
 #include <memory>

@@ -5,7 +5,7 @@
 #include "core/Format.h"
 #include "tools/InfoReport.h"
 
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <cstdio>
 #include <iomanip>

@@ -6,13 +6,13 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/MetaImageFile.h"
-#include "volume/ModalityInference.h"
-#include "volume/MrMaterial.h"
-#include "volume/MrWeighting.h"
-#include "volume/NiftiFile.h"
-#include "volume/NrrdFile.h"
-#include "volume/VdbFile.h"
+#include "volume/io/MetaImageFile.h"
+#include "volume/io/ModalityInference.h"
+#include "volume/mr/MrMaterial.h"
+#include "volume/mr/MrWeighting.h"
+#include "volume/io/NiftiFile.h"
+#include "volume/io/NrrdFile.h"
+#include "volume/io/VdbFile.h"
 
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/Prune.h>

@@ -5,8 +5,8 @@
 /// with the DICOM magic is DICOM, otherwise the extension decides.
 #pragma once
 
-#include "volume/DicomSeries.h"
-#include "volume/RasterReader.h"
+#include "volume/dicom/DicomSeries.h"
+#include "volume/io/RasterReader.h"
 #include "volume/Volume.h"
 
 #include <filesystem>

@@ -5,7 +5,7 @@
 #include "volume/VolumeInfo.h"
 
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <cmath>
 #include <map>

@@ -4,7 +4,7 @@
 /// summaries and label census, for `voxhap info` and reports.
 #pragma once
 
-#include "volume/Rasterize.h"
+#include "volume/phantoms/Rasterize.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 

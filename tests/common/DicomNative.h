@@ -4,8 +4,8 @@
 /// GDCM's decode of the same files.
 #pragma once
 
-#include "volume/DicomHeaders.h"
-#include "volume/DicomPixels.h"
+#include "volume/dicom/DicomHeaders.h"
+#include "volume/dicom/detail/DicomPixels.h"
 
 #include <gtest/gtest.h>
 

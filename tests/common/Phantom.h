@@ -6,7 +6,7 @@
 
 #include "haptic/MaterialField.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <map>
 #include <memory>

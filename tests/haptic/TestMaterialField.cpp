@@ -8,7 +8,7 @@
 #include "haptic/detail/FieldGrids.h"
 #include "haptic/MaterialField.h"
 #include "core/Errors.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <cmath>
 

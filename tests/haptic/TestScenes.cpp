@@ -8,8 +8,8 @@
 #include "haptic/Insertion.h"
 #include "haptic/Scene.h"
 #include "core/Errors.h"
-#include "volume/Phantoms.h"
-#include "volume/Rasterize.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/phantoms/Rasterize.h"
 
 #include <gtest/gtest.h>
 

@@ -10,7 +10,7 @@
 #include "planning/Planner.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <cmath>
 #include <memory>

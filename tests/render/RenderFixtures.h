@@ -7,8 +7,8 @@
 #pragma once
 
 #include "render/Image.h"
-#include "volume/Phantoms.h"
-#include "volume/Rasterize.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/phantoms/Rasterize.h"
 
 #include <gtest/gtest.h>
 

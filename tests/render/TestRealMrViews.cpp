@@ -63,7 +63,7 @@ MprageViews& mprage()
 
 /// The same head as an intensity grid: R1 = 1/T1 [1/s] of the active voxels. The
 /// per-scan normalisation is linear in 1/T1 between its two reference tissues
-/// (volume/T1Normalisation.h), so this is the scan's own T1-weighted contrast,
+/// (volume/mr/T1Normalisation.h), so this is the scan's own T1-weighted contrast,
 /// bright fat and white matter, up to an affine map and the normalisation's clamp.
 MprageViews& mprageAsIntensity()
 {

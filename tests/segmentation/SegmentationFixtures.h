@@ -5,7 +5,7 @@
 #pragma once
 
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <nlohmann/json.hpp>

@@ -9,7 +9,7 @@
 #include "segmentation/Segmentation.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 #include "segmentation/MrSegmentation.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include "common/SharedData.h"
 #include "common/TempDirTest.h"
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
 

@@ -9,10 +9,10 @@
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/T1Normalisation.h"
+#include "volume/mr/T1Normalisation.h"
 
 #include <Eigen/Geometry>
 #include <gdcmImageChangeTransferSyntax.h>

@@ -7,10 +7,10 @@
 #include "common/DicomWriter.h"
 #include "common/TempDirTest.h"
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/StoredPrecision.h"
+#include "volume/dicom/detail/StoredPrecision.h"
 
 #include <Eigen/Geometry>
 

@@ -9,7 +9,7 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/MetaImageFile.h"
+#include "volume/io/MetaImageFile.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

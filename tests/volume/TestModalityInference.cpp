@@ -8,7 +8,7 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/ModalityInference.h"
+#include "volume/io/ModalityInference.h"
 #include "volume/VolumeFile.h"
 
 #include <nifti2_io.h>

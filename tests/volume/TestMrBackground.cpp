@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestMrBackground.cpp
-/// @brief The MR background rule (volume/MrBackground.h) on synthetic heads in
+/// @brief The MR background rule (volume/mr/MrBackground.h) on synthetic heads in
 /// Rayleigh noise of known σ, on masked and air-free images, and on the shared
 /// real MR series.
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/MrBackground.h"
+#include "volume/mr/MrBackground.h"
 
 #include "../common/SharedData.h"
 

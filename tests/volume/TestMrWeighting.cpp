@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestMrWeighting.cpp
-/// @brief The MR weighting rule (volume/MrWeighting.h) on the shared real series,
+/// @brief The MR weighting rule (volume/mr/MrWeighting.h) on the shared real series,
 /// read from their DICOM headers and from the reference converter's BIDS
 /// sidecars, and on hand-made field sets of other vendors and weightings; the
 /// BIDS sidecar reader and its refusals.
 
 #include "core/Errors.h"
-#include "volume/MrWeighting.h"
+#include "volume/mr/MrWeighting.h"
 
 #include "common/SharedData.h"
 #include "common/TempDirTest.h"

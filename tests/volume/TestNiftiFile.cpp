@@ -9,7 +9,7 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/NiftiFile.h"
+#include "volume/io/NiftiFile.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

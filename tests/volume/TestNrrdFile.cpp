@@ -9,8 +9,8 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/NrrdFile.h"
-#include "volume/SparseSlabs.h"
+#include "volume/io/NrrdFile.h"
+#include "volume/detail/SparseSlabs.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

@@ -8,7 +8,7 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 

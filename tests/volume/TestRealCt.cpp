@@ -9,7 +9,7 @@
 #include "common/Tolerances.h"
 
 #include "common/DicomNative.h"
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "volume/Grids.h"
 
 #include <gdcmImageReader.h>

@@ -6,7 +6,7 @@
 
 #include "common/SharedData.h"
 
-#include "volume/DicomSeries.h"
+#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
 

@@ -4,7 +4,7 @@
 /// hand-made positions whose answers are known by construction.
 
 #include "core/Errors.h"
-#include "volume/SliceStack.h"
+#include "volume/dicom/detail/SliceStack.h"
 
 #include <gtest/gtest.h>
 

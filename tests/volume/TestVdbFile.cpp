@@ -6,8 +6,8 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/Phantoms.h"
-#include "volume/VdbFile.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/io/VdbFile.h"
 
 #include <Eigen/Geometry>
 #include <openvdb/io/File.h>
