@@ -4,7 +4,7 @@
 
 #include "bench/DenseField.h"
 
-#include "haptic/detail/FieldGrids.h"
+#include "haptic/materials/FieldGrids.h"
 #include "core/Errors.h"
 
 #include <cmath>

@@ -4,7 +4,7 @@
 /// world->index map, marched at a fixed step (what one writes without OpenVDB).
 #pragma once
 
-#include "haptic/ShaftIntegration.h"
+#include "haptic/shaft/ShaftIntegration.h"
 
 #include <vector>
 

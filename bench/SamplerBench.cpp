@@ -7,8 +7,8 @@
 #include "bench/DenseField.h"
 #include "render/Gnuplot.h"
 #include "bench/VtkProbe.h"
-#include "haptic/ShaftIntegration.h"
-#include "haptic/TrajectoryProfile.h"
+#include "haptic/shaft/ShaftIntegration.h"
+#include "haptic/shaft/TrajectoryProfile.h"
 #include "volume/Grids.h"
 #include "volume/phantoms/Phantoms.h"
 

@@ -3,10 +3,10 @@
 #include "bench/ServoBench.h"
 
 #include "bench/SamplerBench.h"
-#include "haptic/IgtlDevice.h"
-#include "haptic/Scene.h"
-#include "haptic/ServoLoop.h"
-#include "haptic/SimulatedDevices.h"
+#include "haptic/igtl/IgtlDevice.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/servo/ServoLoop.h"
+#include "haptic/servo/SimulatedDevices.h"
 
 #include <igtlTransformMessage.h>
 

@@ -11,7 +11,7 @@
 /// segmentation), the kyung scene, the vertebral lesion as target, directions
 /// within 60° of posterior.
 
-#include "haptic/Scene.h"
+#include "haptic/scene/Scene.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"

@@ -3,11 +3,17 @@
 /// @brief The needle: gauge, tip type and length (physics.md §1.3, §3.3).
 #pragma once
 
-#include "haptic/ConciModel.h"
-
 #include <string>
 
 namespace voxhap::haptic {
+
+/// @brief Needle tip shapes (physics.md §3.3); their slope multipliers are the
+/// Conci model's (ConciModel.h).
+enum class TipType {
+    Coned,
+    Bevel,
+    Triangular
+};
 
 struct Needle {
     int gauge = 18;               ///< Birmingham gauge, 14..27

@@ -2,8 +2,8 @@
 /// @file ForcePrediction.cpp
 #include "planning/ForcePrediction.h"
 
-#include "haptic/InsertionState.h"
-#include "haptic/NeedleForceModel.h"
+#include "haptic/force/InsertionState.h"
+#include "haptic/force/NeedleForceModel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 /// @file ForcePrediction.h
 /// @brief The force a scene's model predicts along a path at a constant
 /// insertion speed, without running the servo loop: the quasi-static reading of
-/// the same terms (haptic/NeedleForceModel.cpp) at steady advance.
+/// the same terms (haptic/force/NeedleForceModel.cpp) at steady advance.
 ///
 /// At steady speed v the stick-slip proxy slips (physics.md §6.2), so its force is
 /// its threshold; the model's own layer state machine (haptic::InsertionState)
@@ -22,8 +22,8 @@
 #pragma once
 
 #include "haptic/Layer.h"
-#include "haptic/NeedleForceModel.h"
-#include "haptic/LabelTrace.h"
+#include "haptic/force/NeedleForceModel.h"
+#include "haptic/shaft/LabelTrace.h"
 #include "planning/Trajectory.h"
 
 #include <vector>

@@ -7,10 +7,10 @@
 
 #include "planning/Clearance.h"
 #include "planning/ForcePrediction.h"
-#include "haptic/LabelTrace.h"
+#include "haptic/shaft/LabelTrace.h"
 #include "planning/RiskScore.h"
 
-#include "haptic/MaterialField.h"
+#include "haptic/materials/MaterialField.h"
 #include "segmentation/DistanceField.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"

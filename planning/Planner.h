@@ -6,9 +6,9 @@
 /// so the candidate search (Search.h) calls it from many TBB tasks.
 #pragma once
 
-#include "haptic/LayerTables.h"
-#include "haptic/Scene.h"
-#include "haptic/LabelTrace.h"
+#include "haptic/models/LayerTables.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/shaft/LabelTrace.h"
 #include "planning/Trajectory.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"

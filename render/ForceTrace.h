@@ -6,7 +6,7 @@
 /// serve`'s session.csv with events.csv beside it).
 #pragma once
 
-#include "haptic/Insertion.h"
+#include "haptic/scene/ScriptedInsertion.h"
 
 #include <filesystem>
 #include <string>

@@ -8,8 +8,8 @@
 #include "tools/Cli.h"
 #include "tools/SimulationOutputs.h"
 
-#include "haptic/Insertion.h"
-#include "haptic/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/scene/Scene.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"

@@ -5,12 +5,12 @@
 
 #include "tools/Cli.h"
 
-#include "haptic/IgtlDevice.h"
-#include "haptic/PoseStream.h"
-#include "haptic/Scene.h"
-#include "haptic/ServoLoop.h"
-#include "haptic/Session.h"
-#include "haptic/SimulatedDevices.h"
+#include "haptic/igtl/IgtlDevice.h"
+#include "haptic/igtl/PoseStream.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/servo/ServoLoop.h"
+#include "haptic/servo/Session.h"
+#include "haptic/servo/SimulatedDevices.h"
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 

@@ -7,7 +7,7 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
-#include "haptic/PoseStream.h"
+#include "haptic/igtl/PoseStream.h"
 #include "render/Display.h"
 #include "render/ImageFile.h"
 #include "render/Plan.h"

@@ -4,7 +4,7 @@
 /// test chooses (so that expected integrals never come from the code under test).
 #pragma once
 
-#include "haptic/MaterialField.h"
+#include "haptic/materials/MaterialField.h"
 #include "volume/Grids.h"
 #include "volume/phantoms/Phantoms.h"
 

@@ -5,11 +5,11 @@
 
 #include "common/Tolerances.h"
 
-#include "haptic/ConciModel.h"
-#include "haptic/ContactTransient.h"
-#include "haptic/LumbarPunctureModel.h"
-#include "haptic/PivotCorrection.h"
-#include "haptic/SenacModel.h"
+#include "haptic/models/ConciModel.h"
+#include "haptic/force/ContactTransient.h"
+#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/force/PivotCorrection.h"
+#include "haptic/models/SenacModel.h"
 
 #include <cmath>
 

@@ -5,9 +5,9 @@
 /// garbage, oversized, corrupted and truncated messages leave it alive; a lost
 /// client zeroes the force within one tick.
 
-#include "haptic/IgtlDevice.h"
-#include "haptic/Scene.h"
-#include "haptic/ServoLoop.h"
+#include "haptic/igtl/IgtlDevice.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/servo/ServoLoop.h"
 
 #include <igtlSensorMessage.h>
 #include <igtlTransformMessage.h>

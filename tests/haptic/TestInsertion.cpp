@@ -7,11 +7,11 @@
 #include "common/Layers.h"
 #include "common/Tolerances.h"
 
-#include "haptic/ConciModel.h"
-#include "haptic/Insertion.h"
-#include "haptic/LayerTables.h"
-#include "haptic/LumbarPunctureModel.h"
-#include "haptic/NeedleForceModel.h"
+#include "haptic/models/ConciModel.h"
+#include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/models/LayerTables.h"
+#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/force/NeedleForceModel.h"
 
 #include <gtest/gtest.h>
 

@@ -5,8 +5,8 @@
 #include "common/BuiltinTable.h"
 #include "common/Tolerances.h"
 
-#include "haptic/detail/FieldGrids.h"
-#include "haptic/MaterialField.h"
+#include "haptic/materials/FieldGrids.h"
+#include "haptic/materials/MaterialField.h"
 #include "core/Errors.h"
 #include "volume/phantoms/Phantoms.h"
 

@@ -5,7 +5,7 @@
 /// reconnects by itself to a receiver started later, the receiver survives a
 /// garbage header, and addresses are checked with one clear message.
 
-#include "haptic/PoseStream.h"
+#include "haptic/igtl/PoseStream.h"
 
 #include "core/Errors.h"
 

@@ -5,8 +5,8 @@
 /// material grids its terms read.
 
 #include "common/BuiltinTable.h"
-#include "haptic/Insertion.h"
-#include "haptic/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/scene/Scene.h"
 #include "core/Errors.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/phantoms/Rasterize.h"

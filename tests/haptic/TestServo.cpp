@@ -7,10 +7,10 @@
 
 #include "common/Layers.h"
 
-#include "haptic/Scene.h"
-#include "haptic/ServoLoop.h"
-#include "haptic/Session.h"
-#include "haptic/SimulatedDevices.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/servo/ServoLoop.h"
+#include "haptic/servo/Session.h"
+#include "haptic/servo/SimulatedDevices.h"
 
 #include <gtest/gtest.h>
 

@@ -6,8 +6,8 @@
 #include "common/Phantom.h"
 #include "common/Tolerances.h"
 
-#include "haptic/ShaftIntegration.h"
-#include "haptic/TrajectoryProfile.h"
+#include "haptic/shaft/ShaftIntegration.h"
+#include "haptic/shaft/TrajectoryProfile.h"
 
 #include "core/Errors.h"
 

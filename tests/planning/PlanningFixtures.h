@@ -6,7 +6,7 @@
 #pragma once
 
 #include "common/BuiltinTable.h"
-#include "haptic/Scene.h"
+#include "haptic/scene/Scene.h"
 #include "planning/Planner.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"

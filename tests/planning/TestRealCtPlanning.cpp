@@ -6,7 +6,7 @@
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
 #include "PlanningFixtures.h"
-#include "haptic/Scene.h"
+#include "haptic/scene/Scene.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/VolumeFile.h"

@@ -6,7 +6,7 @@
 #include "PlanningFixtures.h"
 #include "core/Errors.h"
 
-#include "haptic/Insertion.h"
+#include "haptic/scene/ScriptedInsertion.h"
 #include "planning/RiskScore.h"
 
 #include <gtest/gtest.h>

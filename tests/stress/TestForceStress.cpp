@@ -8,11 +8,11 @@
 #include "common/Phantom.h"
 #include "stress/AllocationCounter.h"
 
-#include "haptic/LayerTables.h"
-#include "haptic/NeedleForceModel.h"
-#include "haptic/Scene.h"
-#include "haptic/ServoLoop.h"
-#include "haptic/SimulatedDevices.h"
+#include "haptic/models/LayerTables.h"
+#include "haptic/force/NeedleForceModel.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/servo/ServoLoop.h"
+#include "haptic/servo/SimulatedDevices.h"
 #include "volume/Grids.h"
 
 #include <Eigen/Geometry> // for cross and unitOrthogonal

@@ -8,8 +8,8 @@
 #include "common/Tolerances.h"
 #include "stress/AllocationCounter.h"
 
-#include "haptic/ShaftIntegration.h"
-#include "haptic/TrajectoryProfile.h"
+#include "haptic/shaft/ShaftIntegration.h"
+#include "haptic/shaft/TrajectoryProfile.h"
 
 #include <Eigen/Geometry> // for unitOrthogonal
 

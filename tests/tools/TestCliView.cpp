@@ -9,7 +9,7 @@
 #include "common/CliRunner.h"
 #include "common/Tolerances.h"
 
-#include "haptic/PoseStream.h"
+#include "haptic/igtl/PoseStream.h"
 #include "render/ImageFile.h"
 #include "render/Overlays.h"
 #include "render/Plan.h"

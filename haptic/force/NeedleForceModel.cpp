@@ -1,0 +1,212 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file NeedleForceModel.cpp
+/// @brief The force pipeline of one tick (architecture.md; physics.md §1–§4, §6).
+
+#include "haptic/force/NeedleForceModel.h"
+
+#include "core/Errors.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace voxhap::haptic {
+
+namespace {
+
+double orDevice(double v, double device) { return v > 0.0 ? v : device; }
+
+/// The component of @p v perpendicular to the unit vector @p u.
+Vec3d lateralOf(const Vec3d& v, const Vec3d& u) noexcept { return v - v.dot(u) * u; }
+
+} // namespace
+
+NeedleForceModel::NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms,
+    const Needle& needle, const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator,
+    const MaterialField* field, std::unique_ptr<ShaftIntegrator> locked)
+    : mState(std::move(layers)), mPath(path), mTerms(terms), mNeedle(needle), mDevice(device),
+      mIntegrator(std::move(integrator)), mLocked(std::move(locked)), mField(field),
+      mProxy(orDevice(terms.couplingNPerMm, device.maxStiffnessNPerMm)), mLor(terms.lor.params),
+      mPivot(terms.pivot.params), mSafety(SafetyParams::fromDevice(device))
+{
+    const double n = path.direction.norm();
+    if (!path.origin.allFinite() || !path.direction.allFinite() || !(n > 0.0)) {
+        throw ValueError("needle path: origin and direction must be finite and the direction non-zero");
+    }
+    mPath.direction = path.direction / n;
+    if (mTerms.damping.on && !mIntegrator) throw ValueError("force model: voxel damping needs a shaft integrator");
+    mIntegral.reset();
+}
+
+void NeedleForceModel::reset() noexcept
+{
+    mState.reset();
+    mProxy.reset();
+    mLor.reset();
+    mPivot.reset();
+    mSafety.reset();
+    mIntegral.reset();
+    mInContact = false;
+    mCritical = false;
+    mLastDirection = 1;
+    mLastTimeS = 0;
+}
+
+double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept
+{
+    const int current = tip.currentLayer();
+    if (!terms.cutting || current < 0) return 0.0;
+    double f = tip.cuttingSumN; // §2.1 Eq. 3, nested boxes
+    if (tip.pushLayer < 0 && tip.inLayer >= 0)
+        f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm);                   // §3.1
+    if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN; // §4 Eq. 3
+    return f;
+}
+
+DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits& device, double b, double v) noexcept
+{
+    if (!(v > 0.0)) return {};
+    b = std::max(0.0, b);
+    const double rendered = std::min(b, device.maxDampingNsPerMm);
+    DampingSplit s;
+    s.viscousN = std::min(rendered * v, damping.capN);
+    s.frictionN = std::clamp((b - rendered) * damping.referenceSpeedMmPerS, 0.0, damping.capN - s.viscousN);
+    return s;
+}
+
+bool NeedleForceModel::touchingCritical() const noexcept
+{
+    const TipState& tip = mState.tip();
+    const auto& layers = mState.layers();
+    for (int i = 0; i <= tip.inLayer; ++i) {
+        if (layers[std::size_t(i)].role == LayerRole::Critical && mState.state(i) == LayerState::Punctured) return true;
+    }
+    if (mField && mIntegral.labelsValid) { // off the path too: any critical voxel on the shaft
+        const auto& per = mField->perLabel();
+        for (int l = 1; l < kMaxLabels; ++l) {
+            if (per[std::size_t(l)].critical && mIntegral.labelLengthMm[std::size_t(l)] > 0.0) return true;
+        }
+    }
+    return false;
+}
+
+void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
+{
+    out.events.clear();
+    out.terms = ForceBreakdown{};
+    out.fault = out.critical = false;
+    const double t = std::isfinite(in.timeS) ? in.timeS : mLastTimeS;
+    const double dt = std::isfinite(in.dtS) && in.dtS > 0.0 ? std::min(in.dtS, mSafety.params().maxDtS) : 0.0;
+    const double dirNorm = in.direction.norm();
+
+    // §6.4: a non-finite device reading latches the fault; the force stays zero.
+    if (!in.tip.allFinite() || !in.direction.allFinite() || !in.velocity.allFinite() || !std::isfinite(in.timeS) ||
+        !(dirNorm > 0.0)) {
+        if (!mSafety.faulted()) out.events.push({EventType::Fault, t, mState.tip().depthMm, -1});
+        mSafety.latchFault();
+    }
+    if (mSafety.faulted()) {
+        out.force = out.modelForce = Vec3d::Zero();
+        out.axialN = out.plungerN = 0.0;
+        out.fault = true;
+        return;
+    }
+    mLastTimeS = t;
+
+    // 1. Kinematics along the path.
+    const Vec3d& u = mPath.direction;
+    const Vec3d dir = in.direction / dirNorm;
+    const double d = (in.tip - mPath.origin).dot(u);
+    const double v = in.velocity.dot(u);
+    if (v > 0.0)
+        mLastDirection = 1;
+    else if (v < 0.0)
+        mLastDirection = -1;
+    const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
+
+    // 2. Insertion state.
+    mState.update(d, t, mNeedle.lengthMm, out.events);
+    const TipState& tip = mState.tip();
+    const auto& layers = mState.layers();
+    bool popped = false;
+    for (const Event& e : out.events) {
+        if (e.type == EventType::Withdrawn) mProxy.reset(), mPivot.reset(), mLor.reset();
+        popped = popped || e.type == EventType::Pop;
+    }
+
+    // After skin entry the needle is tied to its line: the profile answers in O(1) (it
+    // rebuilds itself, without allocating, if the shaft strays from the line).
+    ShaftIntegrator* integ = mLocked && mState.skinEntered() ? mLocked.get() : mIntegrator.get();
+    if (integ && (mTerms.damping.on || mTerms.critical)) integ->integrate(Segment{hub, in.tip}, mIntegral);
+
+    // 3. Force terms, axial resistance positive outward.
+    ForceBreakdown& f = out.terms;
+    double threshold = 0.0; // Coulomb-type terms: the proxy's slip force (§6.2)
+    if (mTerms.tip && tip.pushLayer >= 0) f.elastic = layers[std::size_t(tip.pushLayer)].elasticForceN(tip.pushMm);
+    const int current = tip.currentLayer();
+    threshold += tipSlipForceN(mTerms, tip, layers, v);
+    if (mTerms.viscous && current >= 0) f.viscous = tip.viscousNsPerMm * v; // §4 Eq. 3: Σ b_i·l_i·v
+    if (mTerms.damping.on && v > 0.0) { // §1.2 Eq. 5, advancing only, chord-weighted
+        const DampingSplit split = splitDamping(mTerms.damping, mDevice, mIntegral.dampingIntegral, v);
+        f.damping = split.viscousN;
+        threshold += split.frictionN;
+    }
+    if (popped && v > 0.0) mProxy.preload(d, threshold); // the drop at a pop is exact (§3.1 T_f)
+    if (current >= 0)
+        f.proxy = mProxy.update(d, threshold);
+    else
+        mProxy.reset();
+    if (mTerms.keepDirectionN > 0.0 && v <= 0.0 && tip.inBody)
+        f.keepDirection = -mTerms.keepDirectionN * mLastDirection;
+
+    // Bone (§1.3): contact at the device's stiffness; the tip sticks where it met the
+    // bone until pulled back; the transient (§2.1 Eq. 2) scales with impact speed.
+    Vec3d lateral = Vec3d::Zero();
+    const bool onBone = mTerms.bone.on && tip.boneLayer >= 0;
+    if (onBone && !mInContact) mContactPoint = in.tip, mContactTimeS = t, mImpactMmPerS = std::max(0.0, v);
+    mInContact = onBone;
+    if (onBone) {
+        const double k = mDevice.maxStiffnessNPerMm;
+        f.bone = k * std::max(0.0, tip.penetrationMm);
+        lateral -= k * lateralOf(in.tip - mContactPoint, u);
+        if (mTerms.bone.transient) f.transient = -mTerms.bone.params.forceN(t - mContactTimeS, mImpactMmPerS);
+    }
+    // Lateral terms after skin entry: the Kelvin pivot correction (§1.4) at the hub,
+    // toward the initial line; the trajectory lock ([S19], §6.2) at the tip.
+    if (mTerms.pivot.on && mState.skinEntered()) {
+        const double theta = std::acos(std::clamp(dir.dot(u), -1.0, 1.0));
+        const double fc = mPivot.update(theta, d - mState.surfaceMm(), dt);
+        const Vec3d off = lateralOf(hub - mPath.origin, u); // hub's distance from the line
+        const Vec3d toward = -lateralOf(off, dir);
+        const double n = toward.norm();
+        if (n > 1e-12 && fc > 0.0) lateral += (fc / n) * toward;
+    }
+    if (mTerms.lock.on && mState.skinEntered()) {
+        const double k = orDevice(mTerms.lock.stiffnessNPerMm, mDevice.maxStiffnessNPerMm);
+        lateral -= k * lateralOf(in.tip - mPath.origin, u);
+    }
+    f.lateral = lateral;
+
+    if (mTerms.lor.on)
+        out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
+
+    // §1.1 critical structures: zero force and a warning, in this tick.
+    const bool critical = mTerms.critical && touchingCritical();
+    if (critical != mCritical) {
+        out.events.push({critical ? EventType::CriticalBreach : EventType::CriticalClear, t, d, current});
+        mCritical = critical;
+    }
+    out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
+    out.modelForce = critical ? Vec3d::Zero() : Vec3d(-out.axialN * u + lateral);
+    out.critical = critical;
+    out.speedMmPerS = v;
+    out.tip = tip;
+
+    // 4. Safety.
+    out.force = mSafety.apply(out.modelForce, hub, dt);
+    if (mSafety.faulted()) {
+        out.events.push({EventType::Fault, t, d, current});
+        out.fault = true;
+    }
+}
+
+} // namespace voxhap::haptic

@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file NeedleForceModel.h
+/// @brief One servo tick: kinematics → insertion state → force terms → safety
+/// (architecture.md "The force pipeline"). Each term is a small function of the
+/// state and the materials; a term the scene does not name is not evaluated.
+///
+/// The needle moves along a path (origin, unit direction): depth d is the tip's
+/// projection on it. Forces are on the needle, in world axes [N]; the axial
+/// resistance is reported positive when it pushes the needle back out.
+#pragma once
+
+#include "haptic/force/ContactTransient.h"
+#include "haptic/DeviceLimits.h"
+#include "haptic/Events.h"
+#include "haptic/force/InsertionState.h"
+#include "haptic/force/LorChannel.h"
+#include "haptic/Needle.h"
+#include "haptic/force/PivotCorrection.h"
+#include "haptic/force/Safety.h"
+#include "haptic/shaft/ShaftIntegration.h"
+#include "haptic/force/StickSlipProxy.h"
+
+#include <memory>
+#include <vector>
+
+namespace voxhap::haptic {
+
+/// @brief Which terms run, and their parameters (physics.md section beside each).
+struct ForceTerms {
+    bool tip = true;     ///< the layers' elastic stage and pops (§2.1 Eq. 4, §3.1, §4 Eq. 2)
+    bool cutting = true; ///< nested-box cutting, plateau and Coulomb C through the proxy (§2.1 Eq. 3, §3.1, §4, §6.2)
+    bool viscous = true;              ///< shaft friction b·v·l (§4 Eq. 3)
+    double karnoppDeltaVMmPerS = 0.0; ///< C only while |v| >= Δv ([LP] Eq. 3); 0: always (the proxy sticks)
+    double keepDirectionN = 0.0;      ///< [LP] f_keepdir for v <= 0 (device compensation, §4)
+    struct Damping {
+        bool on = false;   ///< Kyung Eq. 5 voxel damping (§1.2)
+        double capN = 6.0; ///< |F_R| <= 6 N (§1.1)
+        double referenceSpeedMmPerS =
+            10.0; ///< damping beyond the device's is rendered as friction at this speed (§6.2) [K01: 1 cm/s]
+    } damping;
+    struct Bone {
+        bool on = true;        ///< rigid layers are contact at the device's stiffness (§1.3)
+        bool transient = true; ///< decaying-sine transient scaled by impact speed (§2.1 Eq. 2)
+        ContactTransient params;
+    } bone;
+    struct Pivot {
+        bool on = false; ///< layered Kelvin correction about the skin pivot (§1.4)
+        PivotParams params;
+    } pivot;
+    struct Lock {
+        bool on = false;              ///< [S19] trajectory lock after skin entry (§2.1, §6.2 virtual coupling)
+        double stiffnessNPerMm = 0.0; ///< 0: the device's maximum stiffness
+    } lock;
+    struct Lor {
+        bool on = false; ///< syringe plunger channel (§2.3)
+        LorParams params;
+    } lor;
+    bool critical = true;        ///< touching a critical structure zeroes the force (§1.1)
+    double couplingNPerMm = 0.0; ///< stick-slip proxy stiffness; 0: the device's maximum stiffness (§6.2)
+};
+
+/// @brief The device's reading at one tick.
+struct NeedleInput {
+    double timeS = 0;         ///< [s]
+    double dtS = 0.001;       ///< since the last tick [s]
+    Vec3d tip{0, 0, 0};       ///< [mm, LPS]
+    Vec3d direction{0, 0, 1}; ///< shaft direction, hub to tip (normalised here)
+    Vec3d velocity{0, 0, 0};  ///< tip velocity [mm/s]
+};
+
+/// @brief Each term's axial share [N] (positive pushes out) and the lateral terms.
+struct ForceBreakdown {
+    double elastic = 0, proxy = 0, viscous = 0, damping = 0, bone = 0, transient = 0, keepDirection = 0;
+    Vec3d lateral{0, 0, 0}; ///< pivot correction, lock and bone sticking [N]
+};
+
+struct NeedleOutput {
+    Vec3d force{0, 0, 0};      ///< rendered, after safety [N]
+    Vec3d modelForce{0, 0, 0}; ///< before safety [N]
+    double axialN = 0;         ///< model resistance along the path [N], + outward
+    ForceBreakdown terms;
+    double plungerN = 0;    ///< syringe plunger force [N]
+    double speedMmPerS = 0; ///< along the path [mm/s]
+    TipState tip;
+    bool critical = false; ///< force zeroed by a critical structure
+    bool fault = false;    ///< latched safety fault
+    EventBuffer events;    ///< this tick's events
+};
+
+/// @brief The needle's path: where depth 0 is, and the insertion direction.
+struct NeedlePath {
+    Vec3d origin{0, 0, 0};
+    Vec3d direction{0, 0, 1};
+};
+
+/// @brief The Coulomb-type resistance at the tip, the stick-slip proxy's slip
+/// force before damping: nested-box cutting (§2.1 Eq. 3), the plateau past a
+/// puncture (§3.1) and the layer's C while |v| >= Δv (§4 Eq. 3). Shared by the
+/// servo model and the planner's prediction; noexcept, no allocation.
+double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept;
+
+/// @brief Kyung's voxel damping (§1.2 Eq. 5) for damping integral @p b
+/// [N·s/mm] at speed @p v: what the device can render as viscous force, the
+/// rest as friction at the reference speed (§6.2), both within the cap (§1.1).
+struct DampingSplit {
+    double viscousN = 0.0, frictionN = 0.0;
+};
+DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits& device, double b, double v) noexcept;
+
+class NeedleForceModel {
+public:
+    /// @param layers the layers along @p path (LayerTables.h)
+    /// @param integrator shaft integrator over the scene's material field, or null when
+    ///        no term reads voxels (damping, or critical structures off the path)
+    /// @param field the material field behind @p integrator (per-label flags), or null
+    /// @param locked an integrator used once the skin is entered and the needle is tied
+    ///        to its line (a TrajectoryProfile: O(1) per tick), or null to keep @p integrator
+    /// @throw ValueError on a degenerate path
+    NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms, const Needle& needle,
+        const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator = nullptr,
+        const MaterialField* field = nullptr, std::unique_ptr<ShaftIntegrator> locked = nullptr);
+
+    /// @brief One tick. Never allocates, locks or throws.
+    void step(const NeedleInput& in, NeedleOutput& out) noexcept;
+    void reset() noexcept;
+
+    const std::vector<Layer>& layers() const { return mState.layers(); }
+    const InsertionState& state() const { return mState; }
+    const NeedlePath& path() const { return mPath; }
+    const ForceTerms& terms() const { return mTerms; }
+    const Needle& needle() const { return mNeedle; }
+    const DeviceLimits& device() const { return mDevice; }
+    const Safety& safety() const { return mSafety; }
+
+private:
+    bool touchingCritical() const noexcept;
+
+    InsertionState mState;
+    NeedlePath mPath;
+    ForceTerms mTerms;
+    Needle mNeedle;
+    DeviceLimits mDevice;
+    std::unique_ptr<ShaftIntegrator> mIntegrator, mLocked;
+    const MaterialField* mField = nullptr;
+    ShaftIntegral mIntegral;
+    StickSlipProxy mProxy;
+    LorChannel mLor;
+    PivotCorrection mPivot;
+    Safety mSafety;
+    // Bone contact: where and when the tip met it, and how fast.
+    Vec3d mContactPoint{0, 0, 0};
+    double mContactTimeS = 0, mImpactMmPerS = 0;
+    bool mInContact = false;
+    bool mCritical = false;
+    int mLastDirection = 1;
+    double mLastTimeS = 0;
+};
+
+} // namespace voxhap::haptic

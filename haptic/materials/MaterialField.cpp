@@ -1,0 +1,235 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file MaterialField.cpp
+/// @brief Building the property grids: β from T1 or per label (physics.md §1.2,
+/// §5.4) and device-limited bone stiffness from HU (§1.3, §5.3).
+
+#include "haptic/materials/MaterialField.h"
+
+#include "haptic/materials/FieldGrids.h"
+#include "core/Errors.h"
+
+#include <openvdb/tools/Count.h> // for minMax
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cmath>
+
+namespace voxhap::haptic {
+
+namespace {
+
+using namespace voxhap::volume;
+
+/// The bone threshold without labels: about 150 HU (physics.md §5.2 [chosen]).
+constexpr double kBoneHuThreshold = 150.0;
+
+FieldStrength fieldOf(const Volume& v, const MaterialOptions& o)
+{
+    if (o.field) return *o.field;
+    const auto it = v.metadata().extra.find("field_strength");
+    return (it != v.metadata().extra.end() && it->second == "3T") ? FieldStrength::T3 : FieldStrength::T1_5;
+}
+
+void checkLabelRange(const LabelGrid& labels)
+{
+    if (labels.activeVoxelCount() == 0) return;
+    const auto mm = openvdb::tools::minMax(labels.tree());
+    if (mm.min() < 0 || mm.max() >= kMaxLabels) {
+        throw ValueError("label grid: tissue ids must be within 0.." + std::to_string(kMaxLabels - 1) + ", found " +
+            std::to_string(mm.min()) + ".." + std::to_string(mm.max()));
+    }
+}
+
+/// Per voxel (or uniform tile): β from the label's rule.
+struct BetaRule {
+    const std::array<LabelMaterial, kMaxLabels>* perLabel;
+    std::array<bool, kMaxLabels> fromT1{}; // §5.4: Eq. 4 only for fat and muscle
+    T1DampingLaw law;
+    bool haveLabels = false, haveT1 = false;
+
+    bool usesT1(int label) const { return haveT1 && (!haveLabels || fromT1[std::size_t(label)]); }
+    float operator()(int label, float t1) const
+    {
+        if (usesT1(label)) return float(law.dampingNsPerMm2(t1));
+        const double b = (*perLabel)[std::size_t(label)].dampingNsPerMm2;
+        return std::isfinite(b) ? float(b) : 0.0f;
+    }
+};
+
+/// The label and T1 grids read through one accessor pair (one per thread).
+struct SourceReader {
+    SourceReader(const LabelGrid* l, const FloatGrid* t)
+        : labelAcc(l ? std::optional(l->getConstAccessor()) : std::nullopt),
+          t1Acc(t ? std::optional(t->getConstAccessor()) : std::nullopt)
+    {
+    }
+    int label(const openvdb::Coord& c) { return labelAcc ? labelAcc->getValue(c) : 1; }
+    float t1(const openvdb::Coord& c) { return t1Acc ? t1Acc->getValue(c) : 0.0f; }
+
+    std::optional<LabelGrid::ConstAccessor> labelAcc;
+    std::optional<FloatGrid::ConstAccessor> t1Acc;
+};
+
+/// β over every leaf, in parallel: each leaf is written by one task only.
+/// (A threaded tools::foreach over the tree's ValueOn iterator, tiles and
+/// voxels together, gave wrong voxels now and then on a loaded machine.)
+void fillLeaves(FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid* labels, const FloatGrid* t1)
+{
+    tbb::enumerable_thread_specific<SourceReader> readers([&] { return SourceReader(labels, t1); });
+    openvdb::tree::LeafManager<FloatGrid::TreeType> leaves(tree);
+    leaves.foreach ([&](FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        SourceReader& r = readers.local();
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            it.setValue(rule(r.label(c), r.t1(c)));
+        }
+    });
+}
+
+FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
+{
+    const auto labels = labelGrid(v);
+    const auto t1 = t1Grid(v);
+    auto tree = labels ? std::make_shared<FloatGrid::TreeType>(labels->tree(), 0.0f, openvdb::TopologyCopy())
+                       : std::make_shared<FloatGrid::TreeType>(t1->tree(), 0.0f, openvdb::TopologyCopy());
+    // Tiles (uniform label regions, few): serially. A tile whose T1 varies
+    // inside it (the T1 tree has a child node there; both trees share the
+    // node layout) is made voxels and filled with the leaves.
+    bool nonUniform = false;
+    {
+        SourceReader r(labels.get(), t1.get());
+        auto it = tree->beginValueOn();
+        it.setMaxDepth(FloatGrid::TreeType::ValueOnIter::LEAF_DEPTH - 1);
+        for (; it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            const int label = r.label(c);
+            if (rule.usesT1(label) && r.t1Acc && r.t1Acc->getValueDepth(c) > int(it.getDepth())) {
+                nonUniform = true;
+                continue;
+            }
+            it.setValue(rule(label, r.t1(c)));
+        }
+    }
+    if (nonUniform) tree->voxelizeActiveTiles(); // rare; tiles already filled become equal voxels
+    fillLeaves(*tree, rule, labels.get(), t1.get());
+    tree->prune(); // exact: tolerance 0
+    auto grid = FloatGrid::create(tree);
+    grid->setTransform(v.transform().copy());
+    return grid;
+}
+
+} // namespace
+
+MaterialField::MaterialField(const Volume& v, const TissueTable& table, const MaterialOptions& options)
+{
+    initializeOpenVdb();
+    fillPerLabel(table);
+    mLaw = t1DampingLaw(fieldOf(v, options));
+    const auto labels = labelGrid(v);
+    if (labels) {
+        checkLabelRange(*labels);
+        mLabels = labels;
+    }
+
+    if (options.needs.damping) {
+        if (!labels && !v.has(Channel::T1)) {
+            if (v.has(Channel::Intensity)) {
+                // MR that is not T1 (MrMaterial.h): never read as T1 silently.
+                const std::string w = v.metadata().mrWeighting.empty() ? "unknown" : v.metadata().mrWeighting;
+                throw ValueError("material field: tissue damping needs T1 or tissue labels, and this MR (" + w +
+                    ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
+                    "image with --t1-weighted or a T1 map with --t1-map");
+            }
+            throw ValueError("material field: tissue damping needs a label or t1 grid (segment the volume first)");
+        }
+        BetaRule rule;
+        rule.perLabel = &mPerLabel;
+        rule.law = mLaw;
+        rule.haveLabels = labels != nullptr;
+        rule.haveT1 = v.has(Channel::T1) && v.metadata().t1Units == "ms";
+        for (const char* name : {"fat", "muscle"}) {
+            if (const Tissue* t = table.find(name); t && t->id < kMaxLabels) rule.fromT1[std::size_t(t->id)] = true;
+        }
+        auto beta = buildDamping(v, rule);
+        mMaxBeta = beta->activeVoxelCount() ? double(openvdb::tools::minMax(beta->tree()).max()) : 0.0;
+        mBeta = beta;
+    }
+
+    if (options.needs.boneStiffness) {
+        const auto hu = huGrid(v);
+        if (!hu) throw ValueError("material field: bone stiffness needs an hu grid (a CT volume)");
+        const Geometry g = v.geometry();
+        const double lc = g.spacing.minCoeff(); // L_c = one voxel (physics.md §1.3 [chosen])
+        const double limit = options.device.maxStiffnessNPerMm;
+        auto k = FloatGrid::create(0.0f);
+        auto kAcc = k->getAccessor();
+        auto labelAcc = labels ? std::optional(labels->getConstAccessor()) : std::nullopt;
+        StiffnessReport& r = mStiffnessReport;
+        r.deviceLimitNPerMm = limit;
+        double sum = 0.0;
+        // Voxel by voxel over the active HU region (bone is a small part of a scan).
+        for (auto it = hu->cbeginValueOn(); it; ++it) {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            for (auto c = box.begin(); c; ++c) {
+                const float huValue = *it;
+                const bool bone = labelAcc
+                    ? mPerLabel[std::size_t(std::clamp(labelAcc->getValue(*c), 0, kMaxLabels - 1))].rigid
+                    : double(huValue) >= kBoneHuThreshold;
+                if (!bone) continue;
+                const double e = youngsModulusMPa(options.modulusLaw, densityFromHu(huValue));
+                const double computed = contactStiffnessNPerMm(e, options.tipAreaMm2, lc);
+                const double rendered = std::min(computed, limit);
+                kAcc.setValueOn(*c, float(rendered));
+                ++r.boneVoxels;
+                sum += computed;
+                r.computedMaxNPerMm = std::max(r.computedMaxNPerMm, computed);
+                r.renderedMaxNPerMm = std::max(r.renderedMaxNPerMm, rendered);
+            }
+        }
+        if (r.boneVoxels) r.computedMeanNPerMm = sum / double(r.boneVoxels);
+        k->tree().prune();
+        k->setTransform(v.transform().copy());
+        mStiffness = k;
+    }
+}
+
+MaterialField::MaterialField(GridConstPtr beta, GridConstPtr labels, const TissueTable& table)
+    : mBeta(std::move(beta)), mLabels(std::move(labels))
+{
+    initializeOpenVdb();
+    fillPerLabel(table);
+    if (mBeta && !openvdb::gridConstPtrCast<FloatGrid>(mBeta))
+        throw ValueError("material field: damping grid must be float");
+    if (mLabels) {
+        auto l = openvdb::gridConstPtrCast<LabelGrid>(mLabels);
+        if (!l) throw ValueError("material field: label grid must be int32");
+        checkLabelRange(*l);
+    }
+    if (auto b = openvdb::gridConstPtrCast<FloatGrid>(mBeta); b && b->activeVoxelCount()) {
+        mMaxBeta = double(openvdb::tools::minMax(b->tree()).max());
+    }
+}
+
+void MaterialField::fillPerLabel(const TissueTable& table)
+{
+    for (const Tissue& t : table.tissues()) {
+        if (t.id >= kMaxLabels) {
+            throw ValueError(table.origin() + ": tissue '" + t.name + "' id " + std::to_string(t.id) +
+                " exceeds the force path's limit of " + std::to_string(kMaxLabels - 1));
+        }
+        LabelMaterial& m = mPerLabel[std::size_t(t.id)];
+        const auto value = [](const std::optional<Quantity>& q) { return q ? q->value : 0.0; };
+        m.present = true;
+        m.critical = t.critical;
+        m.rigid = t.rigid;
+        m.dampingNsPerMm2 = value(t.damping);
+        m.punctureForceN = value(t.punctureForce);
+        m.cuttingForceN = value(t.cuttingForce);
+        m.elasticityNPerMm = value(t.elasticity);
+        m.frictionViscousNsPerMm2 = value(t.frictionViscous);
+        m.frictionCoulombN = value(t.frictionCoulomb);
+    }
+}
+
+} // namespace voxhap::haptic

@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Scene.cpp
+/// @brief Scene files: strict parsing (every error names the file and the field)
+/// and the set-up of what a scene needs.
+
+#include "haptic/scene/Scene.h"
+
+#include "core/Errors.h"
+#include "core/JsonFields.h"
+#include "volume/phantoms/Phantoms.h"
+#include "volume/VolumeFile.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace voxhap::haptic {
+
+extern const std::vector<std::pair<std::string, std::string>>& builtinSceneFiles(); // SceneBuiltin.cpp (generated)
+
+namespace {
+
+using Json = nlohmann::json;
+using Fields = JsonFields;
+
+DeviceLimits parseDevice(Fields& top)
+{
+    if (!top.has("device")) return DeviceLimits{};
+    if (top.raw("device").is_string()) {
+        try {
+            return deviceLimits(top.raw("device").get<std::string>());
+        } catch (const ValueError& e) {
+            top.fail("device", e.what());
+        }
+    }
+    Fields d = top.sub("device");
+    DeviceLimits l;
+    l.name = d.string("name", "custom");
+    l.maxForceN = d.number("max_force_N", l.maxForceN, true);
+    l.maxContinuousForceN = d.number("max_continuous_force_N", l.maxContinuousForceN, true);
+    l.maxStiffnessNPerMm = d.number("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, true);
+    l.maxDampingNsPerMm = d.number("max_damping_Ns_per_mm", l.maxDampingNsPerMm, true);
+    d.string("source", "");
+    return l;
+}
+
+void parseTerms(Fields& top, ForceTerms& t)
+{
+    t = ForceTerms{};
+    if (!top.has("terms")) top.fail("terms", "missing: name the force terms the scene uses");
+    Fields terms = top.sub("terms");
+    t.tip = terms.term("tip");
+    t.cutting = terms.term("cutting");
+    t.viscous = terms.term("viscous");
+    if (terms.term("karnopp")) {
+        Fields k = terms.sub("karnopp");
+        t.karnoppDeltaVMmPerS = k.number("delta_v_mm_per_s", 1.0);
+        t.keepDirectionN = k.number("keep_direction_N", 0.0);
+    }
+    if ((t.damping.on = terms.term("damping")) && terms.isObject("damping")) {
+        Fields d = terms.sub("damping");
+        t.damping.capN = d.number("cap_N", t.damping.capN, true);
+        t.damping.referenceSpeedMmPerS = d.number("reference_speed_mm_per_s", t.damping.referenceSpeedMmPerS, true);
+    }
+    if ((t.bone.on = terms.term("bone")) && terms.isObject("bone")) {
+        Fields b = terms.sub("bone");
+        t.bone.transient = b.boolean("transient", true);
+        t.bone.params.amplitudeNsPerM = b.number("amplitude_Ns_per_m", t.bone.params.amplitudeNsPerM);
+        t.bone.params.durationS = b.number("duration_ms", t.bone.params.durationS * 1e3, true) * 1e-3;
+        t.bone.params.frequencyHz = b.number("frequency_Hz", t.bone.params.frequencyHz, true);
+        t.bone.params.peakClampN = b.number("peak_clamp_N", t.bone.params.peakClampN);
+    }
+    if ((t.pivot.on = terms.term("pivot")) && terms.isObject("pivot")) {
+        Fields p = terms.sub("pivot");
+        PivotParams& q = t.pivot.params;
+        q.kappa1NPerMm2 = p.number("kappa1_N_per_mm2", q.kappa1NPerMm2);
+        q.kappa2NPerMm2 = p.number("kappa2_N_per_mm2", q.kappa2NPerMm2, true);
+        q.tauS = p.number("tau_ms", q.tauS * 1e3, true) * 1e-3;
+        q.hubDistanceMm = p.number("hub_distance_mm", q.hubDistanceMm, true);
+        q.layerThicknessMm = p.number("layer_thickness_mm", q.layerThicknessMm, true);
+        q.maxForceN = p.number("cap_N", q.maxForceN);
+    }
+    if ((t.lock.on = terms.term("lock")) && terms.isObject("lock")) {
+        t.lock.stiffnessNPerMm = terms.sub("lock").number("stiffness_N_per_mm", 0.0);
+    }
+    if ((t.lor.on = terms.term("lor")) && terms.isObject("lor")) {
+        Fields l = terms.sub("lor");
+        t.lor.params.timeConstantS = l.number("time_constant_ms", t.lor.params.timeConstantS * 1e3, true) * 1e-3;
+        t.lor.params.blockedForceN = l.number("blocked_force_N", t.lor.params.blockedForceN);
+    }
+    t.critical = terms.term("critical");
+    if (terms.has("coupling_N_per_mm")) t.couplingNPerMm = terms.number("coupling_N_per_mm", 0.0, true);
+}
+
+void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
+{
+    if (!top.has("overrides")) return;
+    const Json& all = top.raw("overrides");
+    if (!all.is_object()) top.fail("overrides", "must be an object of tissue names");
+    for (const auto& [name, v] : all.items()) {
+        Fields f(v, origin, "overrides." + name);
+        TissueOverride to;
+        to.punctureForceN = f.optNumber("puncture_force_N");
+        to.cuttingForceN = f.optNumber("cutting_force_N");
+        to.tentDepthMm = f.optNumber("tent_depth_mm", true);
+        to.elasticityNPerMm = f.optNumber("elasticity_N_per_mm");
+        f.string("source", "");
+        r.overrides[name] = to;
+    }
+}
+
+} // namespace
+
+Scene parseScene(const std::string& text, const std::string& origin)
+{
+    Json doc;
+    try {
+        doc = Json::parse(text);
+    } catch (const Json::parse_error& e) {
+        throw ValueError(origin + ": not valid JSON (" + e.what() + ")");
+    }
+    Scene s;
+    s.origin = origin;
+    Fields top(doc, origin, "");
+    if (top.string("schema", "") != "voxhap-scene/1") top.fail("schema", "must be \"voxhap-scene/1\"");
+    s.name = top.string("name", "");
+    if (s.name.empty()) top.fail("name", "missing");
+    s.description = top.string("description", "");
+    s.source = top.string("source", "");
+
+    if (top.has("volume")) {
+        Fields v = top.sub("volume");
+        s.volume.phantom = v.string("phantom", "");
+        s.volume.file = v.string("file", "");
+        s.volume.preset = v.string("preset", s.volume.preset);
+        s.volume.bmi = v.optNumber("bmi", true);
+        s.volume.spacingMm = v.number("spacing_mm", s.volume.spacingMm, true);
+        if (s.volume.phantom.empty() == s.volume.file.empty()) v.fail("", "name exactly one of phantom and file");
+    }
+    if (top.has("path")) {
+        Fields p = top.sub("path");
+        if (p.has("entry")) s.entry = p.vec3("entry");
+        if (p.has("target")) s.target = p.vec3("target");
+        s.entryLandmark = p.string("entry_landmark", s.entryLandmark);
+        s.targetLandmark = p.string("target_landmark", "");
+    }
+    try {
+        s.recipe.model = parseLayerModel(top.string("model", ""));
+    } catch (const ValueError& e) {
+        top.fail("model", e.what());
+    }
+    const std::string layers = top.string("layers", "labels");
+    if (layers != "labels" && layers != "table") top.fail("layers", "must be \"labels\" or \"table\"");
+    s.fixedTable = layers == "table";
+    if (top.has("tenting")) {
+        s.recipe.tenting.clear();
+        const Json& t = top.raw("tenting");
+        if (!t.is_array()) top.fail("tenting", "must be a list of tissue names");
+        for (const Json& n : t) {
+            if (!n.is_string()) top.fail("tenting", "must be a list of tissue names");
+            s.recipe.tenting.push_back(n.get<std::string>());
+        }
+    }
+    parseOverrides(top, origin, s.recipe);
+    parseTerms(top, s.terms);
+    if (top.has("needle")) {
+        Fields n = top.sub("needle");
+        s.needle.gauge = int(n.number("gauge", s.needle.gauge, true));
+        s.needle.referenceGauge = int(n.number("reference_gauge", s.needle.referenceGauge, true));
+        s.needle.lengthMm = n.number("length_mm", s.needle.lengthMm, true);
+        try {
+            s.needle.tip = parseTipType(n.string("tip", tipTypeName(s.needle.tip)));
+            (void)s.needle.forceScale(); // validates both gauges
+        } catch (const ValueError& e) {
+            n.fail("", e.what());
+        }
+    }
+    s.recipe.tip = s.needle.tip;
+    s.recipe.forceScale = s.needle.forceScale();
+    s.device = parseDevice(top);
+    if (top.has("insertion")) {
+        Fields i = top.sub("insertion");
+        s.speedMmPerS = i.number("speed_mm_per_s", s.speedMmPerS, true);
+        s.rateHz = i.number("rate_Hz", s.rateHz, true);
+        s.approachMm = i.number("approach_mm", s.approachMm);
+        s.depthMm = i.optNumber("depth_mm", true);
+    }
+    if (s.recipe.model == LayerModel::Kyung && s.fixedTable)
+        top.fail("layers", "the kyung model reads voxels: use \"labels\"");
+    return s;
+}
+
+Scene loadScene(const std::string& nameOrPath)
+{
+    for (const auto& [name, text] : builtinSceneFiles()) {
+        if (name == nameOrPath) return parseScene(text, "builtin:" + name);
+    }
+    std::ifstream in(nameOrPath);
+    if (!in) {
+        std::string names;
+        for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
+        throw IoError(nameOrPath + ": no such scene file or built-in scene (" + names + ")");
+    }
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parseScene(ss.str(), nameOrPath);
+}
+
+std::vector<std::string> builtinSceneNames()
+{
+    std::vector<std::string> names;
+    for (const auto& f : builtinSceneFiles()) names.push_back(f.first);
+    return names;
+}
+
+std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, const volume::TissueTable& table)
+{
+    if (!s.file.empty()) return std::make_shared<const volume::Volume>(volume::loadVolume(s.file));
+    volume::GridSpec grid;
+    grid.spacing = Vec3d::Constant(s.spacingMm);
+    volume::PhantomModel m;
+    if (s.phantom == "lumbar") {
+        volume::LumbarParams p;
+        p.preset = volume::parseLumbarPreset(s.preset);
+        p.bmi = s.bmi;
+        m = volume::lumbarModel(p, table);
+    } else if (s.phantom == "torso") {
+        m = volume::torsoModel({}, table);
+    } else {
+        throw ValueError("scene volume: unknown phantom '" + s.phantom + "' (lumbar, torso)");
+    }
+    return std::make_shared<const volume::Volume>(volume::makePhantom(m, grid, table));
+}
+
+SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::Volume> vol,
+    const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
+    : mScene(scene), mVolume(vol ? std::move(vol) : makeSourceVolume(scene.volume, table))
+{
+    const bool needLabels = !scene.fixedTable || scene.terms.critical;
+    if (needLabels && !mVolume->has(volume::Channel::Label)) {
+        throw ValueError(scene.origin +
+            ": the volume has no tissue labels, which this scene's layers and critical-structure "
+            "rule read: give a labelled volume (a phantom, or a segmented scan)");
+    }
+    const auto pick = [&](std::optional<Vec3d> given, std::optional<Vec3d> fromScene, const std::string& mark,
+                          const char* what) {
+        if (given) return *given;
+        if (fromScene) return *fromScene;
+        if (auto p = mark.empty() ? std::nullopt : volume::phantomLandmark(*mVolume, mark)) return *p;
+        throw ValueError(
+            scene.origin + ": path." + what + ": not given, and the volume has no landmark '" + mark + "'");
+    };
+    mEntry = pick(entry, scene.entry, scene.entryLandmark, "entry");
+    mTarget = pick(target, scene.target, scene.targetLandmark, "target");
+    const Vec3d dir = mTarget - mEntry;
+    if (!(dir.norm() > 1e-6)) throw ValueError(scene.origin + ": path: entry and target coincide");
+
+    // Only the grids the named terms read (architecture.md "Sparse by default").
+    if (scene.terms.damping.on || needLabels) {
+        MaterialOptions mo;
+        mo.needs.damping = scene.terms.damping.on;
+        mo.needs.boneStiffness = false; // bone renders at the device's stiffness (§1.3)
+        mo.device = scene.device;
+        mo.tipAreaMm2 = scene.needle.tipAreaMm2();
+        mField = std::make_unique<MaterialField>(*mVolume, table, mo);
+    }
+    if (scene.fixedTable) {
+        mLayers = fixedLayers(scene.recipe, table, volume::parseLumbarPreset(scene.volume.preset), scene.volume.bmi);
+    } else {
+        const double reach = dir.norm() + scene.needle.lengthMm;
+        mLayers = layersFromRuns(traceLabelRuns(*mField, mEntry, dir, reach), table, scene.recipe);
+    }
+}
+
+std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
+{
+    std::unique_ptr<ShaftIntegrator> integrator, locked;
+    if (mField && (mScene.terms.damping.on || (mScene.terms.critical && mField->labels()))) {
+        IntegratorOptions o;
+        o.strategy = Strategy::ExactVoxel;
+        o.trackLabels = mScene.terms.critical && mField->labels();
+        integrator = makeIntegrator(*mField, o);
+        if (mScene.terms.damping
+                .on) { // the profile integrates β: after skin entry (architecture.md "Shaft integration")
+            o.strategy = Strategy::Profile;
+            o.profileMaxLengthMm = std::max(o.profileMaxLengthMm, 2.0 * mScene.needle.lengthMm);
+            locked = makeIntegrator(*mField, o);
+        }
+    }
+    return std::make_unique<NeedleForceModel>(mLayers, NeedlePath{mEntry, mTarget - mEntry}, mScene.terms,
+        mScene.needle, mScene.device, std::move(integrator), mField.get(), std::move(locked));
+}
+
+} // namespace voxhap::haptic

@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Insertion.cpp
+#include "haptic/scene/ScriptedInsertion.h"
+
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace voxhap::haptic {
+
+InsertionScript InsertionScript::constantSpeed(double from, double to, double speed)
+{
+    if (!(speed > 0.0) || !std::isfinite(speed)) throw ValueError("insertion: speed must be positive");
+    if (!std::isfinite(from) || !std::isfinite(to)) throw ValueError("insertion: depths must be finite");
+    return InsertionScript{{{0.0, from}, {std::abs(to - from) / speed, to}}};
+}
+
+InsertionScript InsertionScript::load(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
+    if (!in) throw IoError(file.string() + ": cannot open the insertion script");
+    InsertionScript s;
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+        if (line.empty() || line[0] == '#' ||
+            (n == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) && line[0] != '-'))
+            continue;
+        std::replace(line.begin(), line.end(), ',', ' ');
+        std::istringstream ls(line);
+        double t = 0, d = 0;
+        std::string rest;
+        if (!(ls >> t >> d) || (ls >> rest) || !std::isfinite(t) || !std::isfinite(d)) {
+            throw ValueError(file.string() + ": line " + std::to_string(n) + ": expected \"t_s,depth_mm\"");
+        }
+        if (!s.knots.empty() && !(t > s.knots.back().first)) {
+            throw ValueError(file.string() + ": line " + std::to_string(n) + ": t_s must increase");
+        }
+        s.knots.emplace_back(t, d);
+    }
+    if (s.knots.size() < 2) throw ValueError(file.string() + ": an insertion script needs at least two rows");
+    if (s.knots.front().first != 0.0) throw ValueError(file.string() + ": line 1: the script must start at t_s = 0");
+    return s;
+}
+
+namespace {
+std::size_t segmentOf(const InsertionScript& s, double t)
+{
+    std::size_t i = 1;
+    while (i + 1 < s.knots.size() && t > s.knots[i].first) ++i;
+    return i;
+}
+} // namespace
+
+double InsertionScript::depthAt(double t) const
+{
+    if (knots.empty()) return 0.0;
+    if (t <= knots.front().first) return knots.front().second;
+    if (t >= knots.back().first) return knots.back().second;
+    const std::size_t i = segmentOf(*this, t);
+    const auto [t0, d0] = knots[i - 1];
+    const auto [t1, d1] = knots[i];
+    return d0 + (d1 - d0) * (t - t0) / (t1 - t0);
+}
+
+double InsertionScript::speedAt(double t) const
+{
+    if (knots.size() < 2 || t < 0.0 || t > knots.back().first) return 0.0;
+    const std::size_t i = segmentOf(*this, t);
+    return (knots[i].second - knots[i - 1].second) / (knots[i].first - knots[i - 1].first);
+}
+
+InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz)
+{
+    if (!(rateHz > 0.0) || !std::isfinite(rateHz)) throw ValueError("insertion: rate must be positive");
+    InsertionResult r;
+    const double dt = 1.0 / rateHz;
+    const long ticks = long(std::ceil(script.duration() * rateHz - 1e-9)) + 1;
+    r.rows.reserve(std::size_t(ticks));
+    const NeedlePath& path = model.path();
+    NeedleOutput out;
+    InsertionSummary& s = r.summary;
+    for (long n = 0; n < ticks; ++n) {
+        const double t = std::min(double(n) * dt, script.duration());
+        NeedleInput in;
+        in.timeS = t;
+        in.dtS = dt;
+        in.tip = path.origin + script.depthAt(t) * path.direction;
+        in.direction = path.direction;
+        in.velocity = script.speedAt(t) * path.direction;
+        model.step(in, out);
+        InsertionRow row;
+        row.timeS = t;
+        row.depthMm = out.tip.depthMm;
+        row.speedMmPerS = out.speedMmPerS;
+        row.force = out.force;
+        row.axialN = out.axialN;
+        row.plungerN = out.plungerN;
+        row.layer = out.tip.currentLayer();
+        row.state = row.layer >= 0 ? model.state().state(row.layer) : LayerState::Intact;
+        row.critical = out.critical;
+        row.fault = out.fault;
+        row.firstEvent = int(r.events.size());
+        row.eventCount = out.events.size();
+        for (const Event& e : out.events) {
+            r.events.push_back(e);
+            switch (e.type) {
+            case EventType::SkinEntry:
+                s.skinEntryMm = std::min(s.skinEntryMm, e.depthMm);
+                break;
+            case EventType::Pop:
+                ++s.pops;
+                break;
+            case EventType::LossOfResistance:
+                s.lorMm = std::min(s.lorMm, e.depthMm);
+                break;
+            case EventType::DuraPuncture:
+                s.duraMm = std::min(s.duraMm, e.depthMm);
+                break;
+            case EventType::BoneContact:
+                ++s.boneContacts, s.boneMm = std::min(s.boneMm, e.depthMm);
+                break;
+            case EventType::CriticalBreach:
+                ++s.breaches, s.breachMm = std::min(s.breachMm, e.depthMm);
+                break;
+            case EventType::Fault:
+                ++s.faults;
+                break;
+            default:
+                break;
+            }
+        }
+        s.peakModelN = std::max(s.peakModelN, out.modelForce.norm());
+        s.peakRenderedN = std::max(s.peakRenderedN, out.force.norm());
+        s.peakPlungerN = std::max(s.peakPlungerN, out.plungerN);
+        r.rows.push_back(row);
+    }
+    s.finalDepthMm = r.rows.empty() ? 0.0 : r.rows.back().depthMm;
+    s.durationS = script.duration();
+    return r;
+}
+
+void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layers, const std::filesystem::path& file)
+{
+    writeStreamAtomically(file, [&](std::ostream& o) {
+        o << "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n";
+        o << std::setprecision(9);
+        for (const InsertionRow& row : r.rows) {
+            o << row.timeS << ',' << row.depthMm << ',' << row.speedMmPerS << ',' << row.force.x() << ','
+              << row.force.y() << ',' << row.force.z() << ',' << row.force.norm() << ',' << row.axialN << ','
+              << row.plungerN << ',' << (row.layer >= 0 ? layerStateName(row.state) : "outside") << ','
+              << (row.layer >= 0 ? layers[std::size_t(row.layer)].name : "") << ',';
+            for (int k = 0; k < row.eventCount; ++k)
+                o << (k ? ";" : "") << eventName(r.events[std::size_t(row.firstEvent + k)].type);
+            o << '\n';
+        }
+    });
+}
+
+std::string insertionSummaryText(const InsertionResult& r, const std::vector<Layer>& layers)
+{
+    const InsertionSummary& s = r.summary;
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(1);
+    const auto at = [&](const char* what, double d) {
+        o << "  " << std::left << std::setw(20) << what;
+        if (std::isfinite(d))
+            o << "at " << d << " mm\n";
+        else
+            o << "none\n";
+    };
+    at("skin puncture", s.skinEntryMm);
+    o << "  " << std::left << std::setw(20) << "pops" << s.pops;
+    for (const Event& e : r.events) {
+        if (e.type == EventType::Pop)
+            o << (&e == &r.events.front() ? " " : "  ") << layers[std::size_t(e.layer)].name << " " << e.depthMm;
+    }
+    o << '\n';
+    at("loss of resistance", s.lorMm);
+    at("dura puncture", s.duraMm);
+    at("bone contact", s.boneMm);
+    at("critical breach", s.breachMm);
+    o << std::setprecision(2);
+    o << "  " << std::setw(20) << "peak force" << s.peakModelN << " N model, " << s.peakRenderedN << " N rendered\n";
+    if (s.peakPlungerN > 0.0) o << "  " << std::setw(20) << "peak plunger" << s.peakPlungerN << " N\n";
+    if (s.faults) o << "  " << std::setw(20) << "faults" << s.faults << '\n';
+    o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << s.finalDepthMm << " mm in " << s.durationS
+      << " s\n";
+    return o.str();
+}
+
+} // namespace voxhap::haptic

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Insertion.h
+/// @brief A scripted insertion through a force model at a fixed servo rate: the
+/// engine of `voxhap simulate` and of the preset regression tests.
+#pragma once
+
+#include "haptic/force/NeedleForceModel.h"
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace voxhap::haptic {
+
+/// @brief Tip depth along the path over time, piecewise linear between knots.
+struct InsertionScript {
+    std::vector<std::pair<double, double>> knots; ///< (t [s], depth [mm]), t increasing
+
+    /// @brief From @p fromMm to @p toMm at @p speedMmPerS. @throw ValueError on a non-positive speed
+    static InsertionScript constantSpeed(double fromMm, double toMm, double speedMmPerS);
+    /// @brief A CSV file of "t_s,depth_mm" rows (a header line is allowed).
+    /// @throw IoError, ValueError naming the file and line
+    static InsertionScript load(const std::filesystem::path& file);
+    double duration() const { return knots.empty() ? 0.0 : knots.back().first; }
+    double depthAt(double t) const;
+    double speedAt(double t) const; ///< [mm/s], the slope of the segment holding t
+};
+
+/// @brief One tick of the record.
+struct InsertionRow {
+    double timeS = 0, depthMm = 0, speedMmPerS = 0;
+    Vec3d force{0, 0, 0}; ///< rendered [N]
+    double axialN = 0;    ///< model resistance along the path [N]
+    double plungerN = 0;
+    int layer = -1; ///< current layer
+    LayerState state = LayerState::Intact;
+    bool critical = false, fault = false;
+    int firstEvent = 0, eventCount = 0; ///< into InsertionResult::events
+};
+
+struct InsertionSummary {
+    double skinEntryMm = kNoLimit, lorMm = kNoLimit, duraMm = kNoLimit, boneMm = kNoLimit, breachMm = kNoLimit;
+    int pops = 0, boneContacts = 0, breaches = 0, faults = 0;
+    double peakModelN = 0, peakRenderedN = 0, peakPlungerN = 0;
+    double finalDepthMm = 0, durationS = 0;
+};
+
+struct InsertionResult {
+    std::vector<InsertionRow> rows;
+    std::vector<Event> events;
+    InsertionSummary summary;
+};
+
+/// @brief Drive @p model along its path by @p script at @p rateHz (the tip on the
+/// path, the needle along it).
+InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz);
+
+/// @brief CSV: t_s, depth_mm, speed_mm_per_s, fx_N, fy_N, fz_N, force_N, axial_model_N,
+/// plunger_N, state, layer, events. Written to a temporary file, then renamed.
+void writeInsertionCsv(const InsertionResult& r, const std::vector<Layer>& layers, const std::filesystem::path& file);
+
+/// @brief The human summary: skin entry, pops, loss of resistance, dura, bone, peaks.
+std::string insertionSummaryText(const InsertionResult& r, const std::vector<Layer>& layers);
+
+} // namespace voxhap::haptic

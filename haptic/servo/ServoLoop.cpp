@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ServoLoop.cpp
+#include "haptic/servo/ServoLoop.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <sys/prctl.h>
+
+namespace voxhap::haptic {
+
+void TickStats::add(Hist& h, double bin) noexcept
+{
+    const int b = std::isfinite(bin) && bin > 0.0 ? int(std::min(bin, double(kBins))) : 0;
+    h[std::size_t(b)].fetch_add(1, std::memory_order_relaxed);
+}
+
+double TickStats::quantile(const Hist& h, double q) noexcept
+{
+    std::uint64_t total = 0;
+    for (const auto& c : h) total += c.load(std::memory_order_relaxed);
+    if (total == 0) return 0.0;
+    const double want = std::clamp(q, 0.0, 1.0) * double(total);
+    std::uint64_t seen = 0;
+    for (int b = 0; b <= kBins; ++b) {
+        seen += h[std::size_t(b)].load(std::memory_order_relaxed);
+        if (double(seen) >= want) return double(b + 1);
+    }
+    return double(kBins + 1);
+}
+
+long TickStats::count() const noexcept
+{
+    long n = 0;
+    for (const auto& c : mCompute) n += long(c.load(std::memory_order_relaxed));
+    return n;
+}
+
+ServoLoop::ServoLoop(NeedleForceModel& model, Device& device, const ServoOptions& options)
+    : mModel(model), mDevice(device), mOpt(options), mEvents(std::make_unique<SpscQueue<Event, 1024>>()),
+      mRecords(std::make_unique<SpscQueue<ServoRecord, 1 << 16>>())
+{
+    if (!(mOpt.rateHz > 0.0) || !std::isfinite(mOpt.rateHz)) mOpt.rateHz = 1000.0;
+}
+
+ServoLoop::~ServoLoop() { stop(); }
+
+void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
+{
+    const auto start = std::chrono::steady_clock::now();
+    const DeviceReading r = mDevice.read(t);
+    Vec3d target = mLastForceVec;
+    if (r.valid) {
+        mQuietS = 0.0;
+        NeedleInput in;
+        in.timeS = t;
+        in.dtS = dt;
+        in.tip = r.tip;
+        in.direction = r.direction;
+        in.velocity = r.velocity;
+        mModel.step(in, mOut);
+        target = mOut.force;
+        for (const Event& e : mOut.events) mEvents->push(e), mDevice.event(e);
+    } else {
+        mQuietS += dt;
+    }
+    // Watchdog: a quiet device or a stalled loop ramps the force to zero; it comes
+    // back the same way.
+    constexpr double kTimeTolS = 1e-9; // sums of tick periods carry round-off
+    const bool stalled = mQuietS > mOpt.watchdogS + kTimeTolS || lastPeriod > mOpt.watchdogS + kTimeTolS;
+    const double step = mOpt.rampS > 0.0 ? std::max(dt, lastPeriod) / mOpt.rampS : 1.0;
+    mGain = r.lost ? 0.0 : stalled ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
+    mLastForceVec = target;
+    const Vec3d f = mGain * target;
+    mDevice.write(f, mOut.plungerN, t);
+
+    ServoRecord rec;
+    rec.timeS = t;
+    rec.tip = r.tip;
+    rec.direction = r.direction;
+    rec.force = f;
+    rec.plungerN = mOut.plungerN;
+    rec.plungerFraction = r.plungerFraction;
+    rec.depthMm = mOut.tip.depthMm;
+    rec.axialN = mOut.axialN;
+    rec.layer = std::int16_t(mOut.tip.currentLayer());
+    rec.state = rec.layer >= 0 ? mModel.state().state(rec.layer) : LayerState::Intact;
+    rec.fault = mOut.fault;
+    rec.critical = mOut.critical;
+    mRecords->push(rec);
+
+    mLastForce.store(f.norm(), std::memory_order_relaxed);
+    mLastLayer.store(rec.layer, std::memory_order_relaxed);
+    mGainPublic.store(mGain, std::memory_order_relaxed);
+    mTicks.fetch_add(1, std::memory_order_relaxed);
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count();
+    mStats.addCompute(ns);
+    if (ns > mMaxComputeNs.load(std::memory_order_relaxed)) mMaxComputeNs.store(ns, std::memory_order_relaxed);
+}
+
+void ServoLoop::runTicks(long n) noexcept
+{
+    const double T = 1.0 / mOpt.rateHz;
+    for (long i = 0; i < n && !mDevice.finished(); ++i) {
+        tick(mSimTime, T, T);
+        mSimTime += T;
+    }
+}
+
+namespace {
+timespec toTimespec(std::int64_t ns) { return timespec{time_t(ns / 1000000000), long(ns % 1000000000)}; }
+std::int64_t nowNs()
+{
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return std::int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+} // namespace
+
+void ServoLoop::loop() noexcept
+{
+    const std::int64_t period = std::int64_t(std::llround(1e9 / mOpt.rateHz));
+    const std::int64_t t0 = nowNs();
+    std::int64_t deadline = t0, last = t0;
+    bool first = true;
+    const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
+    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
+    while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished()) {
+        // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
+        if (spin) {
+            while (nowNs() < deadline) { }
+        } else {
+            const timespec ts = toTimespec(deadline);
+            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+        }
+        const std::int64_t now = nowNs();
+        const std::int64_t actual = now - last;
+        if (!first) mStats.addPeriodError(double(std::llabs(actual - period)));
+        last = now;
+        tick(double(now - t0) * 1e-9, double(period) * 1e-9, first ? double(period) * 1e-9 : double(actual) * 1e-9);
+        first = false;
+        deadline += period;
+        const std::int64_t after = nowNs();
+        if (after > deadline) { // missed the next deadline: count it and re-anchor
+            mOverruns.fetch_add(1, std::memory_order_relaxed);
+            deadline = after + period - (after - deadline) % period;
+        }
+    }
+    mRunning.store(false);
+}
+
+void ServoLoop::start()
+{
+    if (mRunning.exchange(true)) return;
+    mStop.store(false);
+    mThread = std::thread([this] { loop(); });
+}
+
+void ServoLoop::stop()
+{
+    mStop.store(true);
+    if (mThread.joinable()) mThread.join();
+    mRunning.store(false);
+}
+
+} // namespace voxhap::haptic

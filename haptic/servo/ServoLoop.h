@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ServoLoop.h
+/// @brief The haptic servo loop (architecture.md "Threads"): one thread at a fixed
+/// rate with absolute deadlines; each tick reads the device, steps the force
+/// model, applies the watchdog and writes the force. The tick never allocates,
+/// locks, throws or logs: events and records leave through lock-free queues, and
+/// timing statistics are lock-free histograms.
+#pragma once
+
+#include "haptic/servo/Device.h"
+#include "haptic/force/NeedleForceModel.h"
+#include "haptic/servo/SpscQueue.h"
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <thread>
+
+namespace voxhap::haptic {
+
+struct ServoOptions {
+    double rateHz = 1000.0;
+    /// The watchdog ramps the force to zero over rampS when the device has been
+    /// quiet (no valid reading) this long, or when a period lasted this long [s].
+    double watchdogS = 0.020; ///< [chosen] 20 periods at 1 kHz
+    double rampS = 0.050;     ///< [chosen]
+    /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
+    /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
+    double spinBelowS = 100e-6;
+};
+
+/// @brief One tick, for the session record.
+struct ServoRecord {
+    double timeS = 0;
+    Vec3d tip{0, 0, 0}, direction{0, 0, 1}, force{0, 0, 0};
+    double plungerN = 0, depthMm = 0, axialN = 0;
+    double plungerFraction = std::numeric_limits<double>::quiet_NaN(); ///< syringe emptied, 0..1 (DeviceReading)
+    std::int16_t layer = -1;
+    LayerState state = LayerState::Intact;
+    bool fault = false, critical = false;
+};
+
+/// @brief Lock-free timing statistics: compute time per tick and period error.
+class TickStats {
+public:
+    static constexpr int kBins = 4096; ///< compute: 25 ns bins up to 102 µs; period: 1 µs bins
+    void addCompute(double ns) noexcept { add(mCompute, ns / 25.0); }
+    void addPeriodError(double ns) noexcept { add(mJitter, ns / 1000.0); }
+    /// @brief Quantile @p q of the compute time [ns] (upper edge of its bin).
+    double computeQuantileNs(double q) const noexcept { return quantile(mCompute, q) * 25.0; }
+    double jitterQuantileNs(double q) const noexcept { return quantile(mJitter, q) * 1000.0; }
+    long count() const noexcept;
+
+private:
+    using Hist = std::array<std::atomic<std::uint32_t>, kBins + 1>;
+    static void add(Hist& h, double bin) noexcept;
+    static double quantile(const Hist& h, double q) noexcept;
+    Hist mCompute{}, mJitter{};
+};
+
+class ServoLoop {
+public:
+    ServoLoop(NeedleForceModel& model, Device& device, const ServoOptions& options = {});
+    ~ServoLoop();
+    ServoLoop(const ServoLoop&) = delete;
+    ServoLoop& operator=(const ServoLoop&) = delete;
+
+    /// @brief Run on its own thread in real time until stop() or the device finishes.
+    void start();
+    void stop();
+    bool running() const noexcept { return mRunning.load(); }
+    /// @brief Run @p ticks ticks now on the caller's thread, in simulated time (tests).
+    void runTicks(long ticks) noexcept;
+
+    // Consumer side (another thread).
+    bool popEvent(Event& e) noexcept { return mEvents->pop(e); }
+    bool popRecord(ServoRecord& r) noexcept { return mRecords->pop(r); }
+    long droppedRecords() const noexcept { return mRecords->dropped(); }
+    const TickStats& stats() const noexcept { return mStats; }
+    long ticks() const noexcept { return mTicks.load(); }
+    long overruns() const noexcept { return mOverruns.load(); }
+    double maxComputeNs() const noexcept { return mMaxComputeNs.load(); }
+    /// @brief The last rendered force magnitude [N] and layer, for a status line.
+    double lastForceN() const noexcept { return mLastForce.load(); }
+    int lastLayer() const noexcept { return mLastLayer.load(); }
+    double watchdogGain() const noexcept { return mGainPublic.load(); }
+
+private:
+    void tick(double timeS, double dtS, double lastPeriodS) noexcept;
+    void loop() noexcept;
+
+    NeedleForceModel& mModel;
+    Device& mDevice;
+    ServoOptions mOpt;
+    NeedleOutput mOut;
+    TickStats mStats;
+    // On the heap: 65 s of records at 1 kHz is megabytes, too big for a stack.
+    std::unique_ptr<SpscQueue<Event, 1024>> mEvents;
+    std::unique_ptr<SpscQueue<ServoRecord, 1 << 16>> mRecords;
+    std::atomic<bool> mRunning{false}, mStop{false};
+    std::atomic<long> mTicks{0}, mOverruns{0};
+    std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
+    std::atomic<int> mLastLayer{-1};
+    double mGain = 1.0, mQuietS = 0.0, mSimTime = 0.0;
+    Vec3d mLastForceVec{0, 0, 0};
+    std::thread mThread;
+};
+
+} // namespace voxhap::haptic

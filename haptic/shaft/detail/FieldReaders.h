@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file FieldReaders.h
+/// @brief What every shaft integrator holds: the field's grids, a reader per
+/// grid (its own accessors, so one per thread) and the active box.
+#pragma once
+
+#include "haptic/materials/FieldGrids.h"
+#include "haptic/shaft/detail/LeafReader.h"
+#include "haptic/shaft/detail/Traversal.h"
+#include "core/Errors.h"
+
+#include <optional>
+#include <string>
+
+namespace voxhap::haptic::detail {
+
+using FloatReader = LeafReader<FloatGrid::TreeType>;
+using LabelReader = LeafReader<LabelGrid::TreeType>;
+
+struct FieldReaders {
+    /// @param who names the strategy in errors
+    /// @throw ValueError if @p needDamping and the field has no damping grid, or it has no grid at all
+    FieldReaders(const MaterialField& field, bool trackLabels, bool needDamping, const std::string& who)
+        : beta(dampingGrid(field)), labels(trackLabels ? labelGrid(field) : nullptr)
+    {
+        if (needDamping && !beta) throw ValueError(who + ": the material field has no damping grid");
+        if (!beta && !labels) throw ValueError(who + ": the material field has neither damping nor labels");
+        xform = beta ? beta->transformPtr() : labels->transformPtr();
+        if (beta) betaReader.emplace(beta->tree());
+        if (labels) labelReader.emplace(labels->tree());
+    }
+    FieldReaders(const FieldReaders& o) : beta(o.beta), labels(o.labels), xform(o.xform)
+    {
+        if (o.betaReader) betaReader.emplace(*o.betaReader); // fresh accessors
+        if (o.labelReader) labelReader.emplace(*o.labelReader);
+    }
+    FieldReaders& operator=(const FieldReaders&) = delete;
+
+    /// @brief The union of the grids' active boxes as voxel cells in the shifted
+    /// (+0.5) frame, grown by @p pad; empty grids give lo > hi.
+    void box(double pad, openvdb::Vec3d& lo, openvdb::Vec3d& hi) const
+    {
+        lo = openvdb::Vec3d(std::numeric_limits<double>::max());
+        hi = openvdb::Vec3d(std::numeric_limits<double>::lowest());
+        for (const openvdb::GridBase* g :
+            {static_cast<const openvdb::GridBase*>(beta.get()), static_cast<const openvdb::GridBase*>(labels.get())}) {
+            if (!g) continue;
+            openvdb::Vec3d l, h;
+            activeBox(*g, pad, l, h);
+            if (l[0] > h[0]) continue;
+            lo = openvdb::math::minComponent(lo, l);
+            hi = openvdb::math::maxComponent(hi, h);
+        }
+        if (lo[0] > hi[0]) {
+            lo = openvdb::Vec3d(1.0);
+            hi = openvdb::Vec3d(-1.0);
+        }
+    }
+
+    FloatReader* betaPtr() { return betaReader ? &*betaReader : nullptr; }
+    LabelReader* labelPtr() { return labelReader ? &*labelReader : nullptr; }
+
+    FloatGrid::ConstPtr beta;
+    LabelGrid::ConstPtr labels;
+    openvdb::math::Transform::ConstPtr xform;
+    std::optional<FloatReader> betaReader;
+    std::optional<LabelReader> labelReader;
+};
+
+} // namespace voxhap::haptic::detail
