@@ -4,6 +4,8 @@
 
 #include "segmentation/DistanceField.h"
 
+#include "volume/Grids.h"
+
 #include "segmentation/DenseGrids.h"
 #include "segmentation/DistanceTransform.h"
 
@@ -17,7 +19,7 @@ namespace voxhap::segmentation {
 
 std::string distanceFieldName(const std::string& tissue) { return "sdf." + tissue; }
 
-volume::FloatGrid::Ptr signedDistanceField(
+volume::Volume::GridPtr signedDistanceField(
     const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm)
 {
     Mask inside(labels.size()), outside(labels.size());

@@ -12,7 +12,7 @@
 #pragma once
 
 #include "segmentation/Lattice.h"
-#include "volume/Grids.h"
+#include "volume/Volume.h"
 
 #include <cstdint>
 #include <string>
@@ -26,7 +26,9 @@ std::string distanceFieldName(const std::string& tissue);
 /// @brief Signed distance [mm] to the surface of the voxels where @p labels == @p id:
 /// negative inside, positive outside; voxels farther out than @p bandMm are inactive
 /// and read as the background +@p bandMm; inside values are clamped at −@p bandMm.
-volume::FloatGrid::Ptr signedDistanceField(
+/// @return a FloatGrid (volume/Grids.h), handed out as a base pointer so that
+///         this header does not bring OpenVDB's into every includer
+volume::Volume::GridPtr signedDistanceField(
     const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm);
 
 } // namespace voxhap::segmentation

@@ -16,7 +16,8 @@
 namespace voxhap::haptic {
 namespace {
 
-TEST(R2, LumbarPunctureTableReproducesThePrintedForces)
+// physics.md §7 R2
+TEST(LumbarPunctureModel, LumbarPunctureTableReproducesThePrintedForces)
 {
     // physics.md §4, reference |f| at v = 0.02 m/s, to 1e-6 N beyond the printed digits:
     // the printed values are rounded to 4 decimals, so compare with half a unit in the last place.
@@ -31,7 +32,8 @@ TEST(R2, LumbarPunctureTableReproducesThePrintedForces)
     }
 }
 
-TEST(R2, ClosedFormAtAnyDepthAndSpeed)
+// physics.md §7 R2
+TEST(LumbarPunctureModel, ClosedFormAtAnyDepthAndSpeed)
 {
     // Independent evaluation of Eq. 1–3 at 20 mm depth (ligament: x = 6 mm, C = 0.5 N):
     // k·x + C + v·(2.1·2 + 1.0·7 + 3.0·6)·1e-3 with v in m/s.
@@ -47,7 +49,8 @@ TEST(R2, ClosedFormAtAnyDepthAndSpeed)
     EXPECT_EQ(lumbarPunctureForce(lpTable(), std::nan(""), 3.0, 1), 0.0);
 }
 
-TEST(R3, FittedTableMatchesThePrintedOne)
+// physics.md §7 R3
+TEST(ConciModel, FittedTableMatchesThePrintedOne)
 {
     // physics.md §3.2 "Fitted table (computed)", to its printed digits.
     struct Row {
@@ -82,7 +85,8 @@ TEST(R3, FittedTableMatchesThePrintedOne)
     }
 }
 
-TEST(R3, ProfileIsContinuousWithinStagesAndDropsExactlyTf)
+// physics.md §7 R3
+TEST(ConciModel, ProfileIsContinuousWithinStagesAndDropsExactlyTf)
 {
     const auto layers = fitConci(conciSeeds());
     ConciModel model(layers);
@@ -112,7 +116,8 @@ TEST(R3, ProfileIsContinuousWithinStagesAndDropsExactlyTf)
     EXPECT_NEAR(after.forceN, 1.218, 5e-4);
 }
 
-TEST(R3, BmiScalesTheLayersAboveTheEpiduralSpace)
+// physics.md §7 R3
+TEST(ConciModel, BmiScalesTheLayersAboveTheEpiduralSpace)
 {
     // §3.3: BMI 30 -> s = 1.423 (printed), SED 58.2 mm.
     const double s = conciBmiScale(30.0);
@@ -124,7 +129,8 @@ TEST(R3, BmiScalesTheLayersAboveTheEpiduralSpace)
     EXPECT_NEAR(bevel[0].ce1, 0.85 * fitConci(conciSeeds())[0].ce1, 1e-12);
 }
 
-TEST(R4, SenacNestedBoxesAndPrePunctureStiffness)
+// physics.md §7 R4
+TEST(SenacModel, SenacNestedBoxesAndPrePunctureStiffness)
 {
     // §2.2: F_p = 2 N at z_p = 10 mm -> a1 = 0.10 N/mm, a2 = 0.010 N/mm², peak slope 0.30 N/mm.
     const auto k = PrePunctureStiffness::fromPuncture(2.0, 10.0);
@@ -145,7 +151,8 @@ TEST(R4, SenacNestedBoxesAndPrePunctureStiffness)
     EXPECT_EQ(cut.forceN(30.0, -2.0), 16.0); // opposes motion either way
 }
 
-TEST(R6, BoneTransientSamplesTheDecayingSine)
+// physics.md §7 R6
+TEST(ContactTransient, BoneTransientSamplesTheDecayingSine)
 {
     const ContactTransient c; // A = 150 N·s/m, d = 40 ms, f = 100 Hz
     const double vIn = 10.0;  // mm/s
@@ -168,7 +175,8 @@ TEST(R6, BoneTransientSamplesTheDecayingSine)
     EXPECT_NEAR(std::abs(c.forceN(at, 100.0)), 2.0, 1e-12);
 }
 
-TEST(R7, KelvinStepResponseIsExactlyGeometric)
+// physics.md §7 R7
+TEST(PivotCorrection, KelvinStepResponseIsExactlyGeometric)
 {
     const double k1 = 0.5, k2 = 0.8, tau = 0.02, period = 1e-3, x = 2.0;
     KelvinElement e(k1, k2, tau);
@@ -188,7 +196,8 @@ TEST(R7, KelvinStepResponseIsExactlyGeometric)
     }
 }
 
-TEST(R7, PivotCorrectionMeetsItsDesignPointAndCap)
+// physics.md §7 R7
+TEST(PivotCorrection, PivotCorrectionMeetsItsDesignPointAndCap)
 {
     // §1.4 defaults: F_C = 2 N at θ = 10°, D = 60 mm, L_h = 30 mm once relaxed (k1 only).
     PivotCorrection pivot;

@@ -71,7 +71,8 @@ Direction direction(double thetaDeg)
     return {thetaDeg, Vec3d(std::sin(t) * std::cos(phi), -std::cos(t), std::sin(t) * std::sin(phi))};
 }
 
-class R1 : public testing::TestWithParam<Vec3d> {
+/// physics.md §7 R1: the layered slab.
+class ShaftOnLayeredSlab : public testing::TestWithParam<Vec3d> {
 protected:
     static std::map<std::tuple<double, double, double>, test::FieldFixture>& cache()
     {
@@ -96,7 +97,7 @@ protected:
     static constexpr double kTotal = 30.0;
 };
 
-TEST_P(R1, ExactVoxelMatchesClosedFormAtEveryAngle)
+TEST_P(ShaftOnLayeredSlab, ExactVoxelMatchesClosedFormAtEveryAngle)
 {
     auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
     ShaftIntegral out;
@@ -116,7 +117,7 @@ TEST_P(R1, ExactVoxelMatchesClosedFormAtEveryAngle)
     }
 }
 
-TEST_P(R1, LabelLengthsAndFirstHitsFollowTheLayers)
+TEST_P(ShaftOnLayeredSlab, LabelLengthsAndFirstHitsFollowTheLayers)
 {
     auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
     const auto& table = volume::TissueTable::builtin();
@@ -137,7 +138,7 @@ TEST_P(R1, LabelLengthsAndFirstHitsFollowTheLayers)
     EXPECT_EQ(hit("lung"), kNotHit);
 }
 
-TEST_P(R1, TrilinearMarchWithinThePhysicsBound)
+TEST_P(ShaftOnLayeredSlab, TrilinearMarchWithinThePhysicsBound)
 {
     // physics.md §7 R1: |ΔF| <= v0·[max|Δβ|·h/(8cosθ) + Σ|Δβ|·cosθ·Δs²/(4h)], h the voxel size
     // along the normal. The first term (smearing) assumes both sides of every boundary lie on
@@ -171,7 +172,7 @@ TEST_P(R1, TrilinearMarchWithinThePhysicsBound)
     }
 }
 
-TEST_P(R1, NearestMarchWithinHalfAStepPerBoundary)
+TEST_P(ShaftOnLayeredSlab, NearestMarchWithinHalfAStepPerBoundary)
 {
     const double h = GetParam().y();
     IntegratorOptions o{Strategy::MarchNearest};
@@ -192,7 +193,7 @@ TEST_P(R1, NearestMarchWithinHalfAStepPerBoundary)
     }
 }
 
-TEST_P(R1, ExactTrilinearIsTheLimitOfTheTrilinearMarch)
+TEST_P(ShaftOnLayeredSlab, ExactTrilinearIsTheLimitOfTheTrilinearMarch)
 {
     const double h = GetParam().y();
     auto exactTri = makeIntegrator(*fixture().field, {Strategy::ExactTrilinear});
@@ -219,7 +220,7 @@ TEST_P(R1, ExactTrilinearIsTheLimitOfTheTrilinearMarch)
     }
 }
 
-TEST_P(R1, ProfileOnTheLockedLineIsExact)
+TEST_P(ShaftOnLayeredSlab, ProfileOnTheLockedLineIsExact)
 {
     TrajectoryProfile profile(*fixture().field, 0.05, 200.0, true);
     ShaftIntegral out;
@@ -238,11 +239,12 @@ TEST_P(R1, ProfileOnTheLockedLineIsExact)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Spacings, R1, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),
+INSTANTIATE_TEST_SUITE_P(Spacings, ShaftOnLayeredSlab, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),
     [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
 /// physics.md §7 R5: sphere of radius R (β_s) in a slab (β0), isotropic and anisotropic voxels.
-class R5 : public testing::TestWithParam<Vec3d> {
+/// physics.md §7 R5: the sphere in a slab.
+class ShaftThroughSphere : public testing::TestWithParam<Vec3d> {
 protected:
     const test::FieldFixture& fixture() const
     {
@@ -263,7 +265,7 @@ protected:
     static inline const Vec3d kCentre{0.0, -20.0, 0.0};
 };
 
-TEST_P(R5, ExactVoxelWithinTheVoxelisationBound)
+TEST_P(ShaftThroughSphere, ExactVoxelWithinTheVoxelisationBound)
 {
     const double b0 = testBeta().at("fat"), bs = testBeta().at("muscle");
     auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
@@ -291,7 +293,7 @@ TEST_P(R5, ExactVoxelWithinTheVoxelisationBound)
     }
 }
 
-TEST_P(R5, ExactVoxelEqualsSupersampledVoxelField)
+TEST_P(ShaftThroughSphere, ExactVoxelEqualsSupersampledVoxelField)
 {
     // Against a march over the same voxels with steps of 2e-5 h: its trapezoid error is
     // at most |Δβ|·Δs/2 per voxel face crossed (< 100 faces here), far below the 1e-3·h·|Δβ|
@@ -314,7 +316,7 @@ TEST_P(R5, ExactVoxelEqualsSupersampledVoxelField)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Spacings, R5, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.5)),
+INSTANTIATE_TEST_SUITE_P(Spacings, ShaftThroughSphere, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.5)),
     [](const auto& param) { return param.index == 0 ? "Isotropic" : "Anisotropic"; });
 
 } // namespace

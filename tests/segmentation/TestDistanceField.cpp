@@ -4,6 +4,7 @@
 /// closed form, |p − c| − R, within half a voxel (issue: "exact to half a voxel").
 
 #include "segmentation/DistanceField.h"
+#include "volume/Grids.h"
 
 #include <gtest/gtest.h>
 
@@ -26,7 +27,8 @@ TEST(DistanceField, SphereWithinHalfAVoxelOfTheClosedForm)
     for (std::size_t n = 0; n < labels.size(); ++n) {
         if ((lat.position(n).cast<double>() * h - centre).norm() < radius) labels[n] = 14;
     }
-    const auto grid = signedDistanceField(lat, labels, 14, band);
+    const auto grid = openvdb::gridPtrCast<volume::FloatGrid>(signedDistanceField(lat, labels, 14, band));
+    ASSERT_TRUE(grid);
     auto acc = grid->getConstAccessor();
     double worst = 0;
     int checked = 0;
