@@ -20,19 +20,17 @@ Vec3d lateralOf(const Vec3d& v, const Vec3d& u) noexcept { return v - v.dot(u) *
 
 } // namespace
 
-NeedleForceModel::NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms,
-    const Needle& needle, const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator,
-    const MaterialField* field, std::unique_ptr<ShaftIntegrator> locked)
-    : mState(std::move(layers)), mPath(path), mTerms(terms), mNeedle(needle), mDevice(device),
-      mIntegrator(std::move(integrator)), mLocked(std::move(locked)), mField(field),
-      mProxy(orDevice(terms.couplingNPerMm, device.maxStiffnessNPerMm)), mLor(terms.lor.params),
-      mPivot(terms.pivot.params), mSafety(SafetyParams::fromDevice(device))
+NeedleForceModel::NeedleForceModel(ForceModelSetup setup)
+    : mState(std::move(setup.layers)), mPath(setup.path), mTerms(setup.terms), mNeedle(setup.needle),
+      mDevice(setup.device), mIntegrator(std::move(setup.integrator)), mLocked(std::move(setup.locked)),
+      mField(setup.field), mProxy(orDevice(mTerms.couplingNPerMm, mDevice.maxStiffnessNPerMm)), mLor(mTerms.lor.params),
+      mPivot(mTerms.pivot.params), mSafety(SafetyParams::fromDevice(mDevice))
 {
-    const double n = path.direction.norm();
-    if (!path.origin.allFinite() || !path.direction.allFinite() || !(n > 0.0)) {
+    const double n = mPath.direction.norm();
+    if (!mPath.origin.allFinite() || !mPath.direction.allFinite() || !(n > 0.0)) {
         throw ValueError("needle path: origin and direction must be finite and the direction non-zero");
     }
-    mPath.direction = path.direction / n;
+    mPath.direction = mPath.direction / n;
     if (mTerms.damping.on && !mIntegrator) throw ValueError("force model: voxel damping needs a shaft integrator");
     mIntegral.reset();
 }

@@ -107,18 +107,28 @@ struct DampingSplit {
 };
 DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits& device, double b, double v) noexcept;
 
+/// @brief Everything a force model is built from (the scene builds it from a
+/// scene file: Scene.h; tests and embedding code fill it by hand).
+struct ForceModelSetup {
+    std::vector<Layer> layers; ///< the layers along the path (LayerTables.h)
+    NeedlePath path;
+    ForceTerms terms;
+    Needle needle;
+    DeviceLimits device;
+    /// Shaft integrator over the scene's material field, or null when no term
+    /// reads voxels (damping, or critical structures off the path).
+    std::unique_ptr<ShaftIntegrator> integrator;
+    /// The material field behind @p integrator (per-label flags), or null.
+    const MaterialField* field = nullptr;
+    /// An integrator used once the skin is entered and the needle is tied to its
+    /// line (a TrajectoryProfile: O(1) per tick), or null to keep @p integrator.
+    std::unique_ptr<ShaftIntegrator> locked;
+};
+
 class NeedleForceModel {
 public:
-    /// @param layers the layers along @p path (LayerTables.h)
-    /// @param integrator shaft integrator over the scene's material field, or null when
-    ///        no term reads voxels (damping, or critical structures off the path)
-    /// @param field the material field behind @p integrator (per-label flags), or null
-    /// @param locked an integrator used once the skin is entered and the needle is tied
-    ///        to its line (a TrajectoryProfile: O(1) per tick), or null to keep @p integrator
-    /// @throw ValueError on a degenerate path
-    NeedleForceModel(std::vector<Layer> layers, const NeedlePath& path, const ForceTerms& terms, const Needle& needle,
-        const DeviceLimits& device, std::unique_ptr<ShaftIntegrator> integrator = nullptr,
-        const MaterialField* field = nullptr, std::unique_ptr<ShaftIntegrator> locked = nullptr);
+    /// @throw ValueError on a degenerate path, or damping without an integrator
+    explicit NeedleForceModel(ForceModelSetup setup);
 
     /// @brief One tick. Never allocates, locks or throws.
     void step(const NeedleInput& in, NeedleOutput& out) noexcept;

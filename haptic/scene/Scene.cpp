@@ -291,8 +291,14 @@ std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
             locked = makeIntegrator(*mField, o);
         }
     }
-    return std::make_unique<NeedleForceModel>(mLayers, NeedlePath{mEntry, mTarget - mEntry}, mScene.terms,
-        mScene.needle, mScene.device, std::move(integrator), mField.get(), std::move(locked));
+    return std::make_unique<NeedleForceModel>(ForceModelSetup{.layers = mLayers,
+        .path = NeedlePath{mEntry, mTarget - mEntry},
+        .terms = mScene.terms,
+        .needle = mScene.needle,
+        .device = mScene.device,
+        .integrator = std::move(integrator),
+        .field = mField.get(),
+        .locked = std::move(locked)});
 }
 
 } // namespace voxhap::haptic

@@ -86,7 +86,8 @@ TEST(InsertionR2, LumbarPunctureTableThroughThePipeline)
     r.model = LayerModel::LumbarPuncture;
     ForceTerms t = layerTerms();
     t.karnoppDeltaVMmPerS = 10.0; // the paper's Δv: 20 mm/s is above it
-    NeedleForceModel m(fixedLayers(r, table()), kPath, t, Needle{}, benchDevice());
+    NeedleForceModel m(ForceModelSetup{
+        .layers = fixedLayers(r, table()), .path = kPath, .terms = t, .needle = Needle{}, .device = benchDevice()});
     // depth from the table's start (5 mm out of the skin) → |f| [N], physics.md §4
     const std::pair<double, double> ref[] = {{6, 0.6300}, {6.99, 0.9568}, {10, 0.3001}, {20, 3.8006}, {29.99, 9.2957},
         {32, 2.5613}, {34.99, 5.4917}, {40, 0.2017}, {50, 4.7419}, {54.99, 16.568}};
@@ -110,7 +111,11 @@ TEST(InsertionR2, EventsAtTheTableBoundaries)
 {
     LayerRecipe r;
     r.model = LayerModel::LumbarPuncture;
-    NeedleForceModel m(fixedLayers(r, table()), kPath, layerTerms(), Needle{}, benchDevice());
+    NeedleForceModel m(ForceModelSetup{.layers = fixedLayers(r, table()),
+        .path = kPath,
+        .terms = layerTerms(),
+        .needle = Needle{},
+        .device = benchDevice()});
     std::vector<std::pair<EventType, double>> seen;
     drive(m, -5.0, 50.0, 20.0, 2000.0, [&](double d, const NeedleOutput& o) {
         for (const Event& e : o.events) seen.emplace_back(e.type, d);
@@ -137,7 +142,8 @@ TEST(InsertionR3, ConciProfileAndExactDrop)
     r.model = LayerModel::Conci;
     ForceTerms t = layerTerms();
     t.viscous = false;
-    NeedleForceModel m(fixedLayers(r, table()), kPath, t, Needle{}, benchDevice());
+    NeedleForceModel m(ForceModelSetup{
+        .layers = fixedLayers(r, table()), .path = kPath, .terms = t, .needle = Needle{}, .device = benchDevice()});
     ConciModel reference(fitConci(conciSeeds()));
     double before = 0.0, after = 0.0;
     drive(m, 0.0, 45.0, 10.0, 1000.0, [&](double d, const NeedleOutput& o) {
@@ -171,7 +177,8 @@ TEST(InsertionR4, SenacTentingAndNestedBoxes)
     ForceTerms t = layerTerms();
     t.viscous = false;
     const std::vector<Layer> layers = fixedLayers(r, table(), volume::LumbarPreset::Average);
-    NeedleForceModel m(layers, kPath, t, Needle{}, benchDevice());
+    NeedleForceModel m(
+        ForceModelSetup{.layers = layers, .path = kPath, .terms = t, .needle = Needle{}, .device = benchDevice()});
     // Average patient ([S19] Table I; the lumbar layout): derma 10 mm (skin 2 + fat 8),
     // supraspinous 3, interspinous 15, flavum 7.4, epidural 6, dura 1 mm.
     // Cutting forces from the tissue table: skin 2, supraspinous 4, interspinous 4, flavum 6.
@@ -204,7 +211,8 @@ TEST(InsertionR6, BoneTransientAndNoSliding)
     ForceTerms t = layerTerms();
     DeviceLimits dev = benchDevice();
     dev.maxStiffnessNPerMm = 0.5; // contact at the device's stiffness (§1.3)
-    NeedleForceModel m(test::fatOverBone(10.0), kPath, t, Needle{}, dev);
+    NeedleForceModel m(ForceModelSetup{
+        .layers = test::fatOverBone(10.0), .path = kPath, .terms = t, .needle = Needle{}, .device = dev});
     const double v = 10.0, T = 1e-3; // mm/s, s
     long contactTick = -1;
     long tick = 0;

@@ -232,8 +232,13 @@ TEST(Scenes, LockedProfileMatchesExactTraversal)
     auto withProfile = inst.makeModel();
     IntegratorOptions o;
     o.trackLabels = true;
-    NeedleForceModel exact(inst.layers(), withProfile->path(), scene.terms, scene.needle, scene.device,
-        makeIntegrator(*inst.field(), o), inst.field());
+    NeedleForceModel exact(ForceModelSetup{.layers = inst.layers(),
+        .path = withProfile->path(),
+        .terms = scene.terms,
+        .needle = scene.needle,
+        .device = scene.device,
+        .integrator = makeIntegrator(*inst.field(), o),
+        .field = inst.field()});
     const double depth = (inst.target() - inst.entry()).norm();
     const InsertionScript script = InsertionScript::constantSpeed(-5.0, depth, 10.0);
     const InsertionResult a = runInsertion(*withProfile, script, 1000.0);

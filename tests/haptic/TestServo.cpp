@@ -84,8 +84,11 @@ TEST(Servo, HandStopsAtBone)
     DeviceLimits dev;
     dev.maxForceN = dev.maxContinuousForceN = 8.5;
     dev.maxStiffnessNPerMm = 2.0;
-    NeedleForceModel model(
-        test::fatOverBone(20.0, 0.5), NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)}, terms, Needle{}, dev);
+    NeedleForceModel model(ForceModelSetup{.layers = test::fatOverBone(20.0, 0.5),
+        .path = NeedlePath{Vec3d(0, 0, 0), Vec3d(0, 0, 1)},
+        .terms = terms,
+        .needle = Needle{},
+        .device = dev});
     HandParams p;
     p.speedMmPerS = 10.0;
     p.stopOnLor = false;

@@ -263,8 +263,14 @@ TEST(CriticalStructures, OneLungVoxelZeroesForceWithinOneTick)
     io.trackLabels = true;
     DeviceLimits dev;
     dev.maxForceN = dev.maxContinuousForceN = 100.0;
-    NeedleForceModel model(layersFromRuns(traceLabelRuns(field, entry, dir, 40.0), table(), recipe),
-        NeedlePath{entry, dir}, terms, Needle{}, dev, makeIntegrator(field, io), &field);
+    NeedleForceModel model(
+        ForceModelSetup{.layers = layersFromRuns(traceLabelRuns(field, entry, dir, 40.0), table(), recipe),
+            .path = NeedlePath{entry, dir},
+            .terms = terms,
+            .needle = Needle{},
+            .device = dev,
+            .integrator = makeIntegrator(field, io),
+            .field = &field});
     NeedleOutput out;
     double breachDepth = kNoLimit;
     const double lungFace = 9.5 + 0.5; // depth of the voxel's face z = 9.5 from the entry z = -0.5
