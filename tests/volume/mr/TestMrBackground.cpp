@@ -9,7 +9,7 @@
 #include "volume/Grids.h"
 #include "volume/mr/MrBackground.h"
 
-#include "../common/SharedData.h"
+#include "common/SharedData.h"
 
 #include <openvdb/tools/Prune.h>
 
