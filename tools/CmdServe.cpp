@@ -123,7 +123,12 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         haptic::Event e;
         while (loop.popEvent(e)) session.events.push_back(e);
     };
-    if (!InterruptGuard::interrupted()) loop.start();
+    if (!InterruptGuard::interrupted()) {
+        loop.start();
+        // One line when stderr is not a terminal (a script, a test harness):
+        // from here on Ctrl-C stops the loop and writes the session.
+        if (!live) std::cerr << "voxhap serve: running (Ctrl-C stops and writes the session)\n" << std::flush;
+    }
     while (!InterruptGuard::interrupted() && loop.running() && (duration <= 0.0 || elapsed() < duration)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(viewer ? 20 : 100));
         drain();
