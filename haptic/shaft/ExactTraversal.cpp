@@ -46,7 +46,7 @@ inline bool begin(const Sources& src, const Segment& seg, double shift, IndexSeg
 /// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally.
 void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out) noexcept
 {
-    detail::chordPass(s, src.voxelLo, src.voxelHi, wantBeta ? src.betaPtr() : nullptr, src.labelPtr(), out);
+    detail::chordPass(s, src.voxelLo, src.voxelHi, wantBeta ? src.betaCursorPtr() : nullptr, src.labelCursorPtr(), out);
 }
 
 class ExactVoxel final : public ShaftIntegrator {

@@ -283,7 +283,7 @@ void TrajectoryProfile::integrate(const Segment& s, ShaftIntegral& out) noexcept
     if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
         const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
         out.labelsValid = m.labels;
-        detail::chordPass(direct, m.lo, m.hi, m.src.betaPtr(), m.src.labelPtr(), out);
+        detail::chordPass(direct, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
         return;
     }
     if (!covers(s) && !lock(s.entry, s.tip - s.entry)) return;

@@ -7,6 +7,7 @@
 #include "haptic/materials/FieldGrids.h"
 #include "haptic/shaft/detail/LeafReader.h"
 #include "haptic/shaft/detail/Traversal.h"
+#include "haptic/shaft/detail/VoxelWalk.h"
 #include "core/Errors.h"
 
 #include <optional>
@@ -16,6 +17,8 @@ namespace voxhap::haptic::detail {
 
 using FloatReader = LeafReader<FloatGrid::TreeType>;
 using LabelReader = LeafReader<LabelGrid::TreeType>;
+using FloatCursor = WalkCursor<FloatGrid::TreeType>;
+using LabelCursor = WalkCursor<LabelGrid::TreeType>;
 
 struct FieldReaders {
     /// @param who names the strategy in errors
@@ -26,13 +29,21 @@ struct FieldReaders {
         if (needDamping && !beta) throw ValueError(who + ": the material field has no damping grid");
         if (!beta && !labels) throw ValueError(who + ": the material field has neither damping nor labels");
         xform = beta ? beta->transformPtr() : labels->transformPtr();
-        if (beta) betaReader.emplace(beta->tree());
-        if (labels) labelReader.emplace(labels->tree());
+        if (beta) {
+            betaReader.emplace(beta->tree());
+            betaCursor.emplace(beta->tree());
+        }
+        if (labels) {
+            labelReader.emplace(labels->tree());
+            labelCursor.emplace(labels->tree());
+        }
     }
     FieldReaders(const FieldReaders& o) : beta(o.beta), labels(o.labels), xform(o.xform)
     {
         if (o.betaReader) betaReader.emplace(*o.betaReader); // fresh accessors
         if (o.labelReader) labelReader.emplace(*o.labelReader);
+        if (o.betaCursor) betaCursor.emplace(*o.betaCursor);
+        if (o.labelCursor) labelCursor.emplace(*o.labelCursor);
     }
     FieldReaders& operator=(const FieldReaders&) = delete;
 
@@ -59,12 +70,16 @@ struct FieldReaders {
 
     FloatReader* betaPtr() { return betaReader ? &*betaReader : nullptr; }
     LabelReader* labelPtr() { return labelReader ? &*labelReader : nullptr; }
+    FloatCursor* betaCursorPtr() { return betaCursor ? &*betaCursor : nullptr; }
+    LabelCursor* labelCursorPtr() { return labelCursor ? &*labelCursor : nullptr; }
 
     FloatGrid::ConstPtr beta;
     LabelGrid::ConstPtr labels;
     openvdb::math::Transform::ConstPtr xform;
     std::optional<FloatReader> betaReader;
     std::optional<LabelReader> labelReader;
+    std::optional<FloatCursor> betaCursor; ///< for the exact chord pass (VoxelWalk.h)
+    std::optional<LabelCursor> labelCursor;
 };
 
 } // namespace voxhap::haptic::detail

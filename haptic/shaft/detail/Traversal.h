@@ -162,41 +162,6 @@ private:
     double mLength;
 };
 
-/// @brief The exact piecewise-constant pass over voxel cells (s in the shifted
-/// frame, box [lo, hi] of voxel cells): chord-weighted β into out.dampingIntegral
-/// when @p beta is given, label lengths and first hits when @p labels is given.
-/// A non-finite voxel contributes nothing.
-template <typename BetaReader, typename LabelReader>
-inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb::Vec3d& hi, BetaReader* beta,
-    LabelReader* labels, ShaftIntegral& out) noexcept
-{
-    double t0 = 0.0, t1 = 0.0;
-    const bool inside = clip(s, lo, hi, t0, t1);
-    LabelTally tally(out, s.lengthMm);
-    if (!inside) {
-        if (labels) tally.add(0, 0.0, 1.0); // all air
-        return;
-    }
-    if (labels && t0 > 0.0) tally.add(0, 0.0, t0);
-    double sum = 0.0;
-    const auto voxel = [&](const openvdb::Coord& c, double ta, double tb) {
-        if (beta) {
-            const float b = beta->get(c);
-            if (std::isfinite(b)) sum += double(b) * (tb - ta);
-        }
-        if (labels) tally.add(labels->get(c), ta, tb);
-    };
-    // A block is uniform for this pass when every grid it reads is uniform there.
-    const auto uniform = [&](const openvdb::Coord& c) {
-        const int b = beta ? beta->uniformBlock(c) : 4096;
-        const int l = labels ? labels->uniformBlock(c) : 4096;
-        return std::min(b, l);
-    };
-    walkCellsSkipping(s, t0, t1, 0, uniform, voxel, voxel);
-    if (labels && t1 < 1.0) tally.add(0, t1, 1.0);
-    if (beta) out.dampingIntegral = sum * s.lengthMm;
-}
-
 /// @brief The 8 values at the corners c + {0,1}³ of a trilinear cell; corner i is
 /// (i>>2 & 1, i>>1 & 1, i & 1). Non-finite voxels read as 0.
 template <typename Reader> inline void loadCorners(Reader& r, const openvdb::Coord& c, double (&corner)[8]) noexcept
