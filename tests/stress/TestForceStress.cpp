@@ -2,7 +2,8 @@
 /// @file TestForceStress.cpp
 /// @brief The force pipeline under physics.md §6.4: random and hostile states,
 /// dt jitter, passivity of closed loops, the critical-structure rule, and no
-/// allocation per tick.
+/// allocation or release of any kind per tick (AllocationCounter.h), with the
+/// record queue draining or full.
 
 #include "common/BuiltinTable.h"
 #include "common/Phantom.h"
@@ -100,7 +101,7 @@ TEST(ForceStress, StepNeverAllocates)
     NeedleInput in;
     in.direction = dir;
     in.velocity = 5.0 * dir;
-    const long before = test::allocations();
+    const long before = test::allocations(), freesBefore = test::deallocations();
     for (int n = 0; n < 20000; ++n) { // in to 45 mm (pops, LOR, dura) and out again
         const double d = n < 10000 ? -5.0 + 0.005 * n : 45.0 - 0.005 * (n - 10000);
         in.timeS = 1e-3 * n;
@@ -109,6 +110,7 @@ TEST(ForceStress, StepNeverAllocates)
         model->step(in, out);
     }
     EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
 }
 
 // The servo tick: device read, model, watchdog, write, queues and statistics allocate nothing.
@@ -122,13 +124,36 @@ TEST(ForceStress, ServoTickNeverAllocates)
     HandDevice hand(model->path(), p, model->device());
     ServoLoop loop(*model, hand);
     loop.runTicks(10); // first touches
-    const long before = test::allocations();
+    const long before = test::allocations(), freesBefore = test::deallocations();
     loop.runTicks(8000); // through skin, ligaments, LOR and dura
     EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
     Event e;
     bool dura = false;
     while (loop.popEvent(e)) dura = dura || e.type == EventType::DuraPuncture;
     EXPECT_TRUE(dura); // the ticks did go through the interesting states
+}
+
+// The same with the record queue full because nobody drains it: a dropped record
+// costs no allocation either, the tick goes on, and every drop is counted.
+TEST(ForceStress, ServoTickWithAFullRecordQueueNeverAllocates)
+{
+    const SceneInstance& inst = instance("senac-average");
+    auto model = inst.makeModel();
+    HandParams p;
+    p.speedMmPerS = 1.0; // 65 mm in the 65 s that fill the queue
+    p.stopOnLor = false;
+    HandDevice hand(model->path(), p, model->device());
+    ServoLoop loop(*model, hand);
+    constexpr long kRecordCapacity = 1L << 16; // 65 s at 1 kHz (ServoLoop.h)
+    loop.runTicks(kRecordCapacity);
+    ASSERT_EQ(loop.droppedRecords(), 0);
+    const long before = test::allocations(), freesBefore = test::deallocations();
+    loop.runTicks(8000);
+    EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
+    EXPECT_EQ(loop.ticks(), kRecordCapacity + 8000);
+    EXPECT_EQ(loop.droppedRecords(), 8000);
 }
 
 /// Work done on the hand: the force held over each tick times the device point's

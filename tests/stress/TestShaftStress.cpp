@@ -233,12 +233,13 @@ TEST_F(Stress, IntegrationNeverAllocates)
     for (Strategy st : kAll) integrators.push_back(make(st));
     ShaftIntegral r;
     for (auto& integ : integrators) integ->integrate({{0.1, 1.0, 0.2}, {0.1, -15.0, 0.2}}, r); // warm up
-    const long before = test::allocations();
+    const long before = test::allocations(), freesBefore = test::deallocations();
     for (int n = 0; n < 200; ++n) {
         const double x = 0.01 * n; // moves off the profile's line: rebuilds are included
         for (auto& integ : integrators) integ->integrate({{x, 1.0, 0.2}, {0.1, -15.0 - 0.05 * n, 0.2}}, r);
     }
     EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
     auto* profile = dynamic_cast<TrajectoryProfile*>(integrators.back().get());
     ASSERT_NE(profile, nullptr);
     EXPECT_GT(profile->rebuilds(), 10u);
