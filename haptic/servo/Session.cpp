@@ -60,7 +60,9 @@ std::vector<ServoRecord> readSessionPoses(const fs::path& file)
         throw ValueError(file.string() + ": line 1: not a voxhap session (header t_s,tip_x_mm,...)");
     }
     std::vector<ServoRecord> out;
+    int last = 1; // the last line read
     for (int n = 2; std::getline(in, line); ++n) {
+        last = n;
         std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream ls(line);
         ServoRecord r;
@@ -78,7 +80,10 @@ std::vector<ServoRecord> readSessionPoses(const fs::path& file)
         }
         out.push_back(r);
     }
-    if (out.size() < 2) throw ValueError(file.string() + ": a session needs at least two records");
+    if (out.size() < 2) {
+        throw ValueError(file.string() + ": line " + std::to_string(last) + ": the file ends after " +
+            std::to_string(out.size()) + " record(s); a session needs at least two");
+    }
     return out;
 }
 

@@ -24,7 +24,11 @@ struct Session {
 /// layer. Written to temporary files, then renamed.
 void writeSession(const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
 
-/// @brief Read the pose columns of a session.csv back. @throw IoError, ValueError naming file and line
+/// @brief Read the pose columns of a session.csv back (columns after dir_z are ignored).
+/// @throw IoError when the file cannot be opened; ValueError, one line naming the
+///        file and the line, for a first line that is not the session header, a
+///        line whose first seven fields are not finite numbers, a t_s that does
+///        not increase, and a file of fewer than two records
 std::vector<ServoRecord> readSessionPoses(const std::filesystem::path& file);
 
 /// @brief Plays a recorded session's poses in time (linear between records).

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestNiftiFile.cpp
 /// @brief NIfTI files written here with niftilib (oblique sform, qform only,
-/// gzip, scaled int16) read back in LPS with exact values; bad files refused
-/// with one message naming the file and the field.
+/// gzip, scaled int16) read back in LPS with exact values; an sform and a qform
+/// that disagree resolved by the documented precedence; bad files refused with
+/// one message naming the file and the field.
 
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nifti2_io.h>
 
+#include <cstddef>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -150,6 +152,83 @@ TEST_F(Nifti, BadFilesAreRefusedNamingTheField)
     RasterOptions small;
     small.memoryCapBytes = 1000; // 10×7×9 floats = 2520 bytes
     expectRefused(good, "memory cap", small);
+}
+
+/// NIfTI-1 §"3 methods": a file may carry a qform and an sform that disagree.
+/// voxhap's documented precedence (NiftiFile.h, README "Loading real data") is
+/// the sform when sform_code > 0, else the qform when qform_code > 0.
+class NiftiFrames : public Nifti {
+protected:
+    /// An axis-aligned qform far from rasMatrix(): spacing 1.5, 0.9, 2.5 mm and
+    /// another offset, so that the two frames put every voxel centimetres apart.
+    static Eigen::Matrix4d qformMatrix()
+    {
+        Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+        m.topLeftCorner<3, 3>() = Vec3d(1.5, 0.9, 2.5).asDiagonal();
+        m.topRightCorner<3, 1>() = Vec3d(-60.0, 40.0, -25.0);
+        return m;
+    }
+
+    /// A float volume whose sform is rasMatrix() and whose qform is qformMatrix(),
+    /// both codes set; then sform_code (int16 at its offset in nifti_1_header)
+    /// patched to @p sformCode, leaving the srow rows in place.
+    fs::path writeDisagreeing(const std::string& name, std::int16_t sformCode) const
+    {
+        const int64_t dims[8] = {3, kNx, kNy, kNz, 1, 1, 1, 1};
+        nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
+        float* data = static_cast<float*>(nim->data);
+        for (int k = 0; k < kNz; ++k)
+            for (int j = 0; j < kNy; ++j)
+                for (int i = 0; i < kNx; ++i) data[(k * kNy + j) * kNx + i] = value(i, j, k);
+        const auto toNifti = [](const Eigen::Matrix4d& m) {
+            nifti_dmat44 mat;
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) mat.m[r][c] = m(r, c);
+            return mat;
+        };
+        nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
+        nim->sto_xyz = toNifti(rasMatrix());
+        nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
+        nifti_dmat44_to_quatern(toNifti(qformMatrix()), &nim->quatern_b, &nim->quatern_c, &nim->quatern_d,
+            &nim->qoffset_x, &nim->qoffset_y, &nim->qoffset_z, &nim->dx, &nim->dy, &nim->dz, &nim->qfac);
+        nim->pixdim[1] = nim->dx;
+        nim->pixdim[2] = nim->dy;
+        nim->pixdim[3] = nim->dz;
+        const fs::path p = mDir / name;
+        nifti_set_filenames(nim, p.string().c_str(), 0, 1);
+        nifti_image_write(nim);
+        nifti_image_free(nim);
+        std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(std::streamoff(offsetof(nifti_1_header, sform_code)));
+        f.write(reinterpret_cast<const char*>(&sformCode), sizeof sformCode); // little-endian, as written
+        return p;
+    }
+
+    /// World positions of three corners of the grid under @p ras (ijk → RAS), in LPS.
+    static void expectFrame(const Volume& v, const Eigen::Matrix4d& ras, const Eigen::Matrix4d& other)
+    {
+        for (const Vec3d& ijk : {Vec3d(0, 0, 0), Vec3d(kNx - 1, 0, 0), Vec3d(3, kNy - 1, kNz - 1)}) {
+            const Vec3d a = (ras * ijk.homogeneous()).head<3>(), b = (other * ijk.homogeneous()).head<3>();
+            ASSERT_GT((a - b).norm(), 10.0) << "the two frames must disagree for this test to mean anything";
+            EXPECT_TRUE(voxhap::test::nearVec(v.indexToWorld(ijk), Vec3d(-a.x(), -a.y(), a.z()), kNiftiFloatMm))
+                << ijk.transpose();
+        }
+    }
+};
+
+TEST_F(NiftiFrames, SformWinsWhenBothAreSetAndDisagree)
+{
+    const Volume v = loadNifti(writeDisagreeing("both.nii", NIFTI_XFORM_SCANNER_ANAT));
+    expectFrame(v, rasMatrix(), qformMatrix());
+    EXPECT_EQ(v.metadata().extra.at("nifti_transform"), "sform");
+    EXPECT_NEAR(v.geometry().spacing.x(), 0.8, kNiftiFloatMm); // the sform's, not pixdim's 1.5
+}
+
+TEST_F(NiftiFrames, SformRowsAreIgnoredWhenItsCodeIsZero)
+{
+    const Volume v = loadNifti(writeDisagreeing("qform-wins.nii", 0));
+    expectFrame(v, qformMatrix(), rasMatrix());
+    EXPECT_EQ(v.metadata().extra.at("nifti_transform"), "qform");
 }
 
 TEST_F(Nifti, NanVoxelIsRefused)
