@@ -45,6 +45,7 @@ void NeedleForceModel::reset() noexcept
     mIntegral.reset();
     mInContact = false;
     mCritical = false;
+    mLockAnchor = Vec3d::Zero();
     mLastDirection = 1;
     mLastTimeS = 0;
 }
@@ -128,6 +129,9 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     bool popped = false;
     for (const Event& e : out.events) {
         if (e.type == EventType::Withdrawn) mProxy.reset(), mPivot.reset(), mLor.reset();
+        // The lock ties the needle to its line where cutting starts ([S19], §2.1), not to the
+        // planned path: a spring stretched at entry would store energy nobody put in (§1.1).
+        if (e.type == EventType::SkinEntry) mLockAnchor = lateralOf(in.tip - mPath.origin, u);
         popped = popped || e.type == EventType::Pop;
     }
 
@@ -180,7 +184,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     }
     if (mTerms.lock.on && mState.skinEntered()) {
         const double k = orDevice(mTerms.lock.stiffnessNPerMm, mDevice.maxStiffnessNPerMm);
-        lateral -= k * lateralOf(in.tip - mPath.origin, u);
+        lateral -= k * (lateralOf(in.tip - mPath.origin, u) - mLockAnchor);
     }
     f.lateral = lateral;
 

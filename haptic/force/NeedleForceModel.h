@@ -161,6 +161,8 @@ private:
     Vec3d mContactPoint{0, 0, 0};
     double mContactTimeS = 0, mImpactMmPerS = 0;
     bool mInContact = false;
+    /// Trajectory lock: the tip's offset from the path where it entered the skin (§2.1).
+    Vec3d mLockAnchor{0, 0, 0};
     bool mCritical = false;
     int mLastDirection = 1;
     double mLastTimeS = 0;
