@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestCtSegmentation.cpp
 /// @brief CT segmentation of the torso phantom (physics.md §1.1), generated
-/// from the tissue table with scanner noise: every class recovered with
-/// Dice ≥ 0.95 (issue 7), distance fields written.
+/// from the tissue table with scanner noise: each needle-relevant class
+/// recovered with Dice ≥ 0.95 on its own (issue 7), the soft tissues CT cannot
+/// separate from muscle as one class, distance fields written.
 
 #include "SegmentationFixtures.h"
 
@@ -15,7 +16,10 @@
 
 #include <map>
 #include <memory>
+#include <ostream>
 #include <set>
+#include <string>
+#include <vector>
 
 namespace voxhap::segmentation {
 namespace {
@@ -52,36 +56,72 @@ const TorsoCase& torso()
     return c;
 }
 
-TEST(CtSegmentation, TorsoPhantomEveryClassDiceAtLeast095)
+/// One class of the Dice check: the truth labels and the result labels that count as it.
+struct DiceClass {
+    std::string name;
+    std::vector<std::string> truth, result;
+};
+
+void PrintTo(const DiceClass& c, std::ostream* os) { *os << c.name; }
+
+/// The classes a needle meets or must avoid on the torso (physics.md §1.1), each on
+/// its own: skin, fat and muscle on the way in, the bone it stops on and the lesion's
+/// bone, and the critical structures lung, kidney and aorta; air around the body.
+const std::vector<DiceClass>& needleClasses()
+{
+    static const std::vector<DiceClass> c{
+        {"air", {"air"}, {"air"}},
+        {"skin", {"skin"}, {"skin"}},
+        {"fat", {"fat"}, {"fat"}},
+        {"muscle", {"muscle"}, {"muscle"}},
+        {"lung", {"lung"}, {"lung"}},
+        {"kidney", {"kidney"}, {"kidney"}},
+        {"aorta", {"aorta"}, {"aorta"}},
+        {"cortical_bone", {"cortical_bone"}, {"cortical_bone"}},
+        {"cancellous_bone", {"cancellous_bone"}, {"cancellous_bone"}},
+    };
+    return c;
+}
+
+std::set<int> idsOf(const std::vector<std::string>& names)
+{
+    std::set<int> ids;
+    for (const auto& n : names) ids.insert(n == "air" ? 0 : enhancedTable().at(n).id);
+    return ids;
+}
+
+double diceOf(const DiceClass& k)
 {
     const TorsoCase& c = torso();
-    EXPECT_EQ(c.report.method, "ct");
-    const auto& table = enhancedTable();
-    const auto id = [&](const char* n) { return table.at(n).id; };
     const auto result = volume::labelGrid(*c.v);
-    ASSERT_TRUE(result);
-    // The phantom's soft tissues that CT numbers cannot tell from muscle (ligaments,
-    // dura, CSF, cord, disc, the lytic lesion) form one class with it; the result's
-    // soft_tissue and spinal_cord belong to it too (the canal is tested below).
-    const std::set<int> lean{id("muscle"), id("supraspinous_ligament"), id("interspinous_ligament"),
-        id("ligamentum_flavum"), id("dura"), id("csf"), id("spinal_cord"), id("intervertebral_disc"), id("lesion"),
-        id("soft_tissue"), id("epidural_space")};
-    const std::map<std::string, std::set<int>> classes{
-        {"air", {0}},
-        {"skin", {id("skin")}},
-        {"fat", {id("fat")}},
-        {"muscle and lean soft tissue", lean},
-        {"lung", {id("lung")}},
-        {"kidney", {id("kidney")}},
-        {"aorta", {id("aorta")}},
-        {"cortical_bone", {id("cortical_bone")}},
-        {"cancellous_bone", {id("cancellous_bone")}},
-    };
-    for (const auto& [name, ids] : classes) {
-        const double d = test::dice(*c.truth, *result, c.v->indexBox(), ids, ids);
-        EXPECT_GE(d, test::kMinDice) << name;
-        std::cout << "dice " << name << " " << d << "\n";
-    }
+    if (!result) return 0.0;
+    return test::dice(*c.truth, *result, c.v->indexBox(), idsOf(k.truth), idsOf(k.result));
+}
+
+class CtSegmentationClass : public testing::TestWithParam<DiceClass> { };
+
+TEST_P(CtSegmentationClass, TorsoPhantomDiceAtLeast095)
+{
+    EXPECT_EQ(torso().report.method, "ct");
+    const double d = diceOf(GetParam());
+    EXPECT_GE(d, test::kMinDice) << GetParam().name;
+    std::cout << "dice " << GetParam().name << " " << d << "\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(NeedleRelevant, CtSegmentationClass, testing::ValuesIn(needleClasses()),
+    [](const testing::TestParamInfo<DiceClass>& i) { return i.param.name; });
+
+// The phantom's soft tissues that CT numbers cannot tell from muscle (ligaments, dura,
+// CSF, cord, disc, the lytic lesion, the epidural space) are checked only as one class
+// with muscle; the result's soft_tissue and spinal_cord belong to it too (the canal
+// is tested on the real CT). This is a check of the merged class, not of its members.
+TEST(CtSegmentation, TorsoPhantomLeanSoftTissueAsOneClassDiceAtLeast095)
+{
+    const std::vector<std::string> lean{"muscle", "supraspinous_ligament", "interspinous_ligament", "ligamentum_flavum",
+        "dura", "csf", "spinal_cord", "intervertebral_disc", "lesion", "soft_tissue", "epidural_space"};
+    const double d = diceOf({"lean soft tissue", lean, lean});
+    EXPECT_GE(d, test::kMinDice);
+    std::cout << "dice lean soft tissue " << d << "\n";
 }
 
 TEST(CtSegmentation, DistanceFieldsOfTheCriticalStructuresPresent)

@@ -23,6 +23,14 @@ constexpr double kFitRounding = 1e-3;
 
 using voxhap::test::table;
 
+/// Eq. 4 at 1.5 T with the §5.4 constants, written out here: β = C1·exp(C2·T1),
+/// C1 = 2464 N·s/m² = 2464e-6 N·s/mm², C2 = 1.398e-3 ms⁻¹ (physics.md §5.4 table).
+double beta15T(double t1Ms) { return 2464e-6 * std::exp(1.398e-3 * t1Ms); }
+
+/// The β grid holds floats: 2⁻²⁴ ≈ 6e-8 relative of values up to 1.7e-2 N·s/mm²
+/// (the interspinous β) is at most 1e-9 N·s/mm².
+constexpr double kFloatGridNsPerMm2 = 1e-9;
+
 TEST(T1DampingLaw, ReproducesTheFittedFatAndMuscleValues)
 {
     for (FieldStrength f : {FieldStrength::T1_5, FieldStrength::T3}) {
@@ -91,13 +99,13 @@ TEST_F(LumbarField, DampingFromT1ForFatAndMuscleAndPerLabelOtherwise)
     const MaterialField f(*vol, table(), MaterialOptions{});
     const auto beta = detail::dampingGrid(f);
     ASSERT_TRUE(beta);
-    const T1DampingLaw law = t1DampingLaw(FieldStrength::T1_5);
     // Midline depths (average preset): skin 0-2, fat 2-10, supraspinous 10-13, ... epidural 35.4-41.4.
-    EXPECT_NEAR(at(*beta, {0.5, -5.5, 0.5}), law.dampingNsPerMm2(290.0), 1e-9);   // fat: Eq. 4
-    EXPECT_NEAR(at(*beta, {0.5, -1.5, 0.5}), 8152e-6, 1e-9);                      // skin: table β
-    EXPECT_NEAR(at(*beta, {0.5, -20.5, 0.5}), 16304e-6, 1e-9);                    // interspinous: table β
-    EXPECT_NEAR(at(*beta, {30.5, -20.5, 0.5}), law.dampingNsPerMm2(856.0), 1e-9); // paraspinal muscle: Eq. 4
-    EXPECT_EQ(at(*beta, {0.5, 2.5, 0.5}), 0.0);                                   // air
+    // The phantom's t1 grid holds the 1.5 T column of §5.1: fat 290 ms, muscle 856 ms.
+    EXPECT_NEAR(at(*beta, {0.5, -5.5, 0.5}), beta15T(290.0), kFloatGridNsPerMm2);   // fat: Eq. 4
+    EXPECT_NEAR(at(*beta, {0.5, -1.5, 0.5}), 8152e-6, kFloatGridNsPerMm2);          // skin: table β
+    EXPECT_NEAR(at(*beta, {0.5, -20.5, 0.5}), 16304e-6, kFloatGridNsPerMm2);        // interspinous: table β
+    EXPECT_NEAR(at(*beta, {30.5, -20.5, 0.5}), beta15T(856.0), kFloatGridNsPerMm2); // paraspinal muscle: Eq. 4
+    EXPECT_EQ(at(*beta, {0.5, 2.5, 0.5}), 0.0);                                     // air
     // Air stays inactive: the β grid has exactly the labelled voxels.
     EXPECT_EQ(beta->activeVoxelCount(), volume::labelGrid(*vol)->activeVoxelCount());
     EXPECT_NEAR(f.maxDamping(), 16304e-6, 1e-9);
@@ -156,9 +164,10 @@ TEST_F(LumbarField, CorruptT1StaysFinite)
     copy.setGrid(volume::Channel::T1, t1);
     const MaterialField f(copy, table(), MaterialOptions{});
     const auto beta = detail::dampingGrid(f);
-    const T1DampingLaw law = t1DampingLaw(FieldStrength::T1_5);
-    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel), law.dampingNsPerMm2(856.0), 1e-9);
-    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel2), law.dampingNsPerMm2(290.0), 1e-9);
+    // §5.4: T1 is clamped to the fat–muscle range before Eq. 4, so 65535 ms reads as
+    // muscle (856 ms at 1.5 T) and NaN as the lower end, fat (290 ms).
+    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel), beta15T(856.0), kFloatGridNsPerMm2);
+    EXPECT_NEAR(beta->getConstAccessor().getValue(fatVoxel2), beta15T(290.0), kFloatGridNsPerMm2);
     for (auto it = beta->cbeginValueOn(); it; ++it) ASSERT_TRUE(std::isfinite(*it));
 }
 
