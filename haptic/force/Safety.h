@@ -14,8 +14,12 @@ namespace voxhap::haptic {
 struct SafetyParams {
     double peakN = 3.3;        ///< device peak force [N]
     double continuousN = 0.88; ///< device continuous force [N]
-    /// How long the peak may be held before the limit ramps down to the continuous
-    /// force (an I²t budget of (peak² − continuous²)·this) [s] [chosen].
+    /// The I²t budget B = (peak² − continuous²)·this [N²·s]: what holding the peak
+    /// would spend in this time [s] [chosen]. The allowed force falls from the peak as
+    /// the heat H = ∫(|F|² − continuous²)dt (kept within [0, B]) is spent:
+    /// allowed = c + (p − c)·(1 − H/B). A demand held above the peak is therefore
+    /// rendered as F(t) = c·(p + c + (p − c)·e^(−t/τ)) / (p + c − (p − c)·e^(−t/τ)),
+    /// τ = (p + c)·this/(2c): it starts falling at once and tends to c (physics.md §6.3).
     double peakBudgetS = 1.0;
     double riseNPerS = 2000.0; ///< |F| may grow by at most this per second [N/s] [chosen: 2 N per 1 ms tick]
     double maxDtS = 0.01;      ///< longer ticks count as this [s] [chosen: 10 periods at 1 kHz]

@@ -3,7 +3,6 @@
 #include "haptic/servo/ServoLoop.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <sys/prctl.h>
@@ -37,9 +36,40 @@ long TickStats::count() const noexcept
     return n;
 }
 
+namespace {
+
+timespec toTimespec(std::int64_t ns) { return timespec{time_t(ns / 1000000000), long(ns % 1000000000)}; }
+
+class MonotonicServoClock final : public ServoClock {
+public:
+    std::int64_t nowNs() noexcept override
+    {
+        timespec ts{};
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        return std::int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+    }
+    void waitUntilNs(std::int64_t deadlineNs, bool spin) noexcept override
+    {
+        if (spin) {
+            while (nowNs() < deadlineNs) { }
+            return;
+        }
+        const timespec ts = toTimespec(deadlineNs);
+        clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    }
+};
+
+} // namespace
+
+ServoClock& monotonicServoClock() noexcept
+{
+    static MonotonicServoClock clock;
+    return clock;
+}
+
 ServoLoop::ServoLoop(NeedleForceModel& model, Device& device, const ServoOptions& options)
-    : mModel(model), mDevice(device), mOpt(options), mEvents(std::make_unique<SpscQueue<Event, 1024>>()),
-      mRecords(std::make_unique<SpscQueue<ServoRecord, 1 << 16>>())
+    : mModel(model), mDevice(device), mOpt(options), mClock(options.clock ? options.clock : &monotonicServoClock()),
+      mEvents(std::make_unique<SpscQueue<Event, 1024>>()), mRecords(std::make_unique<SpscQueue<ServoRecord, 1 << 16>>())
 {
     if (!(mOpt.rateHz > 0.0) || !std::isfinite(mOpt.rateHz)) mOpt.rateHz = 1000.0;
 }
@@ -48,7 +78,7 @@ ServoLoop::~ServoLoop() { stop(); }
 
 void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
 {
-    const auto start = std::chrono::steady_clock::now();
+    const std::int64_t start = mClock->nowNs();
     const DeviceReading r = mDevice.read(t);
     Vec3d target = mLastForceVec;
     if (r.valid) {
@@ -65,8 +95,8 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     } else {
         mQuietS += dt;
     }
-    // Watchdog: a quiet device or a stalled loop ramps the force to zero; it comes
-    // back the same way.
+    // Watchdog (ServoOptions): a quiet device ramps the force to zero, a stalled loop
+    // cuts it in proportion to the stall; it comes back the same way.
     constexpr double kTimeTolS = 1e-9; // sums of tick periods carry round-off
     const bool stalled = mQuietS > mOpt.watchdogS + kTimeTolS || lastPeriod > mOpt.watchdogS + kTimeTolS;
     const double step = mOpt.rampS > 0.0 ? std::max(dt, lastPeriod) / mOpt.rampS : 1.0;
@@ -94,7 +124,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     mLastLayer.store(rec.layer, std::memory_order_relaxed);
     mGainPublic.store(mGain, std::memory_order_relaxed);
     mTicks.fetch_add(1, std::memory_order_relaxed);
-    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count();
+    const double ns = double(mClock->nowNs() - start);
     mStats.addCompute(ns);
     if (ns > mMaxComputeNs.load(std::memory_order_relaxed)) mMaxComputeNs.store(ns, std::memory_order_relaxed);
 }
@@ -108,40 +138,26 @@ void ServoLoop::runTicks(long n) noexcept
     }
 }
 
-namespace {
-timespec toTimespec(std::int64_t ns) { return timespec{time_t(ns / 1000000000), long(ns % 1000000000)}; }
-std::int64_t nowNs()
-{
-    timespec ts{};
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return std::int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-} // namespace
-
 void ServoLoop::loop() noexcept
 {
     const std::int64_t period = std::int64_t(std::llround(1e9 / mOpt.rateHz));
-    const std::int64_t t0 = nowNs();
+    ServoClock& clock = *mClock;
+    const std::int64_t t0 = clock.nowNs();
     std::int64_t deadline = t0, last = t0;
     bool first = true;
     const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
     while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished()) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
-        if (spin) {
-            while (nowNs() < deadline) { }
-        } else {
-            const timespec ts = toTimespec(deadline);
-            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-        }
-        const std::int64_t now = nowNs();
+        clock.waitUntilNs(deadline, spin);
+        const std::int64_t now = clock.nowNs();
         const std::int64_t actual = now - last;
         if (!first) mStats.addPeriodError(double(std::llabs(actual - period)));
         last = now;
         tick(double(now - t0) * 1e-9, double(period) * 1e-9, first ? double(period) * 1e-9 : double(actual) * 1e-9);
         first = false;
         deadline += period;
-        const std::int64_t after = nowNs();
+        const std::int64_t after = clock.nowNs();
         if (after > deadline) { // missed the next deadline: count it and re-anchor
             mOverruns.fetch_add(1, std::memory_order_relaxed);
             deadline = after + period - (after - deadline) % period;

@@ -20,15 +20,42 @@
 
 namespace voxhap::haptic {
 
+/// @brief Where the real-time loop (ServoLoop::start) reads the time and waits for
+/// its deadlines. The default is the monotonic clock; tests set a simulated one to
+/// reach the stall watchdog and to count ticks without wall-clock timing. Both calls
+/// run on the servo thread: they must not block beyond the deadline, allocate, lock,
+/// throw or log.
+class ServoClock {
+public:
+    virtual ~ServoClock() = default;
+    /// @brief Monotonic time [ns].
+    virtual std::int64_t nowNs() noexcept = 0;
+    /// @brief Return at @p deadlineNs (on the nowNs() time line) or later; @p spin asks
+    /// for a busy wait instead of a sleep.
+    virtual void waitUntilNs(std::int64_t deadlineNs, bool spin) noexcept = 0;
+};
+
+/// @brief CLOCK_MONOTONIC, waited for with clock_nanosleep on absolute deadlines or by
+/// spinning (the default ServoClock).
+ServoClock& monotonicServoClock() noexcept;
+
 struct ServoOptions {
     double rateHz = 1000.0;
-    /// The watchdog ramps the force to zero over rampS when the device has been
-    /// quiet (no valid reading) this long, or when a period lasted this long [s].
-    double watchdogS = 0.020; ///< [chosen] 20 periods at 1 kHz
-    double rampS = 0.050;     ///< [chosen]
+    /// Watchdog (physics.md §6.3) [chosen]. Each tick moves the gain on the force by
+    /// its period (at least the nominal 1/rateHz) over rampS: down while the device
+    /// has been quiet (no valid reading) for longer than watchdogS, which zeroes it
+    /// rampS later; down when the period itself lasted longer than watchdogS (a
+    /// stalled loop: one step of period/rampS, as if the ramp had run through the
+    /// stall, so a stall of rampS or more zeroes it at once); otherwise up, to 1.
+    /// A lost device zeroes it at once.
+    double watchdogS = 0.020; ///< [s] 20 periods at 1 kHz
+    double rampS = 0.050;     ///< [s]
     /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
     /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
     double spinBelowS = 100e-6;
+    /// The clock of the real-time loop; null: monotonicServoClock(). Set before
+    /// start(); it must outlive the loop.
+    ServoClock* clock = nullptr;
 };
 
 /// @brief One tick, for the session record.
@@ -94,6 +121,7 @@ private:
     NeedleForceModel& mModel;
     Device& mDevice;
     ServoOptions mOpt;
+    ServoClock* mClock;
     NeedleOutput mOut;
     TickStats mStats;
     // On the heap: 65 s of records at 1 kHz is megabytes, too big for a stack.
