@@ -17,6 +17,14 @@
 
 namespace voxhap::fuzz {
 
+/// @brief A finding beyond a crash: an accepted input whose value breaks what
+/// the parser promises. Prints @p what and aborts, so that libFuzzer stops.
+[[noreturn]] inline void finding(const std::string& what)
+{
+    std::fprintf(stderr, "content check failed: %s\n", what.c_str());
+    std::abort();
+}
+
 /// @brief Abort (a finding) unless @p e reads "<file>: ..." on one line, or
 /// "<also>: ..." when @p also is given (a series names its folder).
 inline void checkRefusal(const Error& e, const std::string& file, const std::string& also = {})

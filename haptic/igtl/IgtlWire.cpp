@@ -84,9 +84,9 @@ WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3
     for (int i = 0; i < 8; ++i) bodySize = (bodySize << 8) | header[42 + i];
     if (version < 1 || version > 2 || bodySize > maxBodyBytes) return WireRead::BadHeader;
     const bool transform = std::strncmp(type, "TRANSFORM", 12) == 0;
-    if (transform && (version == 1 ? bodySize != kTransformBodyBytes : bodySize < kTransformBodyBytes)) {
-        return WireRead::BadHeader;
-    }
+    // OpenIGTLink 1.11 reads header version 1 only: on a version 2 header (protocol 3, an
+    // extended header before the matrix) its unpacking depends on uninitialised memory.
+    if (transform && (version != 1 || bodySize != kTransformBodyBytes)) return WireRead::BadHeader;
     try {
         if (!transform) { // read and discard, bounded by maxBodyBytes
             std::vector<unsigned char> body(bodySize);

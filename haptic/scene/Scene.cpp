@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -37,14 +38,18 @@ DeviceLimits parseDevice(Fields& top)
             top.fail("device", e.what());
         }
     }
-    Fields d = top.sub("device");
     DeviceLimits l;
-    l.name = d.string("name", "custom");
-    l.maxForceN = d.number("max_force_N", l.maxForceN, true);
-    l.maxContinuousForceN = d.number("max_continuous_force_N", l.maxContinuousForceN, true);
-    l.maxStiffnessNPerMm = d.number("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, true);
-    l.maxDampingNsPerMm = d.number("max_damping_Ns_per_mm", l.maxDampingNsPerMm, true);
-    d.string("source", "");
+    // d refuses unknown fields as it goes out of scope: before l is returned, which clang
+    // would otherwise never free (a destructor throwing after the return, CWG 2176).
+    {
+        Fields d = top.sub("device");
+        l.name = d.string("name", "custom");
+        l.maxForceN = d.number("max_force_N", l.maxForceN, true);
+        l.maxContinuousForceN = d.number("max_continuous_force_N", l.maxContinuousForceN, true);
+        l.maxStiffnessNPerMm = d.number("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, true);
+        l.maxDampingNsPerMm = d.number("max_damping_Ns_per_mm", l.maxDampingNsPerMm, true);
+        d.string("source", "");
+    }
     return l;
 }
 
@@ -113,14 +118,30 @@ void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
     }
 }
 
-} // namespace
+/// @p message with control characters escaped: names quoted from the file ("a\nb") stay on one line.
+std::string oneLine(const std::string& message)
+{
+    std::string out;
+    for (const char c : message) {
+        if (c == '\n') {
+            out += "\\n";
+        } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02x", unsigned(static_cast<unsigned char>(c)));
+            out += hex;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
 
-Scene parseScene(const std::string& text, const std::string& origin)
+Scene readScene(const std::string& text, const std::string& origin)
 {
     Json doc;
     try {
         doc = Json::parse(text);
-    } catch (const Json::parse_error& e) {
+    } catch (const Json::exception& e) { // a syntax error, or a number beyond double (1e99999)
         throw ValueError(origin + ": not valid JSON (" + e.what() + ")");
     }
     Scene s;
@@ -169,8 +190,13 @@ Scene parseScene(const std::string& text, const std::string& origin)
     parseTerms(top, s.terms);
     if (top.has("needle")) {
         Fields n = top.sub("needle");
-        s.needle.gauge = int(n.number("gauge", s.needle.gauge, true));
-        s.needle.referenceGauge = int(n.number("reference_gauge", s.needle.referenceGauge, true));
+        const auto gauge = [&n](const char* key, int def) { // 20.5 would read as 20, and 1e10 fits no int
+            const double g = n.number(key, def, true);
+            if (g != std::floor(g) || g > 1e6) n.fail(key, "must be a whole gauge number (14 to 27)");
+            return int(g); // the range is checked with the needle below
+        };
+        s.needle.gauge = gauge("gauge", s.needle.gauge);
+        s.needle.referenceGauge = gauge("reference_gauge", s.needle.referenceGauge);
         s.needle.lengthMm = n.number("length_mm", s.needle.lengthMm, true);
         try {
             s.needle.tip = parseTipType(n.string("tip", tipTypeName(s.needle.tip)));
@@ -192,6 +218,17 @@ Scene parseScene(const std::string& text, const std::string& origin)
     if (s.recipe.model == LayerModel::Kyung && s.fixedTable)
         top.fail("layers", "the kyung model reads voxels: use \"labels\"");
     return s;
+}
+
+} // namespace
+
+Scene parseScene(const std::string& text, const std::string& origin)
+{
+    try {
+        return readScene(text, origin);
+    } catch (const ValueError& e) {
+        throw ValueError(oneLine(e.what())); // a refusal is one line, whatever names it quotes
+    }
 }
 
 Scene loadScene(const std::string& nameOrPath)

@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file FuzzIgtlMessage.cpp
+/// @brief libFuzzer target: the OpenIGTLink message reader of the device
+/// bridge and the pose stream (readTransform, haptic/igtl/detail/IgtlWire.h).
+/// The input is a stream of messages, handed over through a local socket pair
+/// and read message by message as the servers do, until one drops the link.
+/// Each outcome is checked against the header and body decoded here
+/// independently: a pose comes only from a version 1 TRANSFORM of 48 bytes
+/// that arrived whole and whose CRC-64 matches, and it is the
+/// translation and the z column as sent (big-endian float32, finite, z column
+/// non-zero); bad versions, sizes and CRCs are refused as such; another
+/// message type is skipped whole, and the next message is read after it.
+
+#include "FuzzInput.h"
+
+#include "haptic/igtl/detail/IgtlWire.h"
+
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <string_view>
+
+namespace {
+
+using voxhap::Vec3d;
+using voxhap::fuzz::finding;
+using voxhap::haptic::detail::WireRead;
+
+constexpr std::size_t kHeader = 58;
+constexpr std::uint64_t kTransformBody = 48; // 12 float32
+constexpr std::uint64_t kMaxBody = 65536;    // the servers' limit
+
+std::uint64_t bigEndian(const std::uint8_t* p, int n)
+{
+    std::uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+    return v;
+}
+
+/// CRC-64 of the OpenIGTLink standard: ECMA-182 polynomial, not reflected, initial value 0.
+std::uint64_t crc64(const std::uint8_t* p, std::size_t n)
+{
+    std::uint64_t crc = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        crc ^= std::uint64_t(p[i]) << 56;
+        for (int b = 0; b < 8; ++b) crc = (crc >> 63) ? (crc << 1) ^ 0x42F0E1EBA9EA3693ull : crc << 1;
+    }
+    return crc;
+}
+
+double float32(const std::uint8_t* p)
+{
+    const auto bits = std::uint32_t(bigEndian(p, 4));
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+const char* name(WireRead r)
+{
+    switch (r) {
+    case WireRead::Pose:
+        return "a pose";
+    case WireRead::Skipped:
+        return "skipped";
+    case WireRead::BadPose:
+        return "a bad pose";
+    case WireRead::BadHeader:
+        return "a bad header";
+    case WireRead::Broken:
+        return "broken";
+    }
+    return "?";
+}
+
+/// What reading the message at @p m (with @p left bytes until the stream ends) must give.
+struct Expected {
+    WireRead read = WireRead::Broken;
+    std::size_t bytes = 0; ///< the message's length, header included
+    Vec3d tip{0, 0, 0}, direction{0, 0, 0};
+};
+
+Expected expect(const std::uint8_t* m, std::size_t left)
+{
+    Expected e;
+    if (left < kHeader) return e; // the stream ends inside the header
+    const auto version = unsigned(bigEndian(m, 2));
+    const std::string_view type(
+        reinterpret_cast<const char*>(m + 2), ::strnlen(reinterpret_cast<const char*>(m + 2), 12));
+    const std::uint64_t body = bigEndian(m + 42, 8), crc = bigEndian(m + 50, 8);
+    const bool transform = type == "TRANSFORM";
+    e.read = WireRead::BadHeader;
+    if (version < 1 || version > 2 || body > kMaxBody) return e;
+    if (transform && (version != 1 || body != kTransformBody)) return e; // the library reads version 1 only
+    e.bytes = kHeader + std::size_t(body);
+    if (left < e.bytes) {
+        e.read = WireRead::Broken; // the stream ends inside the body
+        return e;
+    }
+    if (!transform) {
+        e.read = WireRead::Skipped;
+        return e;
+    }
+    const std::uint8_t* b = m + kHeader;
+    if (crc64(b, std::size_t(body)) != crc) return e; // BadHeader
+    // Column-major rotation, then the translation: z column at 6..8, translation at 9..11.
+    for (int i = 0; i < 3; ++i) {
+        e.direction[i] = float32(b + 4 * (6 + i));
+        e.tip[i] = float32(b + 4 * (9 + i));
+    }
+    const bool usable = e.tip.allFinite() && e.direction.allFinite() && e.direction.norm() > 1e-6;
+    e.read = usable ? WireRead::Pose : WireRead::BadPose;
+    return e;
+}
+
+/// A socket pair holding the input, its writing end closed: the reader sees the stream, then its end.
+struct Stream {
+    int fd[2] = {-1, -1};
+    Stream(const std::uint8_t* data, std::size_t size)
+    {
+        if (::socketpair(AF_UNIX, SOCK_STREAM, 0, fd) != 0) finding("no socket pair");
+        for (std::size_t sent = 0; sent < size;) {
+            const ssize_t n = ::send(fd[1], data + sent, size - sent, MSG_NOSIGNAL);
+            if (n <= 0) finding("cannot hand the input to the reader");
+            sent += std::size_t(n);
+        }
+        ::shutdown(fd[1], SHUT_WR);
+    }
+    ~Stream()
+    {
+        ::close(fd[0]);
+        ::close(fd[1]);
+    }
+};
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+{
+    if (size > 65536) return 0; // more than a socket buffer holds without a reader
+    Stream stream(data, size);
+    std::size_t at = 0;
+    for (int message = 1;; ++message) {
+        Vec3d tip(0, 0, 0), direction(0, 0, 0);
+        const WireRead got = voxhap::haptic::detail::readTransform(stream.fd[0], 1.0, kMaxBody, tip, direction);
+        const Expected e = expect(data + at, size - at);
+        if (got != e.read) {
+            finding("message " + std::to_string(message) + " read as " + name(got) + ", expected " + name(e.read));
+        }
+        if (got == WireRead::Pose && (tip != e.tip || direction != e.direction)) {
+            finding("message " + std::to_string(message) + ": the pose is not the one sent");
+        }
+        if (got != WireRead::Pose && got != WireRead::BadPose && got != WireRead::Skipped) break; // the link drops
+        at += e.bytes;
+    }
+    return 0;
+}
