@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <functional>
 #include <ostream>
 #include <string>
@@ -17,13 +18,17 @@
 namespace voxhap::bench {
 
 struct SamplerBenchOptions {
-    std::vector<std::string> workloads{"slab", "torso"}; ///< "slab" (R1 closed form), "torso" (phantom)
-    int paths = 48;                                      ///< shaft directions per workload (tilt 0..60°)
-    int depths = 40;                                     ///< insertion depths per path, up to 100 mm
-    int repetitions = 5;                                 ///< interleaved rounds over all configurations
-    double speedMmPerS = 10.0;                           ///< insertion speed for force errors [mm/s]
-    double spacingMm = 0.5;                              ///< phantom voxel size [mm]
-    bool vtk = true;                                     ///< include the vtkProbeFilter baseline (slow)
+    /// "slab" (R1 closed form), "torso" (phantom), "ct" (ctDir, segmented, β per
+    /// label), "mr" (mrDir, T1-weighted, β from T1 voxel by voxel)
+    std::vector<std::string> workloads{"slab", "torso"};
+    std::filesystem::path ctDir; ///< the real CT workload's DICOM folder or volume file
+    std::filesystem::path mrDir; ///< the real MR workload's DICOM folder or volume file
+    int paths = 48;              ///< shaft directions per workload (tilt 0..60°)
+    int depths = 40;             ///< insertion depths per path, up to 100 mm
+    int repetitions = 5;         ///< interleaved rounds over all configurations
+    double speedMmPerS = 10.0;   ///< insertion speed for force errors [mm/s]
+    double spacingMm = 0.5;      ///< phantom voxel size [mm]
+    bool vtk = true;             ///< include the vtkProbeFilter baseline (slow)
 };
 
 /// @brief One configuration's figures.

@@ -3,17 +3,25 @@
 /// @brief The shaft-integration runtime-versus-error table (docs: benchmarks.md).
 ///
 ///   build/bin/bench_sampler [--quick] [--json FILE] [--png FILE] [--no-vtk]
-/// Same as `voxhap bench sampler`.
+///                           [--workloads slab,torso,ct,mr] [--ct DIR] [--mr DIR]
+/// Same as `voxhap bench sampler`, with the real workloads on by default: the
+/// shared CT and T1-weighted MR beside the project (../shared/data).
 
 #include "bench/SamplerBench.h"
 
 #include <cstring>
+#include <filesystem>
+#include <sstream>
 #include <fstream>
 #include <iostream>
 
 int main(int argc, char** argv)
 {
     voxhap::bench::SamplerBenchOptions o;
+    const std::filesystem::path shared = std::filesystem::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data";
+    o.ctDir = shared / "ct-abdomen-tcia" / "dicom";
+    o.mrDir = shared / "mr-head-trio" / "t1-mprage";
+    o.workloads = {"slab", "torso", "ct", "mr"};
     std::string json, png;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -23,16 +31,32 @@ int main(int argc, char** argv)
             o.repetitions = 2;
         } else if (a == "--no-vtk") {
             o.vtk = false;
+        } else if (a == "--workloads" && i + 1 < argc) {
+            o.workloads.clear();
+            std::stringstream list(argv[++i]);
+            for (std::string w; std::getline(list, w, ',');) o.workloads.push_back(w);
+        } else if (a == "--ct" && i + 1 < argc) {
+            o.ctDir = argv[++i];
+        } else if (a == "--mr" && i + 1 < argc) {
+            o.mrDir = argv[++i];
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else if (a == "--png" && i + 1 < argc) {
             png = argv[++i];
         } else {
-            std::cerr << "usage: bench_sampler [--quick] [--no-vtk] [--json FILE] [--png FILE]\n";
+            std::cerr
+                << "usage: bench_sampler [--quick] [--no-vtk] [--workloads slab,torso,ct,mr] [--ct DIR] [--mr DIR] "
+                   "[--json FILE] [--png FILE]\n";
             return 2;
         }
     }
-    const auto report = voxhap::bench::runSamplerBench(o, [](double, std::string_view s) { std::cerr << s << '\n'; });
+    voxhap::bench::SamplerReport report;
+    try {
+        report = voxhap::bench::runSamplerBench(o, [](double, std::string_view s) { std::cerr << s << '\n'; });
+    } catch (const std::exception& e) {
+        std::cerr << "bench_sampler: " << e.what() << '\n';
+        return 1;
+    }
     voxhap::bench::printSamplerReport(std::cout, report);
     if (!json.empty()) std::ofstream(json) << voxhap::bench::samplerReportJson(report).dump(2) << '\n';
     if (!png.empty()) {

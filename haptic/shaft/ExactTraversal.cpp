@@ -36,8 +36,8 @@ struct Sources : FieldReaders {
 /// Shared start of integrate(): reset, length, validity.
 inline bool begin(const Sources& src, const Segment& seg, double shift, IndexSegment& s, ShaftIntegral& out) noexcept
 {
-    out.reset();
-    s = detail::toIndex(*src.xform, seg, shift);
+    out.reset(src.labelReader.has_value());
+    s = detail::toIndex(src.indexMap, seg, shift);
     out.lengthMm = s.lengthMm;
     out.labelsValid = src.labelReader.has_value();
     return s.valid;
@@ -73,7 +73,7 @@ public:
     {
         IndexSegment cells;
         if (!begin(mSrc, seg, 0.0, cells, out)) return;
-        if (mSrc.labelReader) voxelPass(mSrc, detail::toIndex(*mSrc.xform, seg, 0.5), false, out);
+        if (mSrc.labelReader) voxelPass(mSrc, detail::toIndex(mSrc.indexMap, seg, 0.5), false, out);
 
         double t0 = 0.0, t1 = 0.0;
         if (!detail::clip(cells, mSrc.cellLo, mSrc.cellHi, t0, t1)) return;

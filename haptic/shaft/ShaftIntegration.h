@@ -38,15 +38,22 @@ struct ShaftIntegral {
     double dampingIntegral = 0; ///< ∫β ds [N·s/mm]: the damping force at speed v [mm/s] is v times this
     std::array<double, kMaxLabels> labelLengthMm{}; ///< shaft length in each label [mm] (air outside the volume)
     std::array<double, kMaxLabels>
-        firstHitMm{};         ///< distance from the entry to each label's first voxel [mm], or kNotHit
-    bool labelsValid = false; ///< labels were tracked (the integrator had a label grid and was asked to)
+        firstHitMm{}; ///< distance from the entry to each label's first voxel [mm], or kNotHit
+    bool labelsValid =
+        false; ///< labels were tracked (the integrator had a label grid and was asked to); else the arrays mean nothing
 
-    void reset() noexcept
+    /// @brief Zero the result. The label arrays (1 KiB) are cleared only when
+    /// @p withLabels: an integrator that tracks no labels leaves labelsValid
+    /// false, and then the arrays mean nothing (at servo rate the fill was a
+    /// tenth of a short shaft's integration).
+    void reset(bool withLabels = true) noexcept
     {
         lengthMm = 0;
         dampingIntegral = 0;
-        labelLengthMm.fill(0.0);
-        firstHitMm.fill(kNotHit);
+        if (withLabels) {
+            labelLengthMm.fill(0.0);
+            firstHitMm.fill(kNotHit);
+        }
         labelsValid = false;
     }
     /// @brief Damping force magnitude for insertion speed @p speedMmPerS [N].

@@ -29,6 +29,7 @@ struct FieldReaders {
         if (needDamping && !beta) throw ValueError(who + ": the material field has no damping grid");
         if (!beta && !labels) throw ValueError(who + ": the material field has neither damping nor labels");
         xform = beta ? beta->transformPtr() : labels->transformPtr();
+        indexMap = AffineIndexMap(*xform);
         if (beta) {
             betaReader.emplace(beta->tree());
             betaCursor.emplace(beta->tree());
@@ -38,7 +39,7 @@ struct FieldReaders {
             labelCursor.emplace(labels->tree());
         }
     }
-    FieldReaders(const FieldReaders& o) : beta(o.beta), labels(o.labels), xform(o.xform)
+    FieldReaders(const FieldReaders& o) : beta(o.beta), labels(o.labels), xform(o.xform), indexMap(o.indexMap)
     {
         if (o.betaReader) betaReader.emplace(*o.betaReader); // fresh accessors
         if (o.labelReader) labelReader.emplace(*o.labelReader);
@@ -76,6 +77,7 @@ struct FieldReaders {
     FloatGrid::ConstPtr beta;
     LabelGrid::ConstPtr labels;
     openvdb::math::Transform::ConstPtr xform;
+    AffineIndexMap indexMap; ///< xform, for the per-tick conversions
     std::optional<FloatReader> betaReader;
     std::optional<LabelReader> labelReader;
     std::optional<FloatCursor> betaCursor; ///< for the exact chord pass (VoxelWalk.h)
