@@ -18,13 +18,28 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A CSV written whole or not at all, 10 significant digits.
+/// A CSV written whole or not at all, 10 significant digits; times are
+/// written with kTimeDigits (timeS below) so that they read back exactly.
 void writeCsv(const fs::path& file, const std::function<void(std::ostream&)>& fill)
 {
     writeStreamAtomically(file, [&](std::ostream& o) {
         o << std::setprecision(10);
         fill(o);
     });
+}
+
+/// Times with 17 significant digits: a double read back is the double written,
+/// so times that increase in the session increase in the file (10 digits
+/// merged 0.002999999999999999 and 0.003, and the reader refused the file).
+struct TimeS {
+    double value;
+};
+std::ostream& operator<<(std::ostream& o, TimeS t)
+{
+    const auto old = o.precision(17);
+    o << t.value;
+    o.precision(old);
+    return o;
 }
 
 } // namespace
@@ -37,8 +52,8 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
         o << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
              "fault,critical,plunger_fraction\n";
         for (const ServoRecord& r : s.records) {
-            o << r.timeS << ',' << r.tip.x() << ',' << r.tip.y() << ',' << r.tip.z() << ',' << r.direction.x() << ','
-              << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ','
+            o << TimeS{r.timeS} << ',' << r.tip.x() << ',' << r.tip.y() << ',' << r.tip.z() << ',' << r.direction.x()
+              << ',' << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ','
               << r.force.z() << ',' << r.plungerN << ',' << r.depthMm << ',' << r.axialN << ',' << layerName(r.layer)
               << ',' << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ','
               << int(r.critical) << ',' << r.plungerFraction << '\n';
@@ -47,7 +62,7 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
     writeCsv(dir / "events.csv", [&](std::ostream& o) {
         o << "t_s,depth_mm,event,layer\n";
         for (const Event& e : s.events)
-            o << e.timeS << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
+            o << TimeS{e.timeS} << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
     });
 }
 

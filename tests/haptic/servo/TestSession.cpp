@@ -100,6 +100,25 @@ TEST_F(SessionFile, FewerThanTwoRecordsAreRefusedWithTheLastLine)
 
 // A bounded queue that is full refuses the push at once, counts it, and keeps what
 // it holds: the oldest items, in order. Draining makes room again (the ring wraps).
+// What writeSession writes, readSessionPoses reads back: times exactly, even two
+// that agree to 15 digits (at 10 digits they merged and the reader refused the
+// file it had just been given).
+TEST_F(SessionFile, WrittenTimesReadBackExactly)
+{
+    Session s;
+    for (const double t : {0.0, 0.002999999999999999, 0.003, 1234.5678901234567}) {
+        ServoRecord r;
+        r.timeS = t;
+        r.tip = Vec3d(1.0, 2.0, 3.0);
+        r.direction = Vec3d(0.0, 0.0, 1.0);
+        s.records.push_back(r);
+    }
+    writeSession(s, {}, mDir / "written");
+    const std::vector<ServoRecord> back = readSessionPoses(mDir / "written" / "session.csv");
+    ASSERT_EQ(back.size(), s.records.size());
+    for (std::size_t i = 0; i < back.size(); ++i) EXPECT_EQ(back[i].timeS, s.records[i].timeS) << "record " << i;
+}
+
 TEST(RecordQueue, FullQueueDropsCountsAndKeepsTheOldest)
 {
     SpscQueue<int, 4> q;
