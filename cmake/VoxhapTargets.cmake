@@ -2,8 +2,12 @@
 # Helpers that give every voxhap target the same warnings and layout.
 
 # Warnings on for our code; library headers are system headers, so they stay quiet.
+# -Wmissing-field-initializers is off: settings structs are filled with C++20
+# designated initialisers that name only what differs from the member defaults,
+# which GCC 12 reports although every omitted member has its default initialiser.
 function(voxhap_warnings target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+    -Wno-missing-field-initializers)
 endfunction()
 
 # voxhap_add_library(<folder> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...] [NO_PCH])

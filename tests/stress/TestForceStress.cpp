@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestForceStress.cpp
 /// @brief The force pipeline under physics.md §6.4: random and hostile states,
-/// dt jitter, passivity of closed loops, the critical-structure rule, and no
+/// dt jitter, the critical-structure rule, and no
 /// allocation or release of any kind per tick (AllocationCounter.h), with the
 /// record queue draining or full.
 
@@ -16,7 +16,6 @@
 #include "haptic/servo/SimulatedDevices.h"
 #include "volume/Grids.h"
 
-#include <Eigen/Geometry> // for cross and unitOrthogonal
 #include <gtest/gtest.h>
 
 #include <cmath>
