@@ -64,6 +64,8 @@ struct Workload {
     std::function<double(const Segment&)> pcReference; ///< exact ∫β of the voxel reading (closed form if any)
     std::string pcReferenceName;
     double voxelMm = 0.5;
+    /// More paths of the same kind (count, depths per path): the fidelity sample.
+    std::function<std::vector<std::vector<Segment>>(int, int, std::mt19937&)> morePaths;
 };
 
 std::unique_ptr<haptic::MaterialField> fieldWithWorkloadBeta(const volume::Volume& v)
@@ -120,6 +122,12 @@ Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
     p.halfWidthMm = 95.0; // a 60° shaft of 100 mm drifts 87 mm sideways
     Workload w = phantomWorkload("slab", volume::slabModel(p, volume::TissueTable::builtin()), o);
     w.paths = makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), o, rng, o.spacingMm);
+    w.morePaths = [o](int count, int depths, std::mt19937& r) {
+        SamplerBenchOptions more = o;
+        more.paths = count;
+        more.depths = depths;
+        return makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), more, r, o.spacingMm);
+    };
     // physics.md §7 R1 closed form, depth from the surface y = 0; β as the grid stores it (float).
     w.pcReference = [](const Segment& s) {
         const Vec3d d = s.tip - s.entry;
@@ -140,6 +148,12 @@ Workload torsoWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
     Workload w = phantomWorkload("torso", volume::torsoModel(volume::TorsoParams{}, volume::TissueTable::builtin()), o);
     // From the posterior skin 40 mm left of the midline, inward and tilted.
     w.paths = makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), o, rng, 10.0);
+    w.morePaths = [o](int count, int depths, std::mt19937& r) {
+        SamplerBenchOptions more = o;
+        more.paths = count;
+        more.depths = depths;
+        return makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), more, r, 10.0);
+    };
     auto exact = std::shared_ptr<haptic::ShaftIntegrator>(
         haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));
     w.pcReference = [exact](const Segment& s) {
@@ -199,7 +213,9 @@ Workload ctWorkload(const SamplerBenchOptions& o, std::mt19937& rng, const Progr
     w.field =
         std::make_unique<haptic::MaterialField>(*w.volume, volume::TissueTable::builtin(), haptic::MaterialOptions{});
     w.voxelMm = w.volume->geometry().spacing.minCoeff();
-    w.paths = bodyPaths(*openvdb::gridConstPtrCast<volume::FloatGrid>(w.field->damping()), o.paths, o.depths, rng);
+    const auto body = openvdb::gridConstPtrCast<volume::FloatGrid>(w.field->damping());
+    w.paths = bodyPaths(*body, o.paths, o.depths, rng);
+    w.morePaths = [body](int count, int depths, std::mt19937& r) { return bodyPaths(*body, count, depths, r); };
     return w;
 }
 
@@ -233,6 +249,7 @@ Workload mrWorkload(const SamplerBenchOptions& o, std::mt19937& rng, const Progr
     w.field = std::make_unique<haptic::MaterialField>(beta, nullptr, volume::TissueTable::builtin());
     w.voxelMm = v.geometry().spacing.minCoeff();
     w.paths = bodyPaths(*beta, o.paths, o.depths, rng);
+    w.morePaths = [beta](int count, int depths, std::mt19937& r) { return bodyPaths(*beta, count, depths, r); };
     return w;
 }
 
@@ -519,6 +536,58 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
              "their sums "
           << std::scientific << std::setprecision(2) << rel << " (target <= 1e-12)";
         report.notes.push_back(n.str());
+
+        // Path-based fidelity (in the manner of Mastmeyer et al. 2017): many more
+        // random paths, untimed, each strategy against the exact reference of its
+        // reading and against the exact trilinear reading.
+        if (o.fidelityPaths > 0 && w.morePaths) {
+            progress(-1.0, name + ": fidelity on " + std::to_string(o.fidelityPaths) + " paths");
+            std::mt19937 fidelityRng(20261125);
+            const auto fpaths = w.morePaths(o.fidelityPaths, o.fidelityDepths, fidelityRng);
+            std::vector<double> refVoxel, refTrilinear;
+            for (const auto& path : fpaths) {
+                for (const auto& seg : path) {
+                    ShaftIntegral r;
+                    tri->integrate(seg, r);
+                    refVoxel.push_back(w.pcReference(seg));
+                    refTrilinear.push_back(r.dampingIntegral);
+                }
+            }
+            std::vector<double> got(std::size_t(o.fidelityDepths));
+            for (std::size_t c = 0; c < configs.size(); ++c) {
+                const Config& cfg = configs[c];
+                if (cfg.perPath || cfg.name.rfind("dense", 0) == 0 || cfg.name.rfind("vtk", 0) == 0) continue;
+                std::vector<double> own, vsTri;
+                for (std::size_t p = 0; p < fpaths.size(); ++p) {
+                    if (cfg.prepare) cfg.prepare(fpaths[p]);
+                    got.resize(fpaths[p].size());
+                    cfg.run(fpaths[p], got);
+                    for (std::size_t i = 0; i < got.size(); ++i) {
+                        const std::size_t k = p * std::size_t(o.fidelityDepths) + i;
+                        const double ref = cfg.reading == "trilinear" ? refTrilinear[k] : refVoxel[k];
+                        own.push_back(v0 * std::abs(got[i] - ref));
+                        vsTri.push_back(v0 * std::abs(got[i] - refTrilinear[k]));
+                    }
+                }
+                FidelityRow f;
+                f.workload = name;
+                f.config = cfg.name;
+                f.reading = cfg.reading;
+                f.paths = long(fpaths.size());
+                f.evaluations = long(own.size());
+                f.nsMedian = find(cfg.name).nsMedian;
+                const auto stats = [](const std::vector<double>& e, double& rms, double& p99, double& max) {
+                    double sq = 0;
+                    for (double x : e) sq += x * x;
+                    rms = std::sqrt(sq / double(std::max<std::size_t>(e.size(), 1)));
+                    p99 = percentile(e, 0.99);
+                    max = e.empty() ? 0.0 : *std::max_element(e.begin(), e.end());
+                };
+                stats(own, f.rmsN, f.p99N, f.maxN);
+                stats(vsTri, f.triRmsN, f.triP99N, f.triMaxN);
+                report.fidelity.push_back(f);
+            }
+        }
     }
     return report;
 }
@@ -547,6 +616,26 @@ void printSamplerReport(std::ostream& os, const SamplerReport& r)
     }
     os << std::defaultfloat << '\n';
     for (const auto& n : r.notes) os << "- " << n << '\n';
+    if (!r.fidelity.empty()) {
+        os << "\npath-based fidelity: force error at " << r.options.speedMmPerS << " mm/s over "
+           << r.options.fidelityPaths << " random paths x " << r.options.fidelityDepths
+           << " depths per workload, against the exact reference of each reading and against exact trilinear\n";
+        std::string current;
+        for (const auto& f : r.fidelity) {
+            if (f.workload != current) {
+                current = f.workload;
+                os << "[" << current << "]\n";
+                os << std::left << std::setw(28) << "configuration" << std::right << std::setw(10) << "median ns"
+                   << std::setw(12) << "rms N" << std::setw(12) << "p99 N" << std::setw(12) << "max N" << std::setw(14)
+                   << "rms N (tri)" << std::setw(14) << "p99 N (tri)" << std::setw(14) << "max N (tri)" << '\n';
+            }
+            os << std::left << std::setw(28) << f.config << std::right << std::fixed << std::setprecision(0)
+               << std::setw(10) << f.nsMedian << std::scientific << std::setprecision(2) << std::setw(12) << f.rmsN
+               << std::setw(12) << f.p99N << std::setw(12) << f.maxN << std::setw(14) << f.triRmsN << std::setw(14)
+               << f.triP99N << std::setw(14) << f.triMaxN << '\n';
+        }
+        os << std::defaultfloat;
+    }
 }
 
 nlohmann::json samplerReportJson(const SamplerReport& r)
@@ -555,46 +644,124 @@ nlohmann::json samplerReportJson(const SamplerReport& r)
     j["machine"] = r.machine;
     j["options"] = {{"workloads", r.options.workloads}, {"paths", r.options.paths}, {"depths", r.options.depths},
         {"repetitions", r.options.repetitions}, {"speed_mm_per_s", r.options.speedMmPerS},
-        {"spacing_mm", r.options.spacingMm}};
+        {"spacing_mm", r.options.spacingMm}, {"fidelity_paths", r.options.fidelityPaths},
+        {"fidelity_depths", r.options.fidelityDepths}};
     nlohmann::json rows = nlohmann::json::array();
-    for (const auto& row : r.rows) {
-        rows.push_back({{"workload", row.workload}, {"config", row.config}, {"reading", row.reading},
-            {"ns_median", row.nsMedian}, {"ns_p99", row.nsP99}, {"err_max_n", row.errMaxN}, {"err_rms_n", row.errRmsN},
-            {"err_trilinear_max_n", row.errTriMaxN}, {"err_trilinear_rms_n", row.errTriRmsN},
-            {"evaluations", row.evaluations}});
+    const std::vector<bool> front = paretoFront(r.rows);
+    for (std::size_t i = 0; i < r.rows.size(); ++i) {
+        const SamplerRow& row = r.rows[i];
+        rows.push_back({{"workload", row.workload}, {"config", row.config}, {"family", strategyFamily(row.config)},
+            {"pareto", bool(front[i])}, {"reading", row.reading}, {"ns_median", row.nsMedian}, {"ns_p99", row.nsP99},
+            {"err_max_n", row.errMaxN}, {"err_rms_n", row.errRmsN}, {"err_trilinear_max_n", row.errTriMaxN},
+            {"err_trilinear_rms_n", row.errTriRmsN}, {"evaluations", row.evaluations}});
     }
     j["rows"] = rows;
+    nlohmann::json fidelity = nlohmann::json::array();
+    for (const auto& f : r.fidelity) {
+        fidelity.push_back({{"workload", f.workload}, {"config", f.config}, {"reading", f.reading}, {"paths", f.paths},
+            {"evaluations", f.evaluations}, {"ns_median", f.nsMedian}, {"err_rms_n", f.rmsN}, {"err_p99_n", f.p99N},
+            {"err_max_n", f.maxN}, {"err_trilinear_rms_n", f.triRmsN}, {"err_trilinear_p99_n", f.triP99N},
+            {"err_trilinear_max_n", f.triMaxN}});
+    }
+    j["fidelity"] = fidelity;
     j["notes"] = r.notes;
     return j;
+}
+
+std::string strategyFamily(const std::string& config)
+{
+    for (const char* f : {"exact", "peer", "profile", "vdb march-nearest", "vdb march-trilinear", "dense march-nearest",
+             "dense march-trilinear", "vtkProbeFilter"}) {
+        if (config.rfind(f, 0) == 0) return f;
+    }
+    return config;
+}
+
+namespace {
+
+/// The error each row is judged by on the front: against the finest reading,
+/// the exact trilinear one. Against its own reading every exact strategy and
+/// the locked profile are exact (0), and the front would be one point.
+double rowError(const SamplerRow& row) { return row.errTriMaxN; }
+
+} // namespace
+
+std::vector<bool> paretoFront(const std::vector<SamplerRow>& rows)
+{
+    // A row is on the front when no other row of its workload is at least as good
+    // on both time and error and better on one (build rows are not evaluations).
+    std::vector<bool> front(rows.size(), false);
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        if (rows[i].reading == "build") continue;
+        bool dominated = false;
+        for (std::size_t j = 0; j < rows.size() && !dominated; ++j) {
+            if (j == i || rows[j].workload != rows[i].workload || rows[j].reading == "build") continue;
+            const double ti = rows[i].nsMedian, tj = rows[j].nsMedian, ei = rowError(rows[i]), ej = rowError(rows[j]);
+            // Errors that differ by round-off only (the exact strategies of one
+            // reading, 1e-14 N apart) count as equal, or each would keep the other on.
+            const double same = 1e-9 * std::max(ei, ej) + 1e-15;
+            const bool noWorse = ej <= ei + same, better = ej < ei - same;
+            dominated = tj <= ti && noWorse && (tj < ti || better);
+        }
+        front[i] = !dominated;
+    }
+    return front;
 }
 
 bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why)
 {
     const render::PlotDir dir;
-    std::ostringstream script;
-    script << "set logscale xy\nset grid\nset key outside right\n"
-           << "set xlabel 'max force error at " << r.options.speedMmPerS
-           << " mm/s against the reference of its reading [N] (0 drawn at 1e-12)'\n"
-           << "set ylabel 'median time per evaluation [ns]'\n"
-           << "set title 'shaft integration, runtime versus error (" << r.machine << ")'\n";
-    std::string plot = "plot ";
-    std::map<std::string, int> index;
+    const std::vector<bool> front = paretoFront(r.rows);
+    std::vector<std::string> workloads, families;
     for (const auto& row : r.rows) {
-        if (row.reading == "build") continue; // a build cost, not an evaluation
-        std::ofstream data(
-            dir.path() / (row.workload + ".dat"), index.count(row.workload) ? std::ios::app : std::ios::trunc);
-        // Each configuration against the reference of the reading it approximates.
-        const double err = row.reading == "trilinear" ? row.errTriMaxN : row.errMaxN;
-        data << std::max(err, 1e-12) << ' ' << row.nsMedian << " \"" << row.config << "\"\n";
-        index[row.workload] = 1;
+        if (row.reading == "build") continue;
+        if (std::find(workloads.begin(), workloads.end(), row.workload) == workloads.end())
+            workloads.push_back(row.workload);
+        const std::string f = strategyFamily(row.config);
+        if (std::find(families.begin(), families.end(), f) == families.end()) families.push_back(f);
     }
-    for (const auto& [workload, unused] : index) {
-        const std::string file = (dir.path() / (workload + ".dat")).string();
-        plot += "'" + file + "' using 1:2 with points pt 7 ps 1.5 title '" + workload + "', '" + file +
-            "' using 1:2:3 with labels offset 1,0.6 left font ',8' notitle, ";
+    // One data file per workload and family, one per workload for its front (sorted by error).
+    const auto file = [&](const std::string& w, std::size_t f) {
+        return (dir.path() / (w + "-" + std::to_string(f) + ".dat")).string();
+    };
+    for (const auto& w : workloads) {
+        std::vector<std::pair<double, double>> frontPoints;
+        for (std::size_t f = 0; f < families.size(); ++f) {
+            std::ofstream data(file(w, f));
+            for (std::size_t i = 0; i < r.rows.size(); ++i) {
+                const SamplerRow& row = r.rows[i];
+                if (row.workload != w || row.reading == "build" || strategyFamily(row.config) != families[f]) continue;
+                data << std::max(rowError(row), 1e-12) << ' ' << row.nsMedian << '\n';
+            }
+        }
+        for (std::size_t i = 0; i < r.rows.size(); ++i) {
+            if (r.rows[i].workload == w && front[i])
+                frontPoints.emplace_back(std::max(rowError(r.rows[i]), 1e-12), r.rows[i].nsMedian);
+        }
+        std::sort(frontPoints.begin(), frontPoints.end());
+        std::ofstream data(dir.path() / (w + "-front.dat"));
+        for (const auto& [e, t] : frontPoints) data << e << ' ' << t << '\n';
     }
-    script << plot.substr(0, plot.size() - 2) << '\n';
-    return render::runGnuplot(dir, script.str(), pngFile, 1200, 800, why);
+    const int columns = workloads.size() > 1 ? 2 : 1;
+    const int rowsN = int((workloads.size() + std::size_t(columns) - 1) / std::size_t(columns));
+    std::ostringstream script;
+    script << "set multiplot layout " << rowsN << "," << columns << " title 'shaft integration, runtime versus error ("
+           << r.machine << ")'\n"
+           << "set logscale xy\nset grid\nset key top center font ',8' maxrows 3\n"
+           << "set xlabel 'max force error at " << r.options.speedMmPerS
+           << " mm/s against the exact trilinear reading [N] (0 drawn at 1e-12)'\n"
+           << "set ylabel 'median ns per evaluation'\n";
+    for (const auto& w : workloads) {
+        script << "set title '" << w << "'\nplot ";
+        for (std::size_t f = 0; f < families.size(); ++f) {
+            script << "'" << file(w, f) << "' using 1:2 with points pt 7 ps 1.2 lc " << f + 1 << " title '"
+                   << families[f] << "', ";
+        }
+        script << "'" << (dir.path() / (w + "-front.dat")).string()
+               << "' using 1:2 with steps lw 2 lc rgb 'black' title 'Pareto front'\n";
+    }
+    script << "unset multiplot\n";
+    return render::runGnuplot(dir, script.str(), pngFile, 1400, 500 * rowsN, why);
 }
 
 } // namespace voxhap::bench

@@ -29,6 +29,8 @@ struct SamplerBenchOptions {
     double speedMmPerS = 10.0;   ///< insertion speed for force errors [mm/s]
     double spacingMm = 0.5;      ///< phantom voxel size [mm]
     bool vtk = true;             ///< include the vtkProbeFilter baseline (slow)
+    int fidelityPaths = 10000;   ///< random paths per workload for the error statistics (0: none)
+    int fidelityDepths = 10;     ///< depths per fidelity path, up to 100 mm
 };
 
 /// @brief One configuration's figures.
@@ -42,11 +44,21 @@ struct SamplerRow {
     long evaluations = 0;
 };
 
+/// @brief One strategy's error over the path-based fidelity sample [N].
+struct FidelityRow {
+    std::string workload, config, reading;
+    long paths = 0, evaluations = 0;
+    double nsMedian = 0;                          ///< from the timed table of the same run
+    double rmsN = 0, p99N = 0, maxN = 0;          ///< against the exact reference of its reading
+    double triRmsN = 0, triP99N = 0, triMaxN = 0; ///< against the exact trilinear reading
+};
+
 struct SamplerReport {
     std::string machine; ///< CPU model and core count
     SamplerBenchOptions options;
     std::vector<SamplerRow> rows;
-    std::vector<std::string> notes; ///< ratios and targets, measured in this run
+    std::vector<FidelityRow> fidelity; ///< path-based error statistics
+    std::vector<std::string> notes;    ///< ratios and targets, measured in this run
 };
 
 /// @brief Run the benchmark; @p progress receives one line per stage.
@@ -56,8 +68,16 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& options, const Progress
 void printSamplerReport(std::ostream& os, const SamplerReport& r);
 /// @brief The report as JSON (for comparisons across commits).
 nlohmann::json samplerReportJson(const SamplerReport& r);
-/// @brief Log–log plot, time against error, one point per configuration (gnuplot,
-/// pngcairo). @return false with @p why set if gnuplot is missing or fails.
+/// @brief The strategy family of a configuration ("exact", "peer", "profile",
+/// "vdb march-nearest", ..., "vtkProbeFilter"): the plot's legend.
+std::string strategyFamily(const std::string& config);
+/// @brief Per row, whether it is on its workload's Pareto front of median time
+/// against the maximum error against the exact trilinear reading (no other row
+/// as fast and as accurate, and better on one). Build rows are never on it.
+std::vector<bool> paretoFront(const std::vector<SamplerRow>& rows);
+/// @brief Log–log plot per workload, time against error, points coloured by
+/// strategy family and the Pareto front drawn (gnuplot, pngcairo).
+/// @return false with @p why set if gnuplot is missing or fails.
 bool plotSamplerReport(const SamplerReport& r, const std::string& pngFile, std::string& why);
 
 /// @brief "model name (N cores)" from /proc/cpuinfo.

@@ -4,11 +4,13 @@
 ///
 ///   build/bin/bench_sampler [--quick] [--json FILE] [--png FILE] [--no-vtk]
 ///                           [--workloads slab,torso,ct,mr] [--ct DIR] [--mr DIR]
+///                           [--fidelity-paths N]
 /// Same as `voxhap bench sampler`, with the real workloads on by default: the
 /// shared CT and T1-weighted MR beside the project (../shared/data).
 
 #include "bench/SamplerBench.h"
 
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
@@ -29,6 +31,9 @@ int main(int argc, char** argv)
             o.paths = 12;
             o.depths = 20;
             o.repetitions = 2;
+            o.fidelityPaths = 1000;
+        } else if (a == "--fidelity-paths" && i + 1 < argc) {
+            o.fidelityPaths = std::atoi(argv[++i]);
         } else if (a == "--no-vtk") {
             o.vtk = false;
         } else if (a == "--workloads" && i + 1 < argc) {

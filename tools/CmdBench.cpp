@@ -25,6 +25,7 @@ struct BenchOptions {
     bench::RenderBenchOptions render;
     bool quick = false;
     bool noVtk = false;
+    bool fidelityGiven = false;
     std::string json, png;
 };
 
@@ -50,6 +51,7 @@ int runSampler(BenchOptions o)
         o.sampler.paths = 12;
         o.sampler.depths = 20;
         o.sampler.repetitions = 2;
+        if (!o.fidelityGiven) o.sampler.fidelityPaths = 1000;
     }
     o.sampler.vtk = !o.noVtk;
     if (!o.sampler.ctDir.empty()) o.sampler.workloads.push_back("ct");
@@ -119,6 +121,11 @@ Action registerBench(CLI::App& app)
     sampler->add_option("--spacing", o->sampler.spacingMm, "Phantom voxel size, mm (default 0.5)")
         ->check(CLI::Range(0.1, 5.0));
     sampler->add_flag("--no-vtk", o->noVtk, "Skip the (slow) vtkProbeFilter baseline");
+    sampler
+        ->add_option("--fidelity-paths", o->sampler.fidelityPaths,
+            "Random paths per workload for the path-based error statistics (default 10000, 1000 with --quick; 0: none)")
+        ->check(CLI::Range(0, 1000000))
+        ->each([o](const std::string&) { o->fidelityGiven = true; });
     sampler->add_option("--ct", o->sampler.ctDir, "Add the real-CT workload: a DICOM folder or volume file")
         ->check(CLI::ExistingPath);
     sampler->add_option("--mr", o->sampler.mrDir, "Add the real-MR workload: a T1-weighted DICOM folder or volume file")

@@ -34,6 +34,7 @@ struct TrajectoryProfile::Impl {
         // A line crosses at most sum_a L·|u_a|/h_a <= sqrt(3)·L/hMin faces, plus the two ends.
         maxRuns = std::size_t(std::ceil(std::sqrt(3.0) * maxLength / hMin)) + 8;
         bucketWidth = 0.5 * hMin;
+        bucketsPerMm = 1.0 / bucketWidth;
         reserveAll(maxLength);
     }
     Impl(const Impl& o) = default;
@@ -200,7 +201,7 @@ struct TrajectoryProfile::Impl {
     /// The run holding arc length s in [0, maxLength]: O(1), a few steps past the bucket's first run.
     std::size_t runAt(double s) const noexcept
     {
-        const auto j = std::min(bucketRun.size() - 1, std::size_t(std::max(0.0, s) / bucketWidth));
+        const auto j = std::min(bucketRun.size() - 1, std::size_t(std::max(0.0, s) * bucketsPerMm));
         std::size_t k = bucketRun[j];
         while (k + 1 < start.size() && start[k + 1] <= s) ++k;
         return k;
@@ -221,6 +222,7 @@ struct TrajectoryProfile::Impl {
     std::vector<int> label;
     std::vector<std::uint32_t> bucketRun;
     double bucketWidth = 1.0;
+    double bucketsPerMm = 1.0; ///< 1/bucketWidth: runAt runs at servo rate, a multiply instead of a divide
     std::size_t maxRuns = 0;
     std::array<int, kMaxLabels> slotOfLabel{};
     int slotCount = 0;
@@ -262,33 +264,60 @@ bool TrajectoryProfile::lock(const Vec3d& origin, const Vec3d& direction) noexce
     return mImpl->build(origin, direction, mMaxLength, mTolerance);
 }
 
+namespace {
+
+/// Where a shaft lies against the locked line: its ends' arc lengths along it
+/// and whether both ends are within the tolerance. Squared distances (no square
+/// roots): this runs at servo rate.
+struct LinePlace {
+    double se = 0, st = 0;
+    bool covered = false;
+};
+
+inline LinePlace placeOnLine(
+    const Vec3d& origin, const Vec3d& u, const Segment& s, double tolerance, double maxLength) noexcept
+{
+    LinePlace p;
+    const Vec3d e = s.entry - origin, t = s.tip - origin;
+    p.se = e.dot(u);
+    p.st = t.dot(u);
+    const double tol2 = tolerance * tolerance;
+    const double de2 = e.squaredNorm() - p.se * p.se, dt2 = t.squaredNorm() - p.st * p.st;
+    p.covered = de2 <= tol2 && dt2 <= tol2 && p.se >= -tolerance && p.st >= p.se && p.st <= maxLength;
+    return p;
+}
+
+} // namespace
+
 bool TrajectoryProfile::covers(const Segment& s) const noexcept
 {
     const Impl& m = *mImpl;
     if (!m.locked || !s.entry.allFinite() || !s.tip.allFinite()) return false;
-    const Vec3d e = s.entry - m.origin, t = s.tip - m.origin;
-    const double se = e.dot(m.u), st = t.dot(m.u);
-    const double de = (e - se * m.u).norm(), dt = (t - st * m.u).norm();
-    return de <= mTolerance && dt <= mTolerance && se >= -mTolerance && st >= se && st <= mMaxLength;
+    return placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength).covered;
 }
 
 void TrajectoryProfile::integrate(const Segment& s, ShaftIntegral& out) noexcept
 {
-    out.reset();
+    Impl& m = *mImpl;
+    out.reset(m.labels); // the label arrays only when this profile fills them
     const double length = (s.tip - s.entry).norm();
     if (!std::isfinite(length) || !s.entry.allFinite()) return;
     out.lengthMm = length;
     if (!(length > 0.0)) return;
-    Impl& m = *mImpl;
     if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
         const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
         out.labelsValid = m.labels;
         detail::chordPass(direct, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
         return;
     }
-    if (!covers(s) && !lock(s.entry, s.tip - s.entry)) return;
-    const double se = std::clamp((s.entry - m.origin).dot(m.u), 0.0, mMaxLength);
-    const double st = std::clamp((s.tip - m.origin).dot(m.u), se, mMaxLength);
+    LinePlace place;
+    if (m.locked && s.tip.allFinite()) place = placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength);
+    if (!place.covered) {
+        if (!lock(s.entry, s.tip - s.entry)) return;
+        place = placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength);
+    }
+    const double se = std::clamp(place.se, 0.0, mMaxLength);
+    const double st = std::clamp(place.st, se, mMaxLength);
     const double projected = st - se;
     // The shaft is ℓ' long where the line piece is ℓ: scale by ℓ'/ℓ (1 on the line).
     const double scale = projected > 0.0 ? length / projected : 0.0;
