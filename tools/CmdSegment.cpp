@@ -9,6 +9,7 @@
 
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
+#include "core/AtomicFile.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
@@ -87,8 +88,13 @@ int run(const SegmentCliOptions& o)
 
     volume::Volume v = loadVolumeWithProgress(o.in, o.reader, terminal);
     const segmentation::SegmentReport r = segmentation::segment(v, table, so);
-    volume::saveVolume(v, o.out);
-    if (!o.exportNrrd.empty()) volume::saveVolume(labelsOnly(v), o.exportNrrd);
+    // The segmented volume and its --export replace an earlier run's together: a kill
+    // between the two can leave one missing, never a new .vdb beside a stale export.
+    OutputSet outputs;
+    outputs.add(o.out, [&v](const std::filesystem::path& tmp) { volume::saveVolume(v, tmp); });
+    if (!o.exportNrrd.empty())
+        outputs.add(o.exportNrrd, [&v](const std::filesystem::path& tmp) { volume::saveVolume(labelsOnly(v), tmp); });
+    outputs.commit();
 
     if (o.common.json) {
         nlohmann::json j;

@@ -149,7 +149,6 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     if (live) std::cerr << '\n';
     const double wall = elapsed();
 
-    haptic::writeSession(session, model->layers(), o.out);
     const haptic::TraineeMetrics m = haptic::traineeMetrics(session, model->layers(), model->path().direction);
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
     nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success_dura_intact", m.success},
@@ -162,7 +161,12 @@ int run(const ServeOptions& o, const CLI::App& cmd)
                 {"max", loop.maxComputeNs()}}},
         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
         {"dropped_records", loop.droppedRecords()}, {"interrupted", InterruptGuard::interrupted()}};
-    writeStreamAtomically(fs::path(o.out) / "metrics.json", [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    // The session and its metrics replace an earlier run's together (OutputSet): never a new
+    // session.csv beside a stale metrics.json.
+    OutputSet outputs;
+    haptic::addSessionOutputs(outputs, session, model->layers(), o.out);
+    outputs.addStream(fs::path(o.out) / "metrics.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
+    outputs.commit();
     if (o.common.json) {
         std::cout << j.dump(2) << '\n';
         return 0;

@@ -2,6 +2,7 @@
 /// @file main.cpp
 /// @brief The `voxhap` command: subcommand dispatch and the one-line error convention.
 
+#include "core/AtomicFile.h"
 #include "core/Version.h"
 #include "tools/Cli.h"
 
@@ -11,6 +12,9 @@
 int main(int argc, char** argv)
 {
     using namespace voxhap::tools;
+    // A kill (SIGTERM, SIGHUP, Ctrl-C where a command does not handle it) removes the
+    // temporaries of unfinished outputs: no *.tmp.* file stays behind.
+    voxhap::installTemporaryFileCleanup();
     CLI::App app{"voxhap: needle-insertion force rendering from patient volumes.\n"
                  "World space is patient LPS in millimetres. Run `voxhap <command> --help` for details."};
     app.require_subcommand(1);

@@ -18,14 +18,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A CSV written whole or not at all, 10 significant digits; times are
-/// written with kTimeDigits (timeS below) so that they read back exactly.
-void writeCsv(const fs::path& file, const std::function<void(std::ostream&)>& fill)
+/// A CSV of 10 significant digits; times are written with TimeS (below) so
+/// that they read back exactly.
+std::function<void(std::ostream&)> csv(std::function<void(std::ostream&)> fill)
 {
-    writeStreamAtomically(file, [&](std::ostream& o) {
+    return [fill = std::move(fill)](std::ostream& o) {
         o << std::setprecision(10);
         fill(o);
-    });
+    };
 }
 
 /// Times with 17 significant digits: a double read back is the double written,
@@ -44,11 +44,12 @@ std::ostream& operator<<(std::ostream& o, TimeS t)
 
 } // namespace
 
-void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::path& dir)
+void addSessionOutputs(OutputSet& out, const Session& s, const std::vector<Layer>& layers, const fs::path& dir)
 {
     fs::create_directories(dir);
-    const auto layerName = [&](int i) { return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : ""; };
-    writeCsv(dir / "session.csv", [&](std::ostream& o) {
+    const auto layerName = [&layers](
+                               int i) { return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : ""; };
+    out.addStream(dir / "session.csv", csv([&s, layerName](std::ostream& o) {
         o << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
              "fault,critical,plunger_fraction\n";
         for (const ServoRecord& r : s.records) {
@@ -58,12 +59,19 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
               << ',' << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ','
               << int(r.critical) << ',' << r.plungerFraction << '\n';
         }
-    });
-    writeCsv(dir / "events.csv", [&](std::ostream& o) {
+    }));
+    out.addStream(dir / "events.csv", csv([&s, layerName](std::ostream& o) {
         o << "t_s,depth_mm,event,layer\n";
         for (const Event& e : s.events)
             o << TimeS{e.timeS} << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
-    });
+    }));
+}
+
+void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::path& dir)
+{
+    OutputSet out;
+    addSessionOutputs(out, s, layers, dir);
+    out.commit();
 }
 
 std::vector<ServoRecord> readSessionPoses(const fs::path& file)

@@ -6,6 +6,7 @@
 
 #include "haptic/servo/Device.h"
 #include "haptic/servo/ServoLoop.h"
+#include "core/AtomicFile.h"
 
 #include <filesystem>
 #include <optional>
@@ -21,8 +22,14 @@ struct Session {
 
 /// @brief session.csv: t_s, tip_x/y/z_mm, dir_x/y/z, fx/fy/fz_N, plunger_N, depth_mm,
 /// axial_N, layer, state, fault, critical, plunger_fraction; then events.csv: t_s, depth_mm, event,
-/// layer. Written to temporary files, then renamed.
+/// layer. Both written and flushed before either replaces an earlier session (OutputSet).
 void writeSession(const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
+
+/// @brief writeSession()'s two files added to @p out, for a caller that writes
+/// more outputs of the same run (serve's metrics.json) in one OutputSet.
+/// @p s and @p layers are read when @p out commits: they must outlive it.
+void addSessionOutputs(
+    OutputSet& out, const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
 
 /// @brief Read the pose columns of a session.csv back (columns after dir_z are ignored).
 /// @throw IoError when the file cannot be opened; ValueError, one line naming the
