@@ -160,7 +160,8 @@ int run(const ServeOptions& o, const CLI::App& cmd)
             {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
                 {"max", loop.maxComputeNs()}}},
         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
-        {"dropped_records", loop.droppedRecords()}, {"interrupted", InterruptGuard::interrupted()}};
+        {"dropped_records", loop.droppedRecords()}, {"pose_faults", m.poseFaults},
+        {"interrupted", InterruptGuard::interrupted()}};
     // The session and its metrics replace an earlier run's together (OutputSet): never a new
     // session.csv beside a stale metrics.json.
     OutputSet outputs;

@@ -148,9 +148,37 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
     double sum = 0, sum2 = 0, epidural = 0;
     long n = 0;
     bool inEpidural = false;
-    for (std::size_t i = 1; i < s.records.size(); ++i) {
-        const ServoRecord& a = s.records[i - 1];
+    // A record is a fault when no hand on the device could have produced it; the
+    // figures then skip it, comparing the next good record with the last good one.
+    std::vector<char> good(s.records.size(), 0);
+    for (std::size_t i = 0; i < s.records.size(); ++i) {
+        const ServoRecord& r = s.records[i];
+        good[i] = r.tip.allFinite() && std::isfinite(r.depthMm) && std::isfinite(r.timeS) &&
+            (r.tip - s.records.front().tip).norm() <= kWorkspaceReachMm;
+    }
+    std::size_t last = s.records.size();
+    for (std::size_t i = 0; i < s.records.size(); ++i) {
+        if (!good[i]) continue;
+        if (last < s.records.size()) {
+            const double dt = s.records[i].timeS - s.records[last].timeS;
+            if (dt > 0.0 && (s.records[i].tip - s.records[last].tip).norm() / dt > kMaxHandSpeedMmPerS) {
+                good[i] = 0; // a jump: keep comparing with the last good record
+                continue;
+            }
+        }
+        last = i;
+    }
+    for (const char g : good) m.poseFaults += !g;
+    std::size_t prev = s.records.size();
+    for (std::size_t i = 0; i < s.records.size(); ++i) {
+        if (!good[i]) continue;
+        if (prev == s.records.size()) {
+            prev = i;
+            continue;
+        }
+        const ServoRecord& a = s.records[prev];
         const ServoRecord& b = s.records[i];
+        prev = i;
         if (!m.insertionAngleDeg && b.timeS >= skinT) {
             m.insertionAngleDeg = std::acos(std::clamp(b.direction.normalized().dot(u), -1.0, 1.0)) * 180.0 / kPi;
         }

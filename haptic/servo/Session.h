@@ -66,7 +66,18 @@ struct TraineeMetrics {
     std::optional<double> overshootMm; ///< distance travelled inside the epidural space
     std::optional<double> syrrate;     ///< fraction emptied per metre [1/m]; null without a plunger channel
     double durationS = 0;
+    /// Records no hand on a desk-mounted device produces, left out of every
+    /// figure above: a non-finite tip, a tip more than kWorkspaceReachMm from the
+    /// session's first one, or a step faster than kMaxHandSpeedMmPerS.
+    long poseFaults = 0;
 };
+
+/// Farthest a tip may be from the session's first tip [mm]: beyond the largest
+/// desk-mounted haptic workspace (Phantom Premium 3.0: 838 × 584 × 406 mm) [chosen].
+inline constexpr double kWorkspaceReachMm = 1000.0;
+/// Fastest a hand moves a needle's tip [mm/s]: fast human reaching peaks near
+/// 2 m/s; 5 m/s leaves margin [chosen].
+inline constexpr double kMaxHandSpeedMmPerS = 5000.0;
 
 TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection);
 

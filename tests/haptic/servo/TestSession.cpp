@@ -10,6 +10,7 @@
 #include "core/Errors.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
+#include "haptic/Events.h"
 #include "haptic/servo/Session.h"
 #include "haptic/servo/SpscQueue.h"
 
@@ -17,6 +18,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <string>
 
 namespace voxhap::haptic {
@@ -117,6 +119,33 @@ TEST_F(SessionFile, WrittenTimesReadBackExactly)
     const std::vector<ServoRecord> back = readSessionPoses(mDir / "written" / "session.csv");
     ASSERT_EQ(back.size(), s.records.size());
     for (std::size_t i = 0; i < back.size(); ++i) EXPECT_EQ(back[i].timeS, s.records[i].timeS) << "record " << i;
+}
+
+// Poses no hand on the device makes (a tip 1e6 mm away, a NaN, a 50 mm jump in
+// one millisecond) are counted as faults and left out: the mean speed is that of
+// the steady 10 mm/s advance around them, not hundreds of metres per second.
+TEST(TraineeMetricsFaults, PosesOutsideTheWorkspaceAreFaultsNotSamples)
+{
+    Session s;
+    for (int i = 0; i <= 1000; ++i) {
+        ServoRecord r;
+        r.timeS = 0.001 * i;
+        r.depthMm = 0.01 * i; // 10 mm/s
+        r.tip = Vec3d(0.0, 0.0, r.depthMm);
+        r.direction = Vec3d(0.0, 0.0, 1.0);
+        if (i == 300) r.tip = Vec3d(1e6, 0.0, 0.0), r.depthMm = 1e6;
+        if (i == 500) r.tip.x() = std::numeric_limits<double>::quiet_NaN();
+        if (i == 700) r.tip.z() += 50.0, r.depthMm += 50.0;
+        s.records.push_back(r);
+    }
+    s.events.push_back({EventType::SkinEntry, 0.0, 0.0, 0});
+    const TraineeMetrics m = traineeMetrics(s, {}, Vec3d(0, 0, 1));
+    EXPECT_EQ(m.poseFaults, 3);
+    // Every good step advances 0.01 mm per ms (two across each skipped record):
+    // 10 mm/s exactly, up to the round-off of the decimal times.
+    constexpr double kSpeedRoundOff = 1e-6; // mm/s: times and depths of 1e-3 and 1e-2 steps in double
+    EXPECT_NEAR(m.speedMeanMmPerS, 10.0, kSpeedRoundOff);
+    EXPECT_LT(m.speedVarianceMm2PerS2, kSpeedRoundOff);
 }
 
 TEST(RecordQueue, FullQueueDropsCountsAndKeepsTheOldest)
