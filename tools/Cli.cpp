@@ -78,9 +78,15 @@ InterruptGuard::InterruptGuard()
 {
     gInterrupted = 0;
     mPrevious = std::signal(SIGINT, onInterrupt);
+    // SIGTERM (a service manager, kill) stops the same way: force released, outputs written.
+    mPreviousTerm = std::signal(SIGTERM, onInterrupt);
 }
 
-InterruptGuard::~InterruptGuard() { std::signal(SIGINT, mPrevious); }
+InterruptGuard::~InterruptGuard()
+{
+    std::signal(SIGINT, mPrevious);
+    std::signal(SIGTERM, mPreviousTerm);
+}
 
 bool InterruptGuard::interrupted() { return gInterrupted != 0; }
 

@@ -56,7 +56,7 @@ Vec3d parseSpacing(const std::string& text, const std::string& option);
 /// @brief Rotation from Euler angles in degrees (about x, then y, then z).
 Mat3d rotationFromDegrees(const Vec3d& degrees);
 
-/// @brief Ctrl-C as a request to stop: while a guard lives, SIGINT sets a flag
+/// @brief Ctrl-C and SIGTERM as a request to stop: while a guard lives, they set a flag
 /// that the command polls (interrupted()) instead of killing the process, so
 /// that it can stop cleanly and write what it has; the previous handler comes
 /// back when the guard goes, also when the command throws.
@@ -70,6 +70,7 @@ public:
 
 private:
     void (*mPrevious)(int);
+    void (*mPreviousTerm)(int);
 };
 
 /// @brief True when stderr is a terminal (progress output is shown only then).

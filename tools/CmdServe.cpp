@@ -144,7 +144,9 @@ int run(const ServeOptions& o, const CLI::App& cmd)
                       << session.events.size() << "        " << std::flush;
         }
     }
-    loop.stop();
+    // The hand may still hold the device: the force ramps to zero at the watchdog's
+    // rate and a zero force is sent before anything is written.
+    loop.releaseAndStop();
     drain();
     if (live) std::cerr << '\n';
     const double wall = elapsed();

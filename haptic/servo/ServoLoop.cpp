@@ -100,9 +100,12 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     constexpr double kTimeTolS = 1e-9; // sums of tick periods carry round-off
     const bool stalled = mQuietS > mOpt.watchdogS + kTimeTolS || lastPeriod > mOpt.watchdogS + kTimeTolS;
     const double step = mOpt.rampS > 0.0 ? std::max(dt, lastPeriod) / mOpt.rampS : 1.0;
-    mGain = r.lost ? 0.0 : stalled ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
+    const bool releasing = mReleasing.load(std::memory_order_relaxed);
+    mGain = r.lost ? 0.0 : stalled || releasing ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
     mLastForceVec = target;
     const Vec3d f = mGain * target;
+    // A release ends on the tick that sends zero.
+    if (releasing && mGain == 0.0) mReleased.store(true, std::memory_order_relaxed);
     mDevice.write(f, mOut.plungerN, t);
 
     ServoRecord rec;
@@ -132,7 +135,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
 void ServoLoop::runTicks(long n) noexcept
 {
     const double T = 1.0 / mOpt.rateHz;
-    for (long i = 0; i < n && !mDevice.finished(); ++i) {
+    for (long i = 0; i < n && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed); ++i) {
         tick(mSimTime, T, T);
         mSimTime += T;
     }
@@ -147,7 +150,8 @@ void ServoLoop::loop() noexcept
     bool first = true;
     const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
-    while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished()) {
+    while (
+        !mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed)) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
         clock.waitUntilNs(deadline, spin);
         const std::int64_t now = clock.nowNs();
@@ -171,6 +175,14 @@ void ServoLoop::start()
     if (mRunning.exchange(true)) return;
     mStop.store(false);
     mThread = std::thread([this] { loop(); });
+}
+
+void ServoLoop::releaseAndStop()
+{
+    beginRelease();
+    // The loop ends itself on the tick that sends zero (or when the device finishes).
+    if (mThread.joinable()) mThread.join();
+    mRunning.store(false);
 }
 
 void ServoLoop::stop()

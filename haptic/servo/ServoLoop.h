@@ -96,7 +96,19 @@ public:
 
     /// @brief Run on its own thread in real time until stop() or the device finishes.
     void start();
+    /// @brief Stop at once (the device keeps the last force it was sent: use
+    /// releaseAndStop() when a hand may be on it).
     void stop();
+    /// @brief Ramp the force down to zero at the watchdog's rate (1/rampS per
+    /// second: 50 ms from full force), send one zero force, then stop. What a
+    /// Ctrl-C or SIGTERM does before anything is written (physics.md §6.3).
+    /// Without a running thread the ramp happens on the next runTicks().
+    void releaseAndStop();
+    /// @brief Ask for the ramp to zero without waiting (runTicks() then ends
+    /// once a zero force was sent).
+    void beginRelease() noexcept { mReleasing.store(true); }
+    /// @brief The zero force that ends a release has been sent.
+    bool released() const noexcept { return mReleased.load(); }
     bool running() const noexcept { return mRunning.load(); }
     /// @brief Run @p ticks ticks now on the caller's thread, in simulated time (tests).
     void runTicks(long ticks) noexcept;
@@ -128,6 +140,7 @@ private:
     std::unique_ptr<SpscQueue<Event, 1024>> mEvents;
     std::unique_ptr<SpscQueue<ServoRecord, 1 << 16>> mRecords;
     std::atomic<bool> mRunning{false}, mStop{false};
+    std::atomic<bool> mReleasing{false}, mReleased{false};
     std::atomic<long> mTicks{0}, mOverruns{0};
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};

@@ -265,6 +265,16 @@ TEST_F(Cli, ServeStopsCleanlyOnInterrupt)
     EXPECT_TRUE(m["interrupted"].get<bool>());
     EXPECT_TRUE(fs::exists(mDir / "stopped" / "session.csv"));
     EXPECT_FALSE(fs::exists(mDir / "stopped" / "session.csv.part"));
+    // The force was released before the session was written: the last force sent is zero.
+    const std::string session = slurp(mDir / "stopped" / "session.csv");
+    const std::string last = session.substr(session.rfind('\n', session.size() - 2) + 1);
+    std::vector<std::string> fields;
+    std::stringstream row(last);
+    for (std::string f; std::getline(row, f, ',');) fields.push_back(f);
+    ASSERT_GE(fields.size(), 10u) << last;
+    EXPECT_EQ(std::stod(fields[7]), 0.0) << last; // fx_N
+    EXPECT_EQ(std::stod(fields[8]), 0.0) << last; // fy_N
+    EXPECT_EQ(std::stod(fields[9]), 0.0) << last; // fz_N
 }
 
 } // namespace

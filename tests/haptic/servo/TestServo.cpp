@@ -310,6 +310,35 @@ TEST(Servo, WatchdogGainOnEveryTickOfTheQuietRamp)
     }
 }
 
+// A release (Ctrl-C or SIGTERM in serve): from full force the gain falls by
+// 1/50 per tick, 1 − k/50, at the watchdog's rate; the tick that reaches zero
+// sends exactly zero and ends the run, before anything could be written.
+TEST(Servo, ReleaseRampsTheForceToZeroThenStops)
+{
+    const DeviceLimits dev = stiffDevice();
+    auto model = boneHold(dev);
+    ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 100.0), dev);
+    WindowDevice device(script); // never quiet: only the release lowers the gain
+    ServoLoop loop(*model, device);
+    loop.runTicks(100);
+    ASSERT_NEAR(device.force.norm(), kHoldN, kRoundN);
+    const long before = loop.ticks();
+    loop.beginRelease();
+    for (long k = 1; k <= 60 && !loop.released(); ++k) {
+        loop.runTicks(1);
+        const double g = std::max(0.0, 1.0 - double(k) * kTickS / kRampS);
+        EXPECT_NEAR(loop.watchdogGain(), g, kRoundN) << "release tick " << k;
+        EXPECT_TRUE(test::nearVec(device.force, Vec3d(0, 0, -g * kHoldN), kRoundN)) << "release tick " << k;
+    }
+    ASSERT_TRUE(loop.released());
+    EXPECT_EQ(device.force.norm(), 0.0); // the last force sent is zero, exactly
+    // 50 ms at 1 kHz, one more tick if round-off leaves the 50th a hair above zero.
+    EXPECT_GE(loop.ticks() - before, 50);
+    EXPECT_LE(loop.ticks() - before, 51);
+    loop.runTicks(10); // released: no further tick runs, nothing more is sent
+    EXPECT_LE(loop.ticks() - before, 51);
+}
+
 // The recovery: quiet for 45 ticks (gain 1 − 25/50 = 0.5), then the device answers
 // again and the gain climbs back by 1/50 per tick, 0.5 + j/50, to 1 after 25 ticks.
 TEST(Servo, WatchdogRampsBackWhenTheDeviceAnswersAgain)
