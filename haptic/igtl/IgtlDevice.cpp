@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -67,7 +68,9 @@ DeviceReading IgtlDevice::read(double) noexcept
         r.velocity[i] = mVel[i].load(std::memory_order_relaxed);
     }
     const double at = mPoseWallS.load(std::memory_order_acquire);
-    r.valid = connected && at >= 0.0 && detail::steadySeconds() - at <= mOpt.staleS;
+    const double age = at >= 0.0 ? detail::steadySeconds() - at : 0.0;
+    r.valid = connected && at >= 0.0 && age <= mOpt.staleS;
+    r.poseAgeS = std::max(0.0, age);
     return r;
 }
 

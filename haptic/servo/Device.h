@@ -22,6 +22,12 @@ struct DeviceReading {
     Vec3d velocity{0, 0, 0};  ///< [mm/s]
     bool valid = false;
     bool lost = false; ///< the link is gone: the force must be zero at once
+    /// How long ago the pose was measured [s]: 0 for devices read in the tick; a
+    /// network client's last pose ages between messages. The watchdog counts a
+    /// valid but aging pose as quiet time, so a client that stops sending has its
+    /// force ramped down 20 ms after its last pose, not 20 ms after the pose
+    /// stopped being valid.
+    double poseAgeS = 0.0;
     /// Fraction of the loss-of-resistance syringe emptied, 0..1, for devices with a
     /// plunger channel ([S19]'s pneumatic syringe); NaN otherwise.
     double plungerFraction = std::numeric_limits<double>::quiet_NaN();

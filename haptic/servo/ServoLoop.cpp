@@ -82,7 +82,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     const DeviceReading r = mDevice.read(t);
     Vec3d target = mLastForceVec;
     if (r.valid) {
-        mQuietS = 0.0;
+        mQuietS = r.poseAgeS; // an aging network pose is quiet time already spent
         NeedleInput in;
         in.timeS = t;
         in.dtS = dt;

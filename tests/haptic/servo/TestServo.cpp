@@ -339,6 +339,52 @@ TEST(Servo, ReleaseRampsTheForceToZeroThenStops)
     EXPECT_LE(loop.ticks() - before, 51);
 }
 
+// A network client that stops sending: its last pose stays valid for a while
+// (IgtlDevice's staleness) but ages 1 ms per tick. The watchdog counts that age
+// as quiet time: the gain is that of a device quiet since the last pose, so the
+// force is held at most 20 ms after it, not 20 ms after the pose goes stale.
+TEST(Servo, AnAgingPoseIsQuietTimeForTheWatchdog)
+{
+    class AgingDevice final : public Device {
+    public:
+        explicit AgingDevice(Device& inner) : mInner(inner) { }
+        DeviceReading read(double t) noexcept override
+        {
+            const long n = mReads++;
+            if (n < 100) return mLast = mInner.read(t);
+            DeviceReading r = mLast; // no new pose since read 99
+            r.poseAgeS = double(n - 99) * kTickS;
+            r.valid = r.poseAgeS <= 0.050; // IgtlDevice's default staleness
+            return r;
+        }
+        void write(const Vec3d& f, double p, double t) noexcept override
+        {
+            force = f;
+            mInner.write(f, p, t);
+        }
+        const DeviceLimits& limits() const noexcept override { return mInner.limits(); }
+        std::string name() const override { return "aging"; }
+        Vec3d force{0, 0, 0};
+
+    private:
+        Device& mInner;
+        DeviceReading mLast;
+        long mReads = 0;
+    };
+    const DeviceLimits dev = stiffDevice();
+    auto model = boneHold(dev);
+    ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 100.0), dev);
+    AgingDevice aging(script);
+    ServoLoop loop(*model, aging);
+    loop.runTicks(100);
+    ASSERT_NEAR(aging.force.norm(), kHoldN, kRoundN);
+    for (long q = 1; q <= 80; ++q) { // q ms since the last pose
+        loop.runTicks(1);
+        EXPECT_NEAR(loop.watchdogGain(), quietGain(q), kRoundN) << q << " ms after the last pose";
+    }
+    EXPECT_EQ(aging.force.norm(), 0.0);
+}
+
 // The recovery: quiet for 45 ticks (gain 1 − 25/50 = 0.5), then the device answers
 // again and the gain climbs back by 1/50 per tick, 0.5 + j/50, to 1 after 25 ticks.
 TEST(Servo, WatchdogRampsBackWhenTheDeviceAnswersAgain)
