@@ -189,7 +189,7 @@ Volume loadVolume(const std::filesystem::path& path, const LoadOptions& options,
     case VolumeFormat::Dicom:
         return loadDicom({path}, options.dicom, report);
     case VolumeFormat::Vdb:
-        return loadVdb(path);
+        return loadVdb(path, options.dicom.memoryCapBytes);
     case VolumeFormat::Nrrd:
     case VolumeFormat::Nifti:
     case VolumeFormat::MetaImage:

@@ -12,9 +12,17 @@
 #include <Eigen/Geometry>
 #include <openvdb/io/File.h>
 
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h> // for getpid: per-process temp names
+#include <iterator>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h> // for getpid: per-process temp names, fork
 
 namespace voxhap::volume {
 namespace {
@@ -118,6 +126,217 @@ TEST(VdbFile, BadFilesGiveOneClearError)
     density->setName("density");
     openvdb::io::File((dir / "foreign.vdb").string()).write({density});
     expectIoError(dir / "foreign.vdb", "found: density");
+}
+
+// ---------------------------------------------------------------------------
+// Hostile lengths (issue 20 item 1): refused before OpenVDB allocates from them.
+
+std::vector<char> readBytes(const fs::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const fs::path& file, const std::vector<char>& bytes)
+{
+    std::ofstream(file, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+/// Offset of the first @p what in @p bytes (a test failure when absent).
+std::size_t find(const std::vector<char>& bytes, const std::string& what)
+{
+    const auto it = std::search(bytes.begin(), bytes.end(), what.begin(), what.end());
+    EXPECT_NE(it, bytes.end()) << what;
+    return std::size_t(it - bytes.begin());
+}
+
+template <typename T> void put(std::vector<char>& bytes, std::size_t at, T value)
+{
+    ASSERT_LE(at + sizeof(T), bytes.size());
+    std::memcpy(bytes.data() + at, &value, sizeof(T));
+}
+
+/// A small voxhap .vdb (a slab phantom at 2 mm) as bytes.
+std::vector<char> smallVdb(const TempDir& dir)
+{
+    SlabParams p;
+    GridSpec g;
+    g.spacing = Vec3d(2, 2, 2);
+    const Volume v = makePhantom(slabModel(p, TissueTable::builtin()), g, TissueTable::builtin());
+    saveVdb(v, dir / "small.vdb");
+    return readBytes(dir / "small.vdb");
+}
+
+/// Address space of this process now [bytes].
+std::uint64_t addressSpace()
+{
+    std::ifstream statm("/proc/self/statm");
+    std::uint64_t pages = 0;
+    statm >> pages;
+    return pages * std::uint64_t(::sysconf(_SC_PAGESIZE));
+}
+
+/// Exit codes of the bounded child.
+enum : int {
+    kRefused = 0,
+    kLoaded = 1,
+    kOutOfMemory = 2,
+    kOther = 3,
+    kWrongMessage = 4
+};
+
+/// Load @p file in a forked child whose address space may grow by 1 GiB at
+/// most (RLIMIT_AS): the child's exit code says what happened.
+template <typename Load> int loadBounded(const fs::path& file, const std::string& fragment, Load load)
+{
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        const rlim_t limit = rlim_t(addressSpace() + (std::uint64_t(1) << 30));
+        const rlimit rl{limit, limit};
+        ::setrlimit(RLIMIT_AS, &rl);
+        int code = kOther;
+        try {
+            load(file);
+            code = kLoaded;
+        } catch (const IoError& e) {
+            const std::string msg = e.what();
+            const bool ok = msg.rfind(file.string() + ": ", 0) == 0 && msg.find('\n') == std::string::npos &&
+                msg.find(fragment) != std::string::npos;
+            if (!ok) std::fprintf(stderr, "unexpected refusal: %s\n", msg.c_str());
+            code = ok ? kRefused : kWrongMessage;
+        } catch (const std::bad_alloc&) {
+            code = kOutOfMemory;
+        } catch (...) {
+            code = kOther;
+        }
+        std::fflush(stderr);
+        ::_exit(code);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+int loadVdbBounded(const fs::path& file, const std::string& fragment)
+{
+    return loadBounded(file, fragment, [](const fs::path& f) { loadVdb(f); });
+}
+
+TEST(VdbFile, SixteenFfBytesAtOffset200AreRefusedWithinOneGiB)
+{
+    TempDir dir;
+    std::vector<char> bytes = smallVdb(dir);
+    ASSERT_GT(bytes.size(), 216u);
+    std::fill_n(bytes.begin() + 200, 16, char(0xFF));
+    writeBytes(dir / "ff.vdb", bytes);
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_EQ(loadVdbBounded(dir / "ff.vdb", "at byte "), kRefused);
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+    // The bound is real: OpenVDB alone, given the same file, asks for more (the issue saw 9 GB).
+    const int raw = loadBounded(dir / "ff.vdb", "", [](const fs::path& f) {
+        openvdb::io::File in(f.string());
+        in.open(false);
+        in.getGrids();
+    });
+    EXPECT_TRUE(raw == kOutOfMemory || raw >= 128) << "OpenVDB alone: exit " << raw;
+}
+
+struct Corruption {
+    std::string name;  ///< what is changed
+    std::string field; ///< what the refusal must name
+    std::function<void(std::vector<char>&)> apply;
+};
+
+TEST(VdbFile, HostileLengthsAreRefusedNamingFieldAndOffsetWithinOneGiB)
+{
+    TempDir dir;
+    const std::vector<char> good = smallVdb(dir);
+    const std::size_t metaCount = 8 + 4 + 8 + 1 + 36; // after magic, version, library version, flag, UUID
+    const std::vector<Corruption> cases = {
+        {"file metadata count", "file metadata count at byte 57",
+            [&](auto& b) { put<std::uint32_t>(b, metaCount, 0xFFFFFFFFu); }},
+        {"first metadata name length", "file metadata entry 0 name length at byte 61",
+            [&](auto& b) { put<std::uint32_t>(b, metaCount + 4, 0x7FFFFFF0u); }},
+        {"string metadata value length", "value",
+            [&](auto& b) { put<std::uint32_t>(b, find(b, "string") + 6, 0x7FFFFFF0u); }},
+        {"grid type length", "grid descriptor",
+            [&](auto& b) { put<std::uint32_t>(b, find(b, "Tree_float_5_4_3") - 4, 0xFFFFFF00u); }},
+        {"grid end position", "positions",
+            [&](auto& b) {
+                const std::size_t type = find(b, "Tree_float_5_4_3");
+                put<std::int64_t>(b, type + 16 + 4 + 16, std::int64_t(1) << 40); // after the empty parent name
+            }},
+        {"delayed-load entry count", "delayed-load",
+            [&](auto& b) { put<std::uint32_t>(b, find(b, "__delayedload") + 13 + 4, 0x0FFFFFFFu); }},
+        {"transform type length", "transform type length",
+            [&](auto& b) { put<std::uint32_t>(b, find(b, "UniformScaleTranslateMap") - 4, 0xFFFFFFF0u); }},
+        {"root child count", "root tile and child counts",
+            [&](auto& b) {
+                // UniformScaleTranslateMap (144 bytes), buffer count, background, tile count, child count
+                const std::size_t mapEnd = find(b, "UniformScaleTranslateMap") + 24 + 144;
+                put<std::uint32_t>(b, mapEnd + 4 + 4 + 4, 0x00FFFFFFu);
+            }},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.name);
+        std::vector<char> bytes = good;
+        c.apply(bytes);
+        ASSERT_NE(bytes, good);
+        const fs::path file = dir / "bad.vdb";
+        writeBytes(file, bytes);
+        EXPECT_EQ(loadVdbBounded(file, c.field), kRefused);
+        try {
+            loadVdb(file);
+            ADD_FAILURE() << "loaded";
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("at byte "), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(VdbFile, EveryTruncationIsRefused)
+{
+    TempDir dir;
+    const std::vector<char> good = smallVdb(dir);
+    for (std::size_t n = 0; n < good.size(); n += std::max<std::size_t>(1, good.size() / 97)) {
+        writeBytes(dir / "cut.vdb", std::vector<char>(good.begin(), good.begin() + std::ptrdiff_t(n)));
+        EXPECT_THROW(loadVdb(dir / "cut.vdb"), IoError) << n << " bytes";
+    }
+}
+
+TEST(VdbFile, MemoryCapRefusesLargeTreesBeforeReading)
+{
+    TempDir dir;
+    smallVdb(dir);
+    const fs::path file = dir / "small.vdb";
+    try {
+        loadVdb(file, std::uint64_t(1) << 16);
+        ADD_FAILURE() << "loaded over the cap";
+    } catch (const IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+        EXPECT_NE(msg.find("memory cap of 1 MiB"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("--memory-cap"), std::string::npos) << msg;
+    }
+    EXPECT_NO_THROW(loadVdb(file, std::uint64_t(64) << 20));
+}
+
+TEST(VdbFile, ValidFileLoadsTheSameAfterTheWalk)
+{
+    TempDir dir;
+    LumbarParams p;
+    p.grid.spacing = Vec3d(1, 1, 1);
+    Volume v = makePhantom(lumbarModel(p, TissueTable::builtin()), p.grid, TissueTable::builtin());
+    saveVdb(v, dir / "v.vdb");
+    initializeOpenVdb();
+    openvdb::io::File raw((dir / "v.vdb").string());
+    raw.open(false);
+    const auto rawHu = openvdb::gridPtrCast<FloatGrid>(raw.readGrid("hu"));
+    raw.close();
+    const Volume back = loadVdb(dir / "v.vdb");
+    expectSameVoxels(*rawHu, *huGrid(back));
+    expectSameVoxels(*huGrid(v), *huGrid(back));
+    expectSameVoxels(*labelGrid(v), *labelGrid(back));
 }
 
 TEST(VdbFile, FailedWriteLeavesNothingBehind)
