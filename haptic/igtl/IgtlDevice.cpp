@@ -57,6 +57,8 @@ IgtlDevice::~IgtlDevice()
     if (mListen >= 0) ::close(mListen);
 }
 
+double IgtlDevice::now() const noexcept { return mOpt.clock ? mOpt.clock() : detail::steadySeconds(); }
+
 DeviceReading IgtlDevice::read(double) noexcept
 {
     DeviceReading r; // the last pose received, whether or not it is still current
@@ -68,7 +70,7 @@ DeviceReading IgtlDevice::read(double) noexcept
         r.velocity[i] = mVel[i].load(std::memory_order_relaxed);
     }
     const double at = mPoseWallS.load(std::memory_order_acquire);
-    const double age = at >= 0.0 ? detail::steadySeconds() - at : 0.0;
+    const double age = at >= 0.0 ? now() - at : 0.0;
     r.valid = connected && at >= 0.0 && age <= mOpt.staleS;
     r.poseAgeS = std::max(0.0, age);
     return r;
@@ -133,7 +135,7 @@ bool IgtlDevice::handleMessage(int fd) noexcept
         break;
     }
     dir.normalize();
-    const double now = detail::steadySeconds();
+    const double now = this->now();
     const double before = mPoseWallS.load();
     Vec3d vel = Vec3d::Zero();
     if (before >= 0.0 && now - before > 1e-4) {
@@ -154,33 +156,55 @@ bool IgtlDevice::handleMessage(int fd) noexcept
 void IgtlDevice::serve() noexcept
 {
     int client = -1;
+    double heard = 0.0; // when the client last sent a message (or connected)
+    bool spoke = false; // it has sent one
+    const auto drop = [&] {
+        mConnected.store(false, std::memory_order_release);
+        ::close(client);
+        client = -1;
+        mCounters.disconnects.fetch_add(1);
+    };
+    const auto adopt = [&](int c) {
+        const int one = 1;
+        ::setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        client = c;
+        heard = now();
+        spoke = false;
+        mPoseWallS.store(-1.0);
+        mConnected.store(true, std::memory_order_release);
+        mCounters.connections.fetch_add(1);
+    };
     while (!mStop.load()) {
         pollfd fds[2] = {{mListen, POLLIN, 0}, {client, POLLIN, 0}};
         const int n = ::poll(fds, client >= 0 ? 2 : 1, 10);
         if (n < 0 && errno != EINTR) break;
         if (fds[0].revents & POLLIN) {
             const int c = ::accept(mListen, nullptr, nullptr);
-            if (c >= 0 && client >= 0) {
-                ::close(c); // one client at a time
+            if (c >= 0 && client >= 0 && now() - heard > mOpt.replaceSilentS) {
+                drop(); // a silent client gives way to a newcomer
+                mCounters.replaced.fetch_add(1);
+                adopt(c);
+            } else if (c >= 0 && client >= 0) {
+                ::close(c); // one controlling client, and it is alive
+                mCounters.refused.fetch_add(1);
             } else if (c >= 0) {
-                const int one = 1;
-                ::setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-                client = c;
-                mPoseWallS.store(-1.0);
-                mConnected.store(true, std::memory_order_release);
-                mCounters.connections.fetch_add(1);
+                adopt(c);
             }
         }
         if (client >= 0) {
             bool ok = true;
-            if (fds[1].revents & (POLLIN | POLLHUP | POLLERR)) ok = handleMessage(client);
-            if (ok) sendEvents(client);
-            if (!ok) {
-                mConnected.store(false, std::memory_order_release);
-                ::close(client);
-                client = -1;
-                mCounters.disconnects.fetch_add(1);
+            if (fds[1].revents & (POLLIN | POLLHUP | POLLERR)) {
+                ok = handleMessage(client);
+                heard = now();
+                spoke = true;
             }
+            if (ok) sendEvents(client);
+            // Silence: no first message in time, or none for idleS since the last.
+            if (ok && now() - heard > (spoke ? mOpt.idleS : mOpt.firstMessageS)) {
+                ok = false;
+                mCounters.timeouts.fetch_add(1);
+            }
+            if (!ok) drop();
         }
     }
     if (client >= 0) ::close(client);

@@ -35,11 +35,24 @@ struct IgtlOptions {
     std::uint64_t maxBodyBytes = 65536; ///< larger bodies drop the connection
     double receiveTimeoutS = 0.5;       ///< a message must arrive whole within this
     double staleS = 0.050;              ///< a pose older than this is not valid [chosen]
+    /// Connection policy: one controlling client. A new connection must send its
+    /// first message within firstMessageS; a client silent for idleS is dropped;
+    /// a newcomer replaces a client silent for replaceSilentS, and is refused
+    /// (closed) otherwise. Dropping the client zeroes the force at once.
+    double firstMessageS = 2.0;   ///< [chosen]: a tracker sends its first pose at once
+    double idleS = 5.0;           ///< [chosen]
+    double replaceSilentS = 0.25; ///< [chosen]: five times the staleness
+    /// The clock of the timeouts and of pose ages [s]; null: the steady clock
+    /// (tests pass a simulated one).
+    double (*clock)() = nullptr;
 };
 
 /// @brief Counters for tests and the status line (all updated by the network thread).
 struct IgtlCounters {
     std::atomic<long> connections{0}, disconnects{0}, poses{0}, forcesSent{0}, eventsSent{0}, rejected{0};
+    std::atomic<long> timeouts{0}; ///< clients dropped for silence (first message or idle)
+    std::atomic<long> refused{0};  ///< newcomers closed while a live client controls the device
+    std::atomic<long> replaced{0}; ///< silent clients replaced by a newcomer
 };
 
 class IgtlDevice final : public Device {
@@ -65,6 +78,7 @@ private:
     bool handleMessage(int fd) noexcept; ///< false: drop the connection
     void sendForce(int fd) noexcept;
     void sendEvents(int fd) noexcept;
+    double now() const noexcept;
 
     IgtlOptions mOpt;
     DeviceLimits mLimits;

@@ -41,7 +41,10 @@ int listenTcp(const std::string& bindAddress, int port, const std::string& what,
         ::close(fd);
         throw IoError(what + ": bad bind address '" + bindAddress + "'");
     }
-    if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 1) != 0) {
+    // A real backlog: clients that connect while another is served wait to be
+    // accepted (and refused or adopted by the server's policy) instead of failing.
+    constexpr int kListenBacklog = 16;
+    if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, kListenBacklog) != 0) {
         const std::string why = std::strerror(errno);
         ::close(fd);
         throw IoError(what + ": cannot listen on " + bindAddress + ":" + std::to_string(port) + ": " + why);

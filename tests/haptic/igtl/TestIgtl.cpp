@@ -23,6 +23,7 @@
 #include <Eigen/Geometry> // for cross and unitOrthogonal
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <thread>
@@ -222,6 +223,76 @@ TEST(Igtl, DisconnectZeroesTheForceWithinOneTick)
     ASSERT_TRUE(waitFor([&] { return !dev.connected(); }));
     loop.runTicks(1);
     EXPECT_EQ(loop.lastForceN(), 0.0);
+}
+
+} // namespace
+} // namespace voxhap::haptic
+
+namespace voxhap::haptic {
+namespace {
+
+/// The connection policy's clock, moved by the tests (IgtlOptions::clock).
+std::atomic<double> gPolicyNow{0.0};
+double policyNow() { return gPolicyNow.load(); }
+
+IgtlOptions policyClock()
+{
+    IgtlOptions o = anyPort();
+    o.clock = policyNow;
+    gPolicyNow.store(0.0);
+    return o;
+}
+
+// A connection that never speaks holds the only client slot until the
+// first-message deadline (2 s on the policy clock), then is dropped.
+TEST(IgtlPolicy, SilentNewcomerIsDroppedAtTheFirstMessageDeadline)
+{
+    IgtlDevice dev(policyClock(), DeviceLimits{});
+    RawClient silent(dev.port());
+    ASSERT_TRUE(silent.ok());
+    ASSERT_TRUE(waitFor([&] { return dev.counters().connections.load() == 1; }));
+    gPolicyNow.store(1.9); // within the deadline
+    ASSERT_TRUE(waitFor([&] { return dev.connected(); }));
+    EXPECT_EQ(dev.counters().timeouts.load(), 0);
+    gPolicyNow.store(2.1);
+    ASSERT_TRUE(waitFor([&] { return dev.counters().timeouts.load() == 1; }));
+    EXPECT_TRUE(waitFor([&] { return !dev.connected(); }));
+    EXPECT_TRUE(dev.read(0.0).lost); // the force goes to zero at once
+}
+
+// A client that sent a pose and then went quiet is dropped after 5 s of silence.
+TEST(IgtlPolicy, IdleClientIsDroppedAfterItsTimeout)
+{
+    IgtlDevice dev(policyClock(), DeviceLimits{});
+    RawClient client(dev.port());
+    client.sendPose(Vec3d(1, 2, 3));
+    ASSERT_TRUE(waitFor([&] { return dev.counters().poses.load() == 1; }));
+    gPolicyNow.store(4.9);
+    ASSERT_TRUE(waitFor([&] { return dev.connected(); }));
+    EXPECT_EQ(dev.counters().timeouts.load(), 0);
+    gPolicyNow.store(5.1);
+    ASSERT_TRUE(waitFor([&] { return dev.counters().timeouts.load() == 1; }));
+}
+
+// One controlling client: a newcomer is refused while the client is alive, and
+// takes over once the client has been silent longer than 0.25 s.
+TEST(IgtlPolicy, NewcomerIsRefusedByALiveClientAndReplacesASilentOne)
+{
+    IgtlDevice dev(policyClock(), DeviceLimits{});
+    RawClient first(dev.port());
+    first.sendPose(Vec3d(1, 2, 3));
+    ASSERT_TRUE(waitFor([&] { return dev.counters().poses.load() == 1; }));
+    gPolicyNow.store(0.1); // the first client spoke 0.1 s ago
+    RawClient second(dev.port());
+    ASSERT_TRUE(waitFor([&] { return dev.counters().refused.load() == 1; }));
+    EXPECT_EQ(dev.counters().connections.load(), 1);
+    gPolicyNow.store(0.4); // silent for 0.4 s
+    RawClient third(dev.port());
+    ASSERT_TRUE(waitFor([&] { return dev.counters().replaced.load() == 1; }));
+    EXPECT_EQ(dev.counters().connections.load(), 2);
+    third.sendPose(Vec3d(4, 5, 6));
+    ASSERT_TRUE(waitFor([&] { return dev.counters().poses.load() == 2; }));
+    EXPECT_EQ(dev.read(0.0).tip, Vec3d(4, 5, 6)); // the newcomer controls the device
 }
 
 } // namespace
