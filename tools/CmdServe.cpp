@@ -97,6 +97,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     auto device = makeDevice(o, cmd, *model, scene, duration);
     haptic::ServoOptions so;
     so.rateHz = scene.rateHz;
+    so.realtime = true; // SCHED_FIFO and locked memory when allowed; one line below when not
     haptic::ServoLoop loop(*model, *device, so);
     // The live needle for `voxhap view --listen`: sent from this (status) thread,
     // never the servo thread, at about 50 Hz (a display rate).
@@ -125,6 +126,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     };
     if (!InterruptGuard::interrupted()) {
         loop.start();
+        if (!loop.realtimeStatus().why.empty()) std::cerr << "voxhap serve: " << loop.realtimeStatus().why << '\n';
         // One line when stderr is not a terminal (a script, a test harness):
         // from here on Ctrl-C stops the loop and writes the session.
         if (!live) std::cerr << "voxhap serve: running (Ctrl-C stops and writes the session)\n" << std::flush;

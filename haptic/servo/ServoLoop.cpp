@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <cerrno>
+#include <cstring>
+#include <sys/mman.h>
 #include <sys/prctl.h>
 
 namespace voxhap::haptic {
@@ -150,6 +153,14 @@ void ServoLoop::loop() noexcept
     bool first = true;
     const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
+    if (mOpt.realtime) {                    // before the first tick; start() reports the outcome
+        sched_param p{};
+        p.sched_priority = mOpt.realtimePriority;
+        const int rc = (mOpt.setScheduler ? mOpt.setScheduler : pthread_setschedparam)(pthread_self(), SCHED_FIFO, &p);
+        mSchedError.store(rc);
+    } else {
+        mSchedError.store(0);
+    }
     while (
         !mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed)) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
@@ -174,7 +185,39 @@ void ServoLoop::start()
 {
     if (mRunning.exchange(true)) return;
     mStop.store(false);
+    mRealtime = RealtimeStatus{};
+    mRealtime.requested = mOpt.realtime;
+    mRealtime.priority = mOpt.realtime ? mOpt.realtimePriority : 0;
+    std::string why;
+    if (mOpt.realtime && mOpt.lockMemory) {
+        // Locked memory: no page fault on the servo path (current and future pages).
+        mRealtime.memoryLocked = ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+        if (!mRealtime.memoryLocked)
+            why =
+                std::string("memory not locked (") + std::strerror(errno) + "): grant CAP_IPC_LOCK or raise ulimit -l";
+    }
+    mSchedError.store(-1);
     mThread = std::thread([this] { loop(); });
+    if (mOpt.pinCpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(mOpt.pinCpu, &set);
+        mRealtime.pinned = pthread_setaffinity_np(mThread.native_handle(), sizeof set, &set) == 0;
+        if (!mRealtime.pinned)
+            why += std::string(why.empty() ? "" : "; ") + "not pinned to CPU " + std::to_string(mOpt.pinCpu);
+    }
+    // The thread reports its scheduling before its first tick (never from the tick).
+    while (mSchedError.load() < 0 && mRunning.load()) std::this_thread::yield();
+    const int err = mSchedError.load();
+    mRealtime.scheduled = mOpt.realtime && err == 0;
+    if (mOpt.realtime && err != 0) {
+        why = "real-time scheduling refused (" + std::string(std::strerror(err > 0 ? err : EPERM)) +
+            "): the servo loop runs at normal priority; run as root, grant CAP_SYS_NICE (setcap "
+            "cap_sys_nice,cap_ipc_lock+ep "
+            "voxhap) or raise the rtprio limit (ulimit -r " +
+            std::to_string(mOpt.realtimePriority) + ")" + (why.empty() ? "" : "; " + why);
+    }
+    mRealtime.why = why;
 }
 
 void ServoLoop::releaseAndStop()

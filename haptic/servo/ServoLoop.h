@@ -16,6 +16,9 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <pthread.h>
+#include <sched.h>
+#include <string>
 #include <thread>
 
 namespace voxhap::haptic {
@@ -56,6 +59,29 @@ struct ServoOptions {
     /// The clock of the real-time loop; null: monotonicServoClock(). Set before
     /// start(); it must outlive the loop.
     ServoClock* clock = nullptr;
+    /// Real-time thread (issue 20 item 8): SCHED_FIFO at realtimePriority and the
+    /// process's memory locked (mlockall), when the process may (root,
+    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits); otherwise the
+    /// loop runs at normal priority and realtimeStatus() says how to grant it.
+    /// Off by default (tests and batch runs); serve and bench servo turn it on.
+    bool realtime = false;
+    int realtimePriority = 80; ///< of 1..99: above interrupt threads (50), below the watchdogs (99) [chosen]
+    bool lockMemory = true;    ///< with realtime: mlockall (process-wide, kept after the loop)
+    /// Pin the loop to this CPU (-1: no pinning).
+    int pinCpu = -1;
+    /// The scheduler call (tests replace it to see the request and to refuse it);
+    /// null: pthread_setschedparam.
+    int (*setScheduler)(pthread_t, int, const sched_param*) = nullptr;
+};
+
+/// @brief What the loop got of what ServoOptions::realtime asked for.
+struct RealtimeStatus {
+    bool requested = false;
+    bool scheduled = false; ///< SCHED_FIFO granted
+    bool memoryLocked = false;
+    bool pinned = false;
+    int priority = 0; ///< the priority asked for
+    std::string why;  ///< one line when something was refused: what and how to grant it
 };
 
 /// @brief One tick, for the session record.
@@ -110,6 +136,8 @@ public:
     /// @brief The zero force that ends a release has been sent.
     bool released() const noexcept { return mReleased.load(); }
     bool running() const noexcept { return mRunning.load(); }
+    /// @brief After start(): what real-time scheduling the loop thread got.
+    const RealtimeStatus& realtimeStatus() const noexcept { return mRealtime; }
     /// @brief Run @p ticks ticks now on the caller's thread, in simulated time (tests).
     void runTicks(long ticks) noexcept;
 
@@ -141,6 +169,8 @@ private:
     std::unique_ptr<SpscQueue<ServoRecord, 1 << 16>> mRecords;
     std::atomic<bool> mRunning{false}, mStop{false};
     std::atomic<bool> mReleasing{false}, mReleased{false};
+    RealtimeStatus mRealtime;
+    std::atomic<int> mSchedError{-1}; ///< set by the loop thread: 0 granted, else errno
     std::atomic<long> mTicks{0}, mOverruns{0};
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};

@@ -385,6 +385,58 @@ TEST(Servo, AnAgingPoseIsQuietTimeForTheWatchdog)
     EXPECT_EQ(aging.force.norm(), 0.0);
 }
 
+// The real-time policy (issue 20 item 8): the loop thread asks for SCHED_FIFO at
+// the configured priority before its first tick; when that is refused the loop
+// still runs, and realtimeStatus() carries one line saying how to grant it.
+std::atomic<int> gAskedPolicy{-1}, gAskedPriority{-1};
+int refuseScheduler(pthread_t, int policy, const sched_param* p)
+{
+    gAskedPolicy = policy;
+    gAskedPriority = p->sched_priority;
+    return EPERM;
+}
+int grantScheduler(pthread_t, int policy, const sched_param* p)
+{
+    gAskedPolicy = policy;
+    gAskedPriority = p->sched_priority;
+    return 0;
+}
+
+TEST(Servo, RealTimeSchedulingIsRequestedAndARefusalSaysHowToGrantIt)
+{
+    const DeviceLimits dev = stiffDevice();
+    for (const bool refuse : {true, false}) {
+        auto model = boneHold(dev);
+        ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 0.2), dev);
+        ServoOptions o;
+        o.realtime = true;
+        o.realtimePriority = 70;
+        o.setScheduler = refuse ? refuseScheduler : grantScheduler;
+        o.lockMemory = false; // mlockall would stay for the rest of this test program
+        gAskedPolicy = gAskedPriority = -1;
+        ServoLoop loop(*model, script, o);
+        loop.start();
+        const RealtimeStatus st = loop.realtimeStatus();
+        // A deadline only so that a broken loop cannot hang the suite; no rate is asserted.
+        const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+        while (loop.ticks() == 0 && std::chrono::steady_clock::now() < end)
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        loop.stop();
+        EXPECT_EQ(gAskedPolicy.load(), SCHED_FIFO);
+        EXPECT_EQ(gAskedPriority.load(), 70);
+        EXPECT_TRUE(st.requested);
+        EXPECT_EQ(st.scheduled, !refuse);
+        if (refuse) {
+            EXPECT_NE(st.why.find("real-time scheduling refused"), std::string::npos) << st.why;
+            EXPECT_NE(st.why.find("CAP_SYS_NICE"), std::string::npos) << st.why;
+            EXPECT_EQ(st.why.find('\n'), std::string::npos) << "one line";
+        } else {
+            EXPECT_TRUE(st.why.empty()) << st.why;
+        }
+        EXPECT_GT(loop.ticks(), 0); // refused or not, the loop ran
+    }
+}
+
 // The recovery: quiet for 45 ticks (gain 1 − 25/50 = 0.5), then the device answers
 // again and the gain climbs back by 1/50 per tick, 0.5 + j/50, to 1 after 25 ticks.
 TEST(Servo, WatchdogRampsBackWhenTheDeviceAnswersAgain)
