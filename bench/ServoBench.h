@@ -22,6 +22,11 @@ struct ServoBenchOptions {
     std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
     double ladderSeconds = 2.0;
     double igtlSeconds = 10.0; ///< the OpenIGTLink round-trip run
+    /// CPU-bound processes (a busy loop each, normal priority, like `yes > /dev/null`)
+    /// running beside the loop for the whole benchmark.
+    int load = 0;
+    bool realtime = true; ///< ask for SCHED_FIFO and locked memory (ServoOptions::realtime)
+    int repeats = 1;      ///< 1 kHz runs per scene; the report gives each and their median
 };
 
 struct ServoRun {
@@ -30,6 +35,8 @@ struct ServoRun {
     long ticks = 0, overruns = 0;
     double computeP50Ns = 0, computeP99Ns = 0, computeMaxNs = 0;
     double periodErrP50Ns = 0, periodErrP99Ns = 0;
+    bool realtime = false; ///< SCHED_FIFO was granted
+    double stealS = 0;     ///< host steal time during the run, all CPUs [s] (/proc/stat)
 };
 
 /// @brief OpenIGTLink pose → force round trip on loopback, the servo running.
@@ -40,8 +47,11 @@ struct IgtlRoundTrip {
 
 struct ServoReport {
     std::string machine;
-    std::vector<ServoRun> runs;                                ///< the long run at 1 kHz, per scene
-    std::vector<ServoRun> ladder;                              ///< per scene and rate
+    int load = 0;                 ///< busy processes beside the loop
+    std::string realtimeNote;     ///< why real-time scheduling was refused, if it was
+    std::vector<ServoRun> median; ///< per scene: the median over repeats of achieved rate, jitter p99, overruns
+    std::vector<ServoRun> runs;   ///< the long run at 1 kHz, per scene
+    std::vector<ServoRun> ladder; ///< per scene and rate
     std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene
     IgtlRoundTrip igtl;                                        ///< at 1 kHz on the first scene
 };
