@@ -2,9 +2,13 @@
 /// @file JsonFields.h
 /// @brief Strict reading of one JSON object for the project's data files
 /// (scenes, plans): unknown keys and wrong types are refused with one line
-/// "origin: field.path: why" (architecture.md "Errors").
+/// "origin: field.path: why" (architecture.md "Errors"). Files are read
+/// through core/BoundedRead.h (regular files of at most 16 MiB), and every
+/// nlohmann::json exception, not only a syntax error, becomes one line naming
+/// the file.
 #pragma once
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "core/Math.h"
 
@@ -12,9 +16,11 @@
 
 #include <cmath>
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace voxhap {
@@ -37,6 +43,27 @@ public:
             if (!mSeen.count(k)) fail(k, "unknown field");
         }
     }
+    /// @brief Parse @p text; any nlohmann::json exception becomes
+    /// ValueError "origin: not valid JSON (why)".
+    static Json parse(std::string_view text, const std::string& origin) { return parseJsonText(text, origin); }
+    /// @brief Read and parse @p file (a regular file within the 16 MiB limit).
+    /// @throw IoError from readBoundedFile(), ValueError from parse()
+    static Json readFile(const std::filesystem::path& file, std::string_view what) { return readJsonFile(file, what); }
+    /// @brief Run @p read (which walks a parsed document); an nlohmann::json
+    /// exception that escapes it (a value of a type the walk did not expect)
+    /// becomes ValueError "origin: why" on one line.
+    template <typename Read> static auto guarded(const std::string& origin, Read&& read) -> decltype(read())
+    {
+        try {
+            return read();
+        } catch (const Json::exception& e) {
+            std::string why = e.what();
+            for (char& c : why) {
+                if (c == '\n' || c == '\r') c = ' ';
+            }
+            throw ValueError(origin + ": " + why);
+        }
+    }
     [[noreturn]] void fail(const std::string& key, const std::string& why) const
     {
         throw ValueError(mOrigin + ": " + (mPath.empty() ? key : key.empty() ? mPath : mPath + "." + key) + ": " + why);
@@ -49,6 +76,7 @@ public:
     const Json& raw(const std::string& k)
     {
         mSeen.insert(k);
+        if (!mJ.contains(k)) fail(k, "missing");
         return mJ.at(k);
     }
     double number(const std::string& k, double def, bool positive = false)

@@ -3,6 +3,7 @@
 #include "planning/Markups.h"
 
 #include "core/AtomicFile.h"
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
@@ -61,12 +62,7 @@ void writeMarkups(const std::vector<MarkupLine>& lines, const std::filesystem::p
 
 std::vector<MarkupLine> parseMarkups(std::string_view json, const std::string& origin)
 {
-    Json j;
-    try {
-        j = Json::parse(json.begin(), json.end());
-    } catch (const Json::parse_error& e) {
-        throw ValueError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
-    }
+    const Json j = parseJsonText(json, origin); // any nlohmann::json exception, on one line
     const auto fail = [&](const std::string& field, const std::string& why) {
         throw ValueError(origin + ": " + field + ": " + why);
     };
@@ -109,11 +105,7 @@ std::vector<MarkupLine> parseMarkups(std::string_view json, const std::string& o
 
 std::vector<MarkupLine> loadMarkups(const std::filesystem::path& file)
 {
-    std::ifstream in(file);
-    if (!in) throw IoError(file.string() + ": cannot open the markups file");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parseMarkups(text.str(), file.string());
+    return parseMarkups(readBoundedFile(file, "markups file"), file.string()); // regular, at most 16 MiB
 }
 
 } // namespace voxhap::planning

@@ -4,6 +4,7 @@
 
 #include "segmentation/LabelImport.h"
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
 #include "core/JsonFields.h"
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <fstream>
@@ -19,13 +21,17 @@
 
 namespace voxhap::segmentation {
 
-LabelMapping parseLabelMapping(const std::string& text, const std::string& origin, const volume::TissueTable& table)
+namespace {
+
+LabelMapping readLabelMapping(const std::string& text, const std::string& origin, const volume::TissueTable& table)
 {
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
-        throw ValueError(origin + ": not JSON (" + std::string(e.what()) + ")");
+        std::string why = e.what();
+        std::replace(why.begin(), why.end(), '\n', ' ');
+        throw ValueError(origin + ": not JSON (" + why + ")");
     }
     LabelMapping m;
     m.origin = origin;
@@ -65,13 +71,18 @@ LabelMapping parseLabelMapping(const std::string& text, const std::string& origi
     return m;
 }
 
+} // namespace
+
+LabelMapping parseLabelMapping(const std::string& text, const std::string& origin, const volume::TissueTable& table)
+{
+    // Every nlohmann::json exception of the walk (a value of an unexpected type) on one line.
+    return JsonFields::guarded(origin, [&] { return readLabelMapping(text, origin, table); });
+}
+
 LabelMapping loadLabelMapping(const std::filesystem::path& file, const volume::TissueTable& table)
 {
-    std::ifstream in(file);
-    if (!in) throw IoError(file.string() + ": cannot open the label mapping");
-    std::ostringstream s;
-    s << in.rdbuf();
-    LabelMapping m = parseLabelMapping(s.str(), file.string(), table);
+    // A regular file within the size limit: not a FIFO, /dev/zero or a huge file.
+    LabelMapping m = parseLabelMapping(readBoundedFile(file, "label mapping"), file.string(), table);
     if (!m.file.empty() && m.file.is_relative()) m.file = file.parent_path() / m.file;
     return m;
 }

@@ -9,6 +9,7 @@
 #include "tools/InfoReport.h"
 #include "tools/LoadOptions.h"
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "volume/VolumeFile.h"
 
@@ -114,6 +115,8 @@ void printSkipped(std::ostream& os, const std::vector<volume::DicomSkippedFile>&
 int run(const InfoOptions& o)
 {
     const volume::TissueTable& table = tissueTable(o.common);
+    // A FIFO or a device (/dev/zero) is refused before formatOf() opens it to look for DICOM.
+    requireRegularFile(o.file, "volume", /*allowDirectory=*/true);
     const bool dicom = volume::formatOf(o.file) == volume::VolumeFormat::Dicom;
     const volume::LoadOptions options = loadOptions(o.reader, false);
     std::optional<volume::DicomCatalog> catalog;

@@ -8,6 +8,7 @@
 
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/scene/Scene.h"
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 
 #include <cmath>
@@ -44,6 +45,7 @@ haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSou
         return s;
     }
     if (!fs::exists(input)) throw IoError(input + ": no such volume (or phantom: lumbar[:preset], torso)");
+    requireRegularFile(input, "volume", /*allowDirectory=*/true); // not a FIFO or a device
     s.file = input;
     return s;
 }

@@ -6,6 +6,8 @@
 
 #include "tools/Cli.h"
 
+#include "core/BoundedRead.h"
+
 #include <cmath>
 #include <iostream>
 
@@ -82,6 +84,8 @@ void clearProgress()
 volume::Volume loadVolumeWithProgress(
     const std::string& path, const ReaderOptions& opts, bool showProgress, volume::DicomLoadReport* report)
 {
+    // A FIFO or a device (/dev/zero, /dev/urandom) is refused before anything opens it.
+    requireRegularFile(path, "volume", /*allowDirectory=*/true);
     try {
         auto loaded = volume::loadVolume(path, loadOptions(opts, showProgress), report);
         clearProgress();

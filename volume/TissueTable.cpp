@@ -4,7 +4,9 @@
 
 #include "volume/TissueTable.h"
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
+#include "core/JsonFields.h"
 
 #include <nlohmann/json.hpp>
 
@@ -284,41 +286,43 @@ TissueTable TissueTable::parse(std::string_view text, const std::string& origin)
         // A literal beyond double range (e.g. 1e999) is the one way a non-finite
         // number reaches us; nlohmann reports it without a position, so find it.
         throw ValueError(describeOverflow(text, e.what(), origin));
+    } catch (const Json::exception& e) { // any other: one line naming the file
+        throw IoError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
     }
-    Context ctx(origin);
-    if (!root.is_object()) ctx.fail("", "expected a JSON object at the top level");
-    rejectUnknownKeys(root, kTopKeys, ctx, "");
-    if (!root.contains("tissues") || !root.at("tissues").is_array() || root.at("tissues").empty()) {
-        ctx.fail("tissues", "missing or not a non-empty array");
-    }
+    // A value of a type the walk below did not expect, likewise.
+    return JsonFields::guarded(origin, [&] {
+        Context ctx(origin);
+        if (!root.is_object()) ctx.fail("", "expected a JSON object at the top level");
+        rejectUnknownKeys(root, kTopKeys, ctx, "");
+        if (!root.contains("tissues") || !root.at("tissues").is_array() || root.at("tissues").empty()) {
+            ctx.fail("tissues", "missing or not a non-empty array");
+        }
 
-    TissueTable table;
-    table.mOrigin = origin;
-    std::set<std::string, std::less<>> names;
-    std::size_t index = 0;
-    for (const auto& entry : root.at("tissues")) {
-        Tissue t = parseTissue(entry, index++, ctx);
-        if (table.find(t.id)) ctx.fail("id", "duplicate id " + std::to_string(t.id));
-        if (!names.insert(t.name).second) ctx.fail("name", "duplicate name '" + t.name + "'");
-        table.mMaxId = std::max(table.mMaxId, t.id);
-        table.mIndexById.resize(static_cast<std::size_t>(table.mMaxId) + 1, -1);
-        table.mIndexById[static_cast<std::size_t>(t.id)] = static_cast<int>(table.mTissues.size());
-        table.mTissues.push_back(std::move(t));
-    }
-    const Tissue* air = table.find(0);
-    if (!air || air->name != "air") {
-        Context(origin).fail("tissues", "id 0 must be 'air', the background of every grid");
-    }
-    return table;
+        TissueTable table;
+        table.mOrigin = origin;
+        std::set<std::string, std::less<>> names;
+        std::size_t index = 0;
+        for (const auto& entry : root.at("tissues")) {
+            Tissue t = parseTissue(entry, index++, ctx);
+            if (table.find(t.id)) ctx.fail("id", "duplicate id " + std::to_string(t.id));
+            if (!names.insert(t.name).second) ctx.fail("name", "duplicate name '" + t.name + "'");
+            table.mMaxId = std::max(table.mMaxId, t.id);
+            table.mIndexById.resize(static_cast<std::size_t>(table.mMaxId) + 1, -1);
+            table.mIndexById[static_cast<std::size_t>(t.id)] = static_cast<int>(table.mTissues.size());
+            table.mTissues.push_back(std::move(t));
+        }
+        const Tissue* air = table.find(0);
+        if (!air || air->name != "air") {
+            Context(origin).fail("tissues", "id 0 must be 'air', the background of every grid");
+        }
+        return table;
+    });
 }
 
 TissueTable TissueTable::load(const std::filesystem::path& file)
 {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw IoError(file.string() + ": cannot open tissue table");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse(text.str(), file.string());
+    // A regular file within the size limit: not a FIFO, /dev/zero or a huge file.
+    return parse(readBoundedFile(file, "tissue table"), file.string());
 }
 
 const TissueTable& TissueTable::builtin()

@@ -5,6 +5,7 @@
 
 #include "haptic/scene/Scene.h"
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "core/JsonFields.h"
 #include "volume/phantoms/Phantoms.h"
@@ -15,9 +16,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <filesystem>
 #include <set>
-#include <sstream>
+#include <system_error>
 
 namespace voxhap::haptic {
 
@@ -138,12 +139,7 @@ std::string oneLine(const std::string& message)
 
 Scene readScene(const std::string& text, const std::string& origin)
 {
-    Json doc;
-    try {
-        doc = Json::parse(text);
-    } catch (const Json::exception& e) { // a syntax error, or a number beyond double (1e99999)
-        throw ValueError(origin + ": not valid JSON (" + e.what() + ")");
-    }
+    const Json doc = Fields::parse(text, origin); // a syntax error, or a number beyond double (1e99999)
     Scene s;
     s.origin = origin;
     Fields top(doc, origin, "");
@@ -225,7 +221,7 @@ Scene readScene(const std::string& text, const std::string& origin)
 Scene parseScene(const std::string& text, const std::string& origin)
 {
     try {
-        return readScene(text, origin);
+        return Fields::guarded(origin, [&] { return readScene(text, origin); });
     } catch (const ValueError& e) {
         throw ValueError(oneLine(e.what())); // a refusal is one line, whatever names it quotes
     }
@@ -236,15 +232,14 @@ Scene loadScene(const std::string& nameOrPath)
     for (const auto& [name, text] : builtinSceneFiles()) {
         if (name == nameOrPath) return parseScene(text, "builtin:" + name);
     }
-    std::ifstream in(nameOrPath);
-    if (!in) {
+    std::error_code ec;
+    if (!std::filesystem::exists(nameOrPath, ec)) {
         std::string names;
         for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
         throw IoError(nameOrPath + ": no such scene file or built-in scene (" + names + ")");
     }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return parseScene(ss.str(), nameOrPath);
+    // A regular file within the size limit: not a FIFO, /dev/zero or a huge file.
+    return parseScene(readBoundedFile(nameOrPath, "scene file"), nameOrPath);
 }
 
 std::vector<std::string> builtinSceneNames()
@@ -256,7 +251,10 @@ std::vector<std::string> builtinSceneNames()
 
 std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, const volume::TissueTable& table)
 {
-    if (!s.file.empty()) return std::make_shared<const volume::Volume>(volume::loadVolume(s.file));
+    if (!s.file.empty()) {
+        requireRegularFile(s.file, "volume", /*allowDirectory=*/true); // not a FIFO or a device
+        return std::make_shared<const volume::Volume>(volume::loadVolume(s.file));
+    }
     volume::GridSpec grid;
     grid.spacing = Vec3d::Constant(s.spacingMm);
     volume::PhantomModel m;

@@ -3,6 +3,7 @@
 #include "haptic/scene/ScriptedInsertion.h"
 
 #include "core/AtomicFile.h"
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 
 #include <algorithm>
@@ -22,8 +23,7 @@ InsertionScript InsertionScript::constantSpeed(double from, double to, double sp
 
 InsertionScript InsertionScript::load(const std::filesystem::path& file)
 {
-    std::ifstream in(file);
-    if (!in) throw IoError(file.string() + ": cannot open the insertion script");
+    std::istringstream in(readBoundedFile(file, "insertion script")); // regular, at most 16 MiB
     InsertionScript s;
     std::string line;
     for (int n = 1; std::getline(in, line); ++n) {

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -275,6 +276,43 @@ TEST_F(Cli, ServeStopsCleanlyOnInterrupt)
     EXPECT_EQ(std::stod(fields[7]), 0.0) << last; // fx_N
     EXPECT_EQ(std::stod(fields[8]), 0.0) << last; // fy_N
     EXPECT_EQ(std::stod(fields[9]), 0.0) << last; // fz_N
+}
+
+/// Issue 20 item 4: every file the CLI reads (volumes, scenes, tissue tables,
+/// label mappings, markups, insertion scripts) is refused in one line when it
+/// is a FIFO, a device or, for text inputs, beyond the 16 MiB limit; nothing
+/// opens a FIFO with no writer (each run is bounded by `timeout`, and a hang
+/// shows as exit 124).
+TEST_F(Cli, FifosDevicesAndHugeInputsAreRefusedWithoutHanging)
+{
+    ASSERT_EQ(::mkfifo((mDir / "fifo").c_str(), 0600), 0);
+    const std::string bounded = "timeout 60";
+    const auto refused = [&](const std::string& args, const std::string& fragment) {
+        SCOPED_TRACE(args);
+        expectFailure(run(args, bounded), fragment);
+    };
+    refused("info /dev/zero", "/dev/zero: file type: a character device");
+    refused("info /dev/urandom", "/dev/urandom: file type: a character device");
+    refused("info fifo", "fifo: file type: a FIFO");
+    refused("convert fifo out.vdb", "fifo: file type: a FIFO");
+    refused("simulate --scene /dev/zero", "/dev/zero: file type: a character device");
+    refused("simulate --scene fifo", "fifo: file type: a FIFO");
+    refused("simulate fifo --scene kyung", "fifo: file type: a FIFO");
+    refused("simulate --scene kyung --tissues fifo", "fifo: file type: a FIFO");
+    refused("simulate --scene kyung --tissues /dev/zero", "/dev/zero: file type: a character device");
+    refused("simulate --scene kyung --script fifo", "fifo: file type: a FIFO");
+    refused("plan missing.vdb --entries fifo", "fifo: file type: a FIFO");
+    refused("plan missing.vdb --entries /dev/zero", "/dev/zero: file type: a character device");
+    refused("segment missing.vdb --labels fifo --out labelled.vdb", "fifo: file type: a FIFO");
+    refused("info fifo.mha", "no such file"); // a name alone is not a file
+    fs::create_symlink("/dev/zero", mDir / "zero.nii");
+    refused("info zero.nii", "zero.nii: file type: a character device");
+    {
+        std::ofstream big(mDir / "big.json");
+        big << "{" << std::string((16u << 20), ' ') << "}";
+    }
+    refused("simulate --scene big.json", "big.json: size: 16777218 bytes, beyond the 16 MiB limit of a scene file");
+    refused("info --tissues big.json missing.vdb", "big.json: size:");
 }
 
 } // namespace

@@ -7,7 +7,11 @@
 #include "core/Errors.h"
 #include "volume/TissueTable.h"
 
+#include <filesystem>
+#include <fstream>
 #include <string>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace voxhap::volume {
 namespace {
@@ -166,6 +170,35 @@ TEST(TissueTable, LoadNamesAMissingFile)
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("does-not-exist/tissues.json"), std::string::npos);
     }
+}
+
+/// Issue 20 item 4: a FIFO or a device is refused before it is opened, and a
+/// file beyond the 16 MiB limit of every text input is refused, in one line.
+TEST(TissueTable, LoadRefusesFifosDevicesAndHugeFiles)
+{
+    const auto refused = [](const std::filesystem::path& p, const std::string& why) {
+        try {
+            TissueTable::load(p);
+            ADD_FAILURE() << p;
+        } catch (const IoError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(p.string()), std::string::npos) << msg;
+            EXPECT_NE(msg.find(why), std::string::npos) << msg;
+            EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        }
+    };
+    refused("/dev/zero", "file type: a character device, not a regular file");
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("voxhap-tissues-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
+    refused(dir / "fifo.json", "file type: a FIFO"); // would block for ever if opened
+    {
+        std::ofstream big(dir / "big.json");
+        big << "{\"tissues\": [" << std::string((16u << 20) + 1, ' ');
+    }
+    refused(dir / "big.json", "size: 16777230 bytes, beyond the 16 MiB limit");
+    std::filesystem::remove_all(dir);
 }
 
 TEST(TissueTable, ShippedFileEqualsBuiltin)

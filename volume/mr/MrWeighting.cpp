@@ -3,6 +3,7 @@
 /// @brief The MR weighting rule (MrWeighting.h) and the BIDS sidecar reader.
 #include "volume/mr/MrWeighting.h"
 
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
@@ -942,14 +943,13 @@ std::optional<double> sidecarTimeMs(const nlohmann::json& j, const char* key, do
 BidsSidecar readBidsSidecar(const fs::path& json)
 {
     using namespace mrweighting_detail;
-    std::ifstream in(json, std::ios::binary);
-    if (!in) sidecarFail(json, "", "cannot open the BIDS sidecar");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) sidecarFail(json, "", "read error");
+    std::error_code ec;
+    if (!fs::exists(json, ec)) sidecarFail(json, "", "cannot open the BIDS sidecar");
+    const std::string text = readBoundedFile(json, "BIDS sidecar"); // regular, at most 16 MiB
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) { // a syntax error, a number beyond double, ...
         sidecarFail(json, "", "malformed JSON: " + oneLine(e.what()));
     }
     if (!j.is_object())
