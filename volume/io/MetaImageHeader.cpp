@@ -146,8 +146,15 @@ MetaImageHeader parseMetaImageHeader(std::string_view text, const std::filesyste
     if (data == "LOCAL" || data == "Local" || data == "local") {
         h.dataFile = path;
     } else {
-        if (data.find(' ') != std::string::npos || data == "LIST") {
+        if (data.find(' ') != std::string::npos || data.find('\t') != std::string::npos || data == "LIST") {
             throw IoError(file + ": ElementDataFile: '" + data + "': file lists and patterns are not supported");
+        }
+        // Only a file of the header's own folder: no absolute path, no folder, no "..".
+        // (Where a symbolic link of that name leads is checked by loadMetaImage.)
+        if (data.empty() || data == "." || data == ".." || data.find('/') != std::string::npos ||
+            data.find('\\') != std::string::npos) {
+            throw IoError(file + ": ElementDataFile: '" + data +
+                "' must name a file in the header's own folder (no absolute path, no folder, no '..')");
         }
         h.dataFile = path.parent_path() / data;
         h.dataOffset = 0;

@@ -18,7 +18,9 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <sys/stat.h>
 #include <unistd.h>
+#include <vector>
 
 namespace {
 
@@ -151,6 +153,53 @@ TEST_F(MetaImage, BadFilesAreRefusedNamingTheField)
         "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n" +
             std::string(reinterpret_cast<const char*>(nan.data()), nan.size() * 4));
     expectRefused(mDir / "inf.mha", "voxel (1, 1, 0) is not a finite number");
+}
+
+/// Issue 20 item 3: ElementDataFile names a file of the header's own folder and
+/// nothing else, also once symbolic links are resolved; a FIFO or a device is
+/// refused before it is opened (a FIFO with no writer would block the open).
+TEST_F(MetaImage, DataFileOutsideTheHeaderFolderIsRefused)
+{
+    const std::string data = samples(false);
+    fs::create_directories(mDir / "sub");
+    fs::create_directories(mDir / "other");
+    write(mDir / "other" / "x.raw", data);
+    write(mDir / "sub" / "x.raw", data);
+    write(mDir / "in.raw", data);
+    for (const std::string& name : std::vector<std::string>{"/etc/passwd", (mDir / "in.raw").string(), "../other/x.raw",
+             "sub/x.raw", "..", "sub/../in.raw", "LIST", "x%03d.raw 1 3 1"}) {
+        const fs::path hdr = mDir / "h.mhd";
+        write(hdr, header("", name));
+        expectRefused(hdr, "ElementDataFile");
+        try {
+            loadMetaImage(hdr);
+        } catch (const voxhap::IoError& e) {
+            EXPECT_EQ(std::string(e.what()).find("not found"), std::string::npos) << "refused by name: " << e.what();
+        }
+    }
+    // A symbolic link in the folder that leads out of it.
+    fs::create_symlink(mDir / "other" / "x.raw", mDir / "escape.raw");
+    write(mDir / "link.mhd", header("", "escape.raw"));
+    expectRefused(mDir / "link.mhd", "outside the header's own folder");
+    fs::create_symlink("/dev/zero", mDir / "zero.raw");
+    write(mDir / "zero.mhd", header("", "zero.raw"));
+    expectRefused(mDir / "zero.mhd", "outside the header's own folder");
+    // A link within the folder is fine.
+    fs::create_symlink("in.raw", mDir / "inside.raw");
+    write(mDir / "inside.mhd", header("", "inside.raw"));
+    expectVolume(mDir / "inside.mhd");
+    // A FIFO in the folder: refused without opening it (the test would hang otherwise).
+    ASSERT_EQ(::mkfifo((mDir / "fifo.raw").c_str(), 0600), 0);
+    write(mDir / "fifo.mhd", header("", "fifo.raw"));
+    expectRefused(mDir / "fifo.mhd", "ElementDataFile: 'fifo.raw' is not a regular file");
+}
+
+TEST_F(MetaImage, HeaderThatIsNotARegularFileIsRefusedUnopened)
+{
+    ASSERT_EQ(::mkfifo((mDir / "fifo.mha").c_str(), 0600), 0);
+    expectRefused(mDir / "fifo.mha", "file type: a FIFO");
+    fs::create_symlink("/dev/zero", mDir / "zero.mha");
+    expectRefused(mDir / "zero.mha", "file type: a character device");
 }
 
 } // namespace

@@ -20,7 +20,9 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 namespace {
 
@@ -241,6 +243,168 @@ TEST_F(Nifti, NanVoxelIsRefused)
     nifti_image_write(nim);
     nifti_image_free(nim);
     expectRefused(p, "voxel (1, 0, 1) is not a finite number");
+}
+
+/// Issue 20 item 3: header fields niftilib would replace (vox_offset by 352,
+/// a zero or NaN voxel size by 1 mm, a NaN slope by "unscaled") are refused,
+/// naming the field.
+class NiftiFields : public Nifti {
+protected:
+    /// The bytes of a good single-file NIfTI-1 (sform, positive pixdim) with
+    /// @p patch written at @p at, saved as @p name (gzip if it ends in .gz).
+    fs::path patched(const std::string& name, std::size_t at, const std::string& patch) const
+    {
+        const fs::path good = write("good-" + std::to_string(at) + ".nii", true, false);
+        std::ifstream in(good, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        bytes.replace(at, patch.size(), patch);
+        const fs::path p = mDir / name;
+        if (name.size() > 3 && name.compare(name.size() - 3, 3, ".gz") == 0) {
+            gzFile gz = gzopen(p.c_str(), "wb");
+            gzwrite(gz, bytes.data(), unsigned(bytes.size()));
+            gzclose(gz);
+        } else {
+            std::ofstream(p, std::ios::binary) << bytes;
+        }
+        return p;
+    }
+    template <typename T> static std::string raw(T v)
+    {
+        return std::string(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    static constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+    static constexpr float kInf = std::numeric_limits<float>::infinity();
+};
+
+TEST_F(NiftiFields, VoxOffsetOutsideTheDataIsRefused)
+{
+    const std::size_t at = offsetof(nifti_1_header, vox_offset);
+    expectRefused(patched("far.nii", at, raw(1e12f)),
+        "vox_offset: " + std::to_string(std::uint64_t(1e12f)) + " is beyond the end of the file");
+    expectRefused(patched("negative.nii", at, raw(-352.0f)), "vox_offset: -352 is negative");
+    expectRefused(patched("nan.nii", at, raw(kNan)), "vox_offset: nan");
+    expectRefused(patched("inf.nii", at, raw(kInf)), "vox_offset: inf");
+    expectRefused(patched("header.nii", at, raw(348.0f)), "vox_offset: 348 lies inside the header");
+    expectRefused(patched("zero.nii", at, raw(0.0f)), "vox_offset: 0 lies inside the header");
+    expectRefused(patched("half.nii", at, raw(352.5f)), "vox_offset: 352.5 is not a whole number");
+    // A .nii.gz against the decompressed length (10×7×9 floats after 352 bytes).
+    expectRefused(patched("far.nii.gz", at, raw(4096.0f)), "vox_offset: 4096 is beyond the end of the decompressed");
+    expectRefused(patched("header.nii.gz", at, raw(100.0f)), "vox_offset: 100 lies inside the header");
+}
+
+TEST_F(NiftiFields, BadVoxelSizesOnUsedAxesAreRefused)
+{
+    const std::size_t pixdim = offsetof(nifti_1_header, pixdim);
+    expectRefused(patched("nan.nii", pixdim + 4 * 2, raw(kNan)), "pixdim: pixdim[2] = nan");
+    expectRefused(patched("zero.nii", pixdim + 4 * 1, raw(0.0f)), "pixdim: pixdim[1] = 0");
+    expectRefused(patched("negative.nii", pixdim + 4 * 3, raw(-2.0f)), "pixdim: pixdim[3] = -2");
+    expectRefused(patched("inf.nii", pixdim + 4 * 3, raw(kInf)), "pixdim: pixdim[3] = inf");
+    // pixdim[4] (time) is not a spatial axis: dim[4] = 1 there, and nothing reads it.
+    EXPECT_NO_THROW(loadNifti(patched("time.nii", pixdim + 4 * 4, raw(kNan))));
+
+    // On an axis of one voxel a zero size is no error (the sform gives the geometry).
+    const int64_t dims[8] = {3, 4, 3, 1, 1, 1, 1, 1};
+    nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
+    nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) nim->sto_xyz.m[r][c] = r == c ? 1.0 : 0.0;
+    nim->pixdim[3] = nim->dz = 0.0f;
+    const fs::path p = mDir / "slice.nii";
+    nifti_set_filenames(nim, p.string().c_str(), 0, 1);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+    EXPECT_EQ(loadNifti(p).indexBox().dims(), voxhap::Vec3i(4, 3, 1));
+}
+
+TEST_F(NiftiFields, BadDimsAreRefused)
+{
+    const std::size_t dim = offsetof(nifti_1_header, dim);
+    expectRefused(patched("rank.nii", dim, raw(std::int16_t(8))), "dim: dim[0] = 8");
+    expectRefused(patched("rank0.nii", dim, raw(std::int16_t(0))), "dim: dim[0] = 0");
+    expectRefused(patched("zero.nii", dim + 2 * 2, raw(std::int16_t(0))), "dim: dim[2] = 0");
+    expectRefused(patched("negative.nii", dim + 2 * 3, raw(std::int16_t(-9))), "dim: dim[3] = -9");
+    std::string big = raw(std::int16_t(7));
+    for (int a = 1; a <= 7; ++a) big += raw(std::int16_t(32767)); // 32767^7 × 4 bytes: beyond 2^63
+    expectRefused(patched("overflow.nii", dim, big), "dim: the product dim[1]");
+}
+
+TEST_F(NiftiFields, NonFiniteScalingIsRefused)
+{
+    const std::size_t slope = offsetof(nifti_1_header, scl_slope), inter = offsetof(nifti_1_header, scl_inter);
+    expectRefused(patched("nan.nii", slope, raw(kNan)), "scl_slope: nan");
+    expectRefused(patched("inf.nii", slope, raw(-kInf)), "scl_slope: -inf");
+    expectRefused(patched("inter.nii", slope, raw(2.0f) + raw(kInf)), "scl_inter: inf");
+    // A slope of 0 means unscaled, whatever the intercept (NIfTI-1 standard).
+    EXPECT_NO_THROW(loadNifti(patched("unscaled.nii", slope, raw(0.0f) + raw(kNan))));
+    (void)inter;
+}
+
+TEST_F(NiftiFields, PairMayStartAtZeroButNotBeyondItsImage)
+{
+    const int64_t dims[8] = {3, 4, 3, 2, 1, 1, 1, 1};
+    nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
+    nim->nifti_type = NIFTI_FTYPE_NIFTI1_2;
+    const fs::path hdr = mDir / "pair.hdr";
+    nifti_set_filenames(nim, hdr.string().c_str(), 0, 1);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+    ASSERT_TRUE(fs::exists(mDir / "pair.img"));
+    EXPECT_EQ(loadNifti(hdr).indexBox().dims(), voxhap::Vec3i(4, 3, 2)); // vox_offset 0: valid in a pair
+    const auto patchHeader = [&](float offset) {
+        std::fstream f(hdr, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(std::streamoff(offsetof(nifti_1_header, vox_offset)));
+        f.write(reinterpret_cast<const char*>(&offset), sizeof offset);
+    };
+    patchHeader(1e6f);
+    expectRefused(hdr, "vox_offset: 1000000 is beyond the end of pair.img");
+    patchHeader(-1.0f);
+    expectRefused(hdr, "vox_offset: -1 is negative");
+    patchHeader(0.0f);
+    fs::remove(mDir / "pair.img");
+    ASSERT_EQ(::mkfifo((mDir / "pair.img").c_str(), 0600), 0);
+    expectRefused(hdr, "data file: pair.img is a FIFO");
+}
+
+TEST_F(NiftiFields, FifoOrDeviceIsRefusedUnopened)
+{
+    ASSERT_EQ(::mkfifo((mDir / "fifo.nii").c_str(), 0600), 0);
+    expectRefused(mDir / "fifo.nii", "file type: a FIFO");
+    fs::create_symlink("/dev/zero", mDir / "zero.nii.gz");
+    expectRefused(mDir / "zero.nii.gz", "file type: a character device");
+}
+
+TEST_F(NiftiFields, Nifti2VoxOffsetAndDimsAreChecked)
+{
+    // Written by hand: niftilib 3 writes NIfTI-2 only through its own file naming.
+    nifti_2_header h{};
+    h.sizeof_hdr = 540;
+    std::memcpy(h.magic, "n+2\0\r\n\032\n", 8);
+    h.datatype = DT_FLOAT32;
+    h.bitpix = 32;
+    const std::int64_t dims[8] = {3, 4, 3, 2, 1, 1, 1, 1};
+    for (int a = 0; a < 8; ++a) h.dim[a] = dims[a], h.pixdim[a] = 1.0;
+    h.vox_offset = 544;
+    const fs::path good = mDir / "two.nii";
+    {
+        std::ofstream out(good, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(&h), sizeof h);
+        out << std::string(4 + 4 * 3 * 2 * 4, '\0'); // no extension; 24 zero floats
+    }
+    EXPECT_EQ(loadNifti(good).indexBox().dims(), voxhap::Vec3i(4, 3, 2));
+    ASSERT_EQ(fs::file_size(good), 544u + 4 * 3 * 2 * 4) << "a NIfTI-2 file";
+    std::ifstream in(good, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto variant = [&](const std::string& name, std::size_t at, const std::string& patch) {
+        std::string b = bytes;
+        b.replace(at, patch.size(), patch);
+        std::ofstream(mDir / name, std::ios::binary) << b;
+        return mDir / name;
+    };
+    const std::size_t voxOffset = offsetof(nifti_2_header, vox_offset), dim = offsetof(nifti_2_header, dim);
+    expectRefused(variant("negative.nii", voxOffset, raw(std::int64_t(-544))), "vox_offset: -544 is negative");
+    expectRefused(variant("inside.nii", voxOffset, raw(std::int64_t(540))), "vox_offset: 540 lies inside the header");
+    expectRefused(variant("far.nii", voxOffset, raw(std::int64_t(1) << 40)), "vox_offset: 1099511627776 is beyond");
+    expectRefused(variant("overflow.nii", dim + 8, raw(std::int64_t(1) << 62)), "dim: the product dim[1]");
 }
 
 } // namespace
