@@ -3,7 +3,7 @@
 /// @brief Four-view frame times of the viewer on the real CT and a 256³ phantom
 /// (docs: benchmarks.md "Rendering"). Same as `voxhap bench render --ct DIR`.
 ///
-///     bench_render [--ct DIR] [--first N] [--steady N] [--json FILE]
+///     bench_render [--ct DIR] [--first N] [--steady N] [--orbit-frames N] [--orbit-only] [--json FILE]
 ///
 /// Without --ct, the real CT of ../shared/data is used when present.
 
@@ -32,10 +32,15 @@ int main(int argc, char** argv)
             o.firstFrames = std::max(1, std::atoi(argv[++i]));
         else if (a == "--steady" && i + 1 < argc)
             o.steadyFrames = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--orbit-frames" && i + 1 < argc)
+            o.orbitFrames = std::max(0, std::atoi(argv[++i]));
+        else if (a == "--orbit-only")
+            o.fourView = false;
         else if (a == "--json" && i + 1 < argc)
             json = argv[++i];
         else {
-            std::cerr << "usage: bench_render [--ct DIR] [--first N] [--steady N] [--json FILE]\n";
+            std::cerr << "usage: bench_render [--ct DIR] [--first N] [--steady N] [--orbit-frames N] [--orbit-only] "
+                         "[--json FILE]\n";
             return 2;
         }
     }

@@ -53,6 +53,7 @@ Viewer::Viewer(const volume::Volume& v, const ViewerOptions& options, const volu
     }
     mWindow = mOpt.window ? *mOpt.window : mVolume->defaultWindow();
     mFrames[std::size_t(ViewKind::ThreeD)] = viewFrame(ViewKind::ThreeD, mBox, centre, mPixelMm, 1 << 20);
+    mCamera = OrbitCamera(mFrames[std::size_t(ViewKind::ThreeD)]);
     updateFrames();
 }
 
@@ -78,7 +79,9 @@ bool Viewer::clickWindow(int x, int y)
     std::array<std::array<int, 2>, 4> sizes{};
     for (std::size_t i = 0; i < 4; ++i) sizes[i] = {mFrames[i].width, mFrames[i].height};
     const auto hit = hitPane(mLayout, x, y, sizes);
+    mDragFrom.reset();
     if (!hit) return true;
+    if (hit->view == ViewKind::ThreeD) mDragFrom = Vec2d(x, y); // a drag may follow
     ViewerEvent e;
     e.kind = ViewerEvent::Kind::Click;
     e.pane = hit->view;
@@ -98,6 +101,46 @@ void Viewer::scrollWindow(int x, int y, int steps)
     }
 }
 
+void Viewer::dragWindow(int x, int y)
+{
+    if (!mDragFrom) return;
+    ViewerEvent e;
+    e.kind = ViewerEvent::Kind::Drag;
+    e.pane = ViewKind::ThreeD;
+    e.px = Vec2d(x, y) - *mDragFrom;
+    mDragFrom = Vec2d(x, y);
+    handle(e);
+}
+
+void Viewer::releaseWindow()
+{
+    if (!mDragFrom) return;
+    mDragFrom.reset();
+    ViewerEvent e;
+    e.kind = ViewerEvent::Kind::Release;
+    e.pane = ViewKind::ThreeD;
+    handle(e);
+}
+
+void Viewer::cameraMoved(bool dragging)
+{
+    mFrames[std::size_t(ViewKind::ThreeD)] = mCamera.frame();
+    mMoving = true;
+    mDragging = dragging;
+    mSettleAt = std::chrono::steady_clock::now() +
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(kSettleS));
+    m3dStale = true;
+}
+
+bool Viewer::settle(std::chrono::steady_clock::time_point now)
+{
+    if (!mMoving || mDragging || now < mSettleAt) return false;
+    mMoving = false;
+    m3dStale = true;
+    mDirty = true;
+    return true;
+}
+
 bool Viewer::handle(const ViewerEvent& e)
 {
     mMessage.clear();
@@ -105,7 +148,8 @@ bool Viewer::handle(const ViewerEvent& e)
     switch (e.kind) {
     case ViewerEvent::Kind::Click: {
         if (e.pane == ViewKind::ThreeD) {
-            mMessage = "the 3d pane has no depth to pick: click a slice";
+            mMessage =
+                "the 3d pane has no depth to pick: click a slice (drag rotates the 3d pane, wheel zooms, r resets)";
             return true;
         }
         mActive = e.pane;
@@ -120,8 +164,26 @@ bool Viewer::handle(const ViewerEvent& e)
         }
         return true;
     }
+    case ViewerEvent::Kind::Drag:
+        if (e.pane == ViewKind::ThreeD && mOpt.threeD) {
+            mCamera.drag(e.px.x(), e.px.y());
+            cameraMoved(true);
+        }
+        return true;
+    case ViewerEvent::Kind::Release:
+        if (mDragging) {
+            mDragging = false;
+            mMoving = false; // the drag ended: full quality at the next render
+            m3dStale = true;
+        }
+        return true;
     case ViewerEvent::Kind::Scroll: {
-        if (e.pane == ViewKind::ThreeD) return true;
+        if (e.pane == ViewKind::ThreeD) {
+            if (!mOpt.threeD) return true;
+            mCamera.wheel(e.steps);
+            cameraMoved(false);
+            return true;
+        }
         mActive = e.pane;
         mPoint += double(e.steps) * mStepMm * frame(e.pane).normal;
         // Keep the crosshair inside the volume: a slice beyond it shows only air.
@@ -146,7 +208,12 @@ bool Viewer::handle(const ViewerEvent& e)
         mEditor.clearMeasurements();
     else if (k == "s")
         savePlan();
-    else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) {
+    else if (k == "r") {
+        mCamera.reset();
+        mFrames[std::size_t(ViewKind::ThreeD)] = mCamera.frame();
+        mMoving = mDragging = false;
+        m3dStale = true;
+    } else if (k == "w" && mVolume->channel() == ScalarChannel::Hu) {
         mWindowPreset = (mWindowPreset + 1) % 3;
         mWindow = windowLevel(kViewerPresets[mWindowPreset]);
         mSliceStale = {true, true, true};
@@ -268,9 +335,13 @@ Image Viewer::render3dPane()
         if (mVolume->channel() != ScalarChannel::Hu && mOpt.mode != BlendMode::Sum) {
             o.legend = windowLegend(mVolume->channel(), style.window); // the sum has no window
         }
-        m3d = std::make_unique<VolumeView3d>(*mVolume, f, style, mTable, o);
+        style.moving = mOpt.moving;
+        style.movingFactor = mOpt.movingFactor;
+        m3d = std::make_unique<VolumeView3d>(*mVolume, mCamera.home(), style, mTable, o);
     }
-    return m3d->render();
+    m3d->setCamera(f);
+    m3dQuality = mMoving ? RenderQuality::Moving : RenderQuality::Full;
+    return m3d->render(m3dQuality);
 }
 
 void Viewer::drawOver3d(Image& img) const
@@ -311,7 +382,8 @@ Image Viewer::render()
     const int y0 = mLayout.height - kViewerStatusPx + 3;
     const int maxChars = std::max(1, (mLayout.width - 8) / 6);
     drawText(win, 4, y0, status().substr(0, std::size_t(maxChars)), Rgb{255, 255, 255}, 1, false);
-    std::string second = "keys: n p d a tools, arrows slice, w window, c clear, s save, q quit";
+    std::string second =
+        "keys: n p d a tools, arrows slice, w window, c clear, s save, q quit; 3d: drag rotate, wheel zoom, r reset";
     if (!mNote.empty()) second = mNote + " | " + second;
     drawText(win, 4, y0 + textHeight(1) + 4, second.substr(0, std::size_t(maxChars)), Rgb{180, 180, 180}, 1, false);
     mDirty = false;

@@ -20,15 +20,21 @@
 /// - w: next window (soft tissue, bone, lung) on CT; MR keeps the body's own
 ///   range (RenderVolume::defaultWindow) and says so; c: clear measurements
 /// - s: save the plan (voxhap-plan/1); q or Escape: quit
+/// - 3D pane (OrbitCamera.h, VTK's trackball camera semantics): left drag
+///   rotates, the wheel zooms, r resets the camera. While the camera moves the
+///   pane is drawn at RenderQuality::Moving; at full quality once the drag
+///   ends (button released) or kSettleS after the last wheel step (settle()).
 #pragma once
 
 #include "render/Image.h"
+#include "render/OrbitCamera.h"
 #include "render/PlanEditor.h"
 #include "render/ViewFrame.h"
 #include "render/ViewTypes.h"
 #include "render/ViewerLayout.h"
 #include "render/VolumeView3d.h"
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -43,10 +49,17 @@ namespace voxhap::render {
 
 class RenderVolume;
 
+/// @brief Quiet time after the last wheel step before the 3D pane is redrawn at
+/// full quality [s] [chosen]: longer than the gap between the notches of a
+/// spun wheel (tens of ms), short against the 1.5 s the issue allows.
+inline constexpr double kSettleS = 0.3;
+
 struct ViewerOptions {
     int width = 1024, height = 1048;    ///< window [px], status bar included
     BlendMode mode = BlendMode::Colour; ///< of the 3D pane
     RayCaster caster = RayCaster::Auto;
+    MovingPath moving = MovingPath::Subsample; ///< the 3D pane while its camera moves
+    int movingFactor = 3;                      ///< View3dStyle::movingFactor
     std::optional<WindowLevel> window; ///< slices and 3D; default RenderVolume::defaultWindow (CT presets on CT only)
     bool labels = true;                ///< tissue colours on the slices
     bool threeD = true;                ///< false: the 3D pane says why not (threeDNote) instead
@@ -61,11 +74,13 @@ struct ViewerEvent {
     enum class Kind {
         Click,
         Key,
-        Scroll
+        Scroll,
+        Drag,   ///< the left button held and moved (3D pane: rotate)
+        Release ///< the left button released (3D pane: the drag ends, full quality)
     };
     Kind kind = Kind::Key;
-    ViewKind pane = ViewKind::Axial; ///< Click, Scroll
-    Vec2d px{0, 0};                  ///< Click: in the pane image's pixels
+    ViewKind pane = ViewKind::Axial; ///< Click, Scroll, Drag
+    Vec2d px{0, 0};                  ///< Click: in the pane image's pixels; Drag: the motion [px, y down]
     std::string key;                 ///< Key: keysym name
     int steps = 0;                   ///< Scroll: slices, positive along the pane's normal
 };
@@ -84,6 +99,21 @@ public:
     bool clickWindow(int x, int y);
     /// @brief Scroll in the pane under window pixel (@p x, @p y).
     void scrollWindow(int x, int y, int steps);
+    /// @brief The pointer moved to window pixel (@p x, @p y) with the left button
+    /// held: a drag if the button went down in the 3D pane.
+    void dragWindow(int x, int y);
+    /// @brief The left button went up.
+    void releaseWindow();
+    /// @brief Call when idle: once the camera has been still for kSettleS after a
+    /// wheel step (or the drag ended), the 3D pane is marked for a full-quality
+    /// redraw. @return true if it was
+    bool settle(std::chrono::steady_clock::time_point now = std::chrono::steady_clock::now());
+    /// @brief True while the 3D pane draws at moving quality (a drag or the settle time).
+    bool moving() const { return mMoving; }
+    /// @brief The 3D pane's camera.
+    const OrbitCamera& camera() const { return mCamera; }
+    /// @brief The quality of the 3D pane's last rendering (Full before any).
+    RenderQuality last3dQuality() const { return m3dQuality; }
 
     /// @brief The live needle (nullopt: none).
     void setNeedle(const std::optional<NeedlePose>& needle);
@@ -117,6 +147,7 @@ private:
     Image renderSlicePane(ViewKind v);
     Image render3dPane();
     void drawOver3d(Image& img) const;
+    void cameraMoved(bool dragging);
 
     ViewerOptions mOpt;
     const volume::TissueTable& mTable;
@@ -131,6 +162,11 @@ private:
     Image m3dImage; ///< the volume alone; paths and needle go over a copy
     bool m3dStale = true, mDirty = true;
     std::unique_ptr<VolumeView3d> m3d;
+    OrbitCamera mCamera;
+    bool mMoving = false, mDragging = false;
+    RenderQuality m3dQuality = RenderQuality::Full;
+    std::chrono::steady_clock::time_point mSettleAt;
+    std::optional<Vec2d> mDragFrom; ///< window pixel where the last 3D drag step ended
     WindowLevel mWindow;
     int mWindowPreset = 0;
     ViewKind mActive = ViewKind::Axial;

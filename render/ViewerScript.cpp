@@ -73,6 +73,16 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
             if (count != std::round(count) || std::abs(count) > 1e6)
                 throw ValueError(where + "scroll: steps must be an integer");
             s.event.steps = int(count);
+        } else if (verb == "drag") {
+            std::string pane;
+            if (!(in >> pane)) throw ValueError(where + "drag: missing the pane");
+            s.event.kind = ViewerEvent::Kind::Drag;
+            s.event.pane = scriptPane(pane, where);
+            const double dx = scriptNumber(in, "dx", where), dy = scriptNumber(in, "dy", where);
+            s.event.px = Vec2d(dx, dy);
+        } else if (verb == "release") {
+            s.event.kind = ViewerEvent::Kind::Release;
+            s.event.pane = ViewKind::ThreeD;
         } else if (verb == "wait-pose" || verb == "sleep") {
             s.kind = verb == "sleep" ? ScriptStep::Kind::Sleep : ScriptStep::Kind::WaitPose;
             s.seconds = scriptNumber(in, "seconds", where);
@@ -80,7 +90,8 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
                 throw ValueError(where + verb + ": seconds must be in 0..600");
             }
         } else {
-            throw ValueError(where + "unknown step '" + verb + "' (expected key, click, scroll, wait-pose or sleep)");
+            throw ValueError(
+                where + "unknown step '" + verb + "' (expected key, click, scroll, drag, release, wait-pose or sleep)");
         }
         std::string extra;
         if (in >> extra) throw ValueError(where + "unexpected '" + extra + "' after the " + verb + " step");

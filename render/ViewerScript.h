@@ -7,7 +7,9 @@
 /// # comments and blank lines are skipped
 /// key p                  # a key, by its X keysym name
 /// click axial 120 130    # a left click in a pane, in that pane image's pixels
-/// scroll sagittal -3     # slices along the pane's normal
+/// scroll sagittal -3     # slices along the pane's normal (in the 3d pane: wheel steps, zoom)
+/// drag 3d 40 -10         # the left button held and moved by (40, −10) px: rotates the 3d pane
+/// release                # the left button released: the drag ends
 /// wait-pose 5            # wait up to 5 s for a streamed needle pose (view --listen)
 /// sleep 0.5              # seconds
 /// @endcode

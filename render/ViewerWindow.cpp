@@ -48,7 +48,8 @@ ViewerWindow::ViewerWindow(int width, int height, const std::string& title) : mI
     a.colormap = XCreateColormap(m.display, RootWindow(m.display, screen), m.visual, AllocNone);
     a.background_pixel = 0;
     a.border_pixel = 0;
-    a.event_mask = ExposureMask | ButtonPressMask | KeyPressMask | StructureNotifyMask;
+    a.event_mask =
+        ExposureMask | ButtonPressMask | ButtonReleaseMask | Button1MotionMask | KeyPressMask | StructureNotifyMask;
     m.window = XCreateWindow(m.display, RootWindow(m.display, screen), 0, 0, unsigned(width), unsigned(height), 0, 24,
         InputOutput, m.visual, CWColormap | CWBackPixel | CWBorderPixel | CWEventMask, &a);
     XStoreName(m.display, m.window, title.c_str());
@@ -136,6 +137,13 @@ std::vector<WindowInput> ViewerWindow::poll(int timeoutMs)
             out.push_back(in);
             break;
         }
+        case MotionNotify:
+            out.push_back(WindowInput{WindowInput::Kind::Motion, e.xmotion.x, e.xmotion.y, 0, ""});
+            break;
+        case ButtonRelease:
+            if (e.xbutton.button == Button1)
+                out.push_back(WindowInput{WindowInput::Kind::Release, e.xbutton.x, e.xbutton.y, 0, ""});
+            break;
         case KeyPress: {
             char buf[8];
             KeySym sym = 0;

@@ -23,10 +23,12 @@ struct WindowInput {
         Click,
         Scroll,
         Key,
-        Close
+        Close,
+        Motion, ///< the pointer moved with the left button held
+        Release ///< the left button went up
     };
     Kind kind = Kind::Key;
-    int x = 0, y = 0; ///< Click, Scroll: window pixels
+    int x = 0, y = 0; ///< Click, Scroll, Motion, Release: window pixels
     int steps = 0;    ///< Scroll: +1 wheel up, −1 wheel down
     std::string key;  ///< Key: X keysym name ("q", "Up", "Escape")
 };

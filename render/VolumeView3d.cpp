@@ -16,6 +16,7 @@
 #include <vtkDiscreteFlyingEdges3D.h>
 #include <vtkFixedPointVolumeRayCastMapper.h>
 #include <vtkGPUVolumeRayCastMapper.h>
+#include <vtkImageShrink3D.h>
 #include <vtkLookupTable.h>
 #include <vtkPiecewiseFunction.h>
 #include <vtkPoints.h>
@@ -30,6 +31,7 @@
 #include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <map>
 
@@ -130,7 +132,93 @@ struct VolumeView3d::Impl {
     vtkSmartPointer<vtkRenderer> lines; ///< where paths and needles go: the scene, or a layer above it
     vtkSmartPointer<vtkActor> needle;
     RayCaster caster = RayCaster::Gpu;
+    View3dStyle look;
+    double step = 1.0, far = 1.0;          ///< full-quality ray step [mm]; camera distance [mm]
+    vtkSmartPointer<vtkVolumeMapper> full; ///< the ray caster of full-quality frames (and Subsample, AutoRate)
+    vtkSmartPointer<vtkVolume> volume;
+    vtkSmartPointer<vtkVolumeProperty> property;
+    vtkSmartPointer<vtkVolume> shrunk; ///< MovingPath::Shrunk: built at the first moving frame
+    RenderQuality last = RenderQuality::Full;
+    vtkSmartPointer<vtkImageData> scalars; ///< the RenderVolume's array (shared, not copied)
+    vtkSmartPointer<vtkMatrix4x4> dataToWorld;
+    Vec3d spacing{1, 1, 1};
+
+    /// A ray caster of the view's kind on @p input, @p imageSample pixels per ray, steps of @p stepMm.
+    vtkSmartPointer<vtkVolumeMapper> makeMapper(vtkImageData* input, double stepMm) const;
+    void setQuality(RenderQuality q);
 };
+
+namespace {
+
+/// The frame rate AutoRate asks VTK for while moving, and the still rate it
+/// restores (VTK's defaults for vtkRenderWindowInteractor: 15 and 0.0001) [1/s].
+constexpr double kMovingRate = 10.0;
+constexpr double kStillRate = 0.0001;
+
+void setImageSample(vtkVolumeMapper* m, double pixels, double stepMm, bool autoAdjust)
+{
+    if (auto* cpu = vtkFixedPointVolumeRayCastMapper::SafeDownCast(m)) {
+        cpu->SetAutoAdjustSampleDistances(autoAdjust);
+        cpu->SetImageSampleDistance(float(pixels));
+        cpu->SetSampleDistance(float(stepMm));
+    } else if (auto* gpu = vtkGPUVolumeRayCastMapper::SafeDownCast(m)) {
+        gpu->SetAutoAdjustSampleDistances(autoAdjust);
+        gpu->SetImageSampleDistance(float(pixels));
+        gpu->SetSampleDistance(float(stepMm));
+    }
+}
+
+} // namespace
+
+vtkSmartPointer<vtkVolumeMapper> VolumeView3d::Impl::makeMapper(vtkImageData* input, double stepMm) const
+{
+    vtkSmartPointer<vtkVolumeMapper> mapper;
+    if (caster == RayCaster::Gpu)
+        mapper = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
+    else
+        mapper = vtkSmartPointer<vtkFixedPointVolumeRayCastMapper>::New();
+    setImageSample(mapper, 1.0, stepMm, false); // one ray per pixel
+    mapper->SetInputData(input);
+    return mapper;
+}
+
+void VolumeView3d::Impl::setQuality(RenderQuality q)
+{
+    const bool moving = q == RenderQuality::Moving;
+    const int k = std::max(1, look.movingFactor);
+    window->SetDesiredUpdateRate(moving && look.moving == MovingPath::AutoRate ? kMovingRate : kStillRate);
+    switch (look.moving) {
+    case MovingPath::Subsample:
+        setImageSample(full, moving ? k : 1.0, moving ? k * step : step, false);
+        property->SetInterpolationType(moving ? VTK_NEAREST_INTERPOLATION : VTK_LINEAR_INTERPOLATION);
+        break;
+    case MovingPath::AutoRate:
+        setImageSample(full, 1.0, step, moving);
+        break;
+    case MovingPath::Shrunk:
+        if (moving && !shrunk) {
+            auto shrink = vtkSmartPointer<vtkImageShrink3D>::New();
+            shrink->SetInputData(scalars);
+            int f[3];
+            for (int a = 0; a < 3; ++a) f[a] = std::max(1, int(std::lround(k * spacing.minCoeff() / spacing[a])));
+            shrink->SetShrinkFactors(f);
+            shrink->AveragingOn();
+            shrink->Update();
+            vtkSmartPointer<vtkImageData> copy = shrink->GetOutput();
+            shrunk = vtkSmartPointer<vtkVolume>::New();
+            const vtkSmartPointer<vtkVolumeMapper> reduced = makeMapper(copy, k * step);
+            reduced->SetBlendMode(full->GetBlendMode());
+            shrunk->SetMapper(reduced);
+            shrunk->SetProperty(property);
+            shrunk->SetUserMatrix(dataToWorld);
+            renderer->AddVolume(shrunk);
+        }
+        volume->SetVisibility(!moving);
+        if (shrunk) shrunk->SetVisibility(moving);
+        break;
+    }
+    last = q;
+}
 
 VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const View3dStyle& style,
     const volume::TissueTable& table, const Overlays& overlays)
@@ -150,24 +238,17 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     if (m.caster == RayCaster::Cpu && style.mode == BlendMode::Sum) {
         throw ValueError("3d view: the CPU ray caster has no summed projection (use the GPU one)");
     }
-    const double step = std::max(1e-3, style.sampleVoxels) * d.spacing.minCoeff();
-    vtkSmartPointer<vtkVolumeMapper> mapper;
-    if (m.caster == RayCaster::Gpu) {
-        auto gpu = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
-        gpu->SetAutoAdjustSampleDistances(false);
-        gpu->SetSampleDistance(float(step));
-        mapper = gpu;
-    } else {
-        auto cpu = vtkSmartPointer<vtkFixedPointVolumeRayCastMapper>::New();
-        cpu->SetAutoAdjustSampleDistances(false);
-        cpu->SetSampleDistance(float(step));
-        cpu->SetImageSampleDistance(1.0f); // one ray per pixel
-        mapper = cpu;
-    }
-    mapper->SetInputData(d.scalars);
+    m.look = style;
+    m.scalars = d.scalars;
+    m.dataToWorld = d.dataToWorld();
+    m.spacing = d.spacing;
+    m.step = std::max(1e-3, style.sampleVoxels) * d.spacing.minCoeff();
+    const vtkSmartPointer<vtkVolumeMapper> mapper = m.makeMapper(d.scalars, m.step);
+    m.full = mapper;
     auto colour = vtkSmartPointer<vtkColorTransferFunction>::New();
     auto opacity = vtkSmartPointer<vtkPiecewiseFunction>::New();
     auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+    m.property = property;
     property->SetInterpolationTypeToLinear();
     const double depthMm = (d.bounds.max - d.bounds.min).cwiseAbs().dot(frame.normal.cwiseAbs());
     switch (style.mode) {
@@ -225,6 +306,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     volumeProp->SetMapper(mapper);
     volumeProp->SetProperty(property);
     volumeProp->SetUserMatrix(d.dataToWorld());
+    m.volume = volumeProp;
 
     m.renderer = vtkSmartPointer<vtkRenderer>::New();
     m.renderer->SetBackground(0.0, 0.0, 0.0);
@@ -288,18 +370,9 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     if (!needles.empty()) m.lines->AddActor(lineActor(needles, m.style.needle, 3.0));
     setNeedle(overlays.needle);
 
-    // A parallel projection onto the frame: pixel (x, y) shows the ray through frame.toWorld(x, y).
-    vtkCamera* cam = m.renderer->GetActiveCamera();
-    cam->ParallelProjectionOn();
-    const Vec3d centre = frame.centre();
-    const double far = (d.bounds.max - d.bounds.min).norm() + 1.0;
-    const Vec3d eye = centre - far * frame.normal;
-    cam->SetFocalPoint(centre.data());
-    cam->SetPosition(eye.data());
-    const Vec3d up = -frame.down;
-    cam->SetViewUp(up.data());
-    cam->SetParallelScale(0.5 * frame.height * frame.pixelMm);
-    cam->SetClippingRange(0.5, 3.0 * far);
+    m.far = (d.bounds.max - d.bounds.min).norm() + 1.0;
+    m.renderer->GetActiveCamera()->ParallelProjectionOn();
+    setCamera(frame);
 
     m.window = vtkSmartPointer<vtkRenderWindow>::New();
     m.window->SetOffScreenRendering(1);
@@ -319,6 +392,26 @@ VolumeView3d::~VolumeView3d()
 
 RayCaster VolumeView3d::caster() const { return mImpl->caster; }
 
+RenderQuality VolumeView3d::lastQuality() const { return mImpl->last; }
+
+void VolumeView3d::setCamera(const ViewFrame& frame)
+{
+    // A parallel projection onto the frame: pixel (x, y) shows the ray through frame.toWorld(x, y).
+    Impl& m = *mImpl;
+    if (frame.width != m.frame.width || frame.height != m.frame.height)
+        throw ValueError("3d view: a camera frame must keep the view's size in pixels");
+    m.frame = frame;
+    vtkCamera* cam = m.renderer->GetActiveCamera();
+    const Vec3d centre = frame.centre();
+    const Vec3d eye = centre - m.far * frame.normal;
+    cam->SetFocalPoint(centre.data());
+    cam->SetPosition(eye.data());
+    const Vec3d up = -frame.down;
+    cam->SetViewUp(up.data());
+    cam->SetParallelScale(0.5 * frame.height * frame.pixelMm);
+    cam->SetClippingRange(0.5, 3.0 * m.far);
+}
+
 void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
 {
     Impl& m = *mImpl;
@@ -329,9 +422,10 @@ void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
     m.lines->AddActor(m.needle);
 }
 
-Image VolumeView3d::render()
+Image VolumeView3d::render(RenderQuality quality)
 {
     Impl& m = *mImpl;
+    m.setQuality(quality);
     m.window->Render();
     auto grab = vtkSmartPointer<vtkWindowToImageFilter>::New();
     grab->SetInput(m.window);

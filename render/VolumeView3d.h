@@ -30,12 +30,27 @@ enum class RayCaster {
     Cpu,  ///< vtkFixedPointVolumeRayCastMapper (multi-threaded): composite and MIP only
 };
 
+/// @brief What the 3D view draws while the camera moves (measured by `voxhap bench render`).
+enum class MovingPath {
+    Subsample, ///< the same ray caster, one ray per movingFactor² pixels, steps movingFactor× longer, nearest voxel
+    Shrunk,    ///< a second ray caster on a copy averaged over movingFactor voxels per side (vtkImageShrink3D)
+    AutoRate,  ///< the same ray caster left to meet 10 frames/s itself (VTK's AutoAdjustSampleDistances)
+};
+
+/// @brief The quality of one 3D frame.
+enum class RenderQuality {
+    Full,   ///< one ray per pixel, steps of sampleVoxels, trilinear: the still picture
+    Moving, ///< the View3dStyle's moving path: for frames while the camera moves
+};
+
 struct View3dStyle {
     BlendMode mode = BlendMode::Colour;
     RayCaster caster = RayCaster::Auto;
-    WindowLevel window;           ///< grey ramp of the grey and MIP modes, and of MR's colour mode
-    bool criticalSurfaces = true; ///< surfaces of the table's critical tissues (needs labels)
-    double sampleVoxels = 1.0;    ///< ray step in units of the finest voxel size
+    WindowLevel window;                        ///< grey ramp of the grey and MIP modes, and of MR's colour mode
+    bool criticalSurfaces = true;              ///< surfaces of the table's critical tissues (needs labels)
+    double sampleVoxels = 1.0;                 ///< ray step in units of the finest voxel size
+    MovingPath moving = MovingPath::Subsample; ///< how RenderQuality::Moving frames are drawn
+    int movingFactor = 3;                      ///< the moving path's reduction per side (Subsample, Shrunk)
 };
 
 class VolumeView3d {
@@ -49,8 +64,15 @@ public:
     VolumeView3d(const VolumeView3d&) = delete;
     VolumeView3d& operator=(const VolumeView3d&) = delete;
 
-    /// @brief Render one frame and read it back (the first frame also compiles the shaders).
-    Image render();
+    /// @brief Render one frame and read it back (the first frame of a quality also
+    /// builds that path's tables: gradients, shaders).
+    Image render(RenderQuality quality = RenderQuality::Full);
+    /// @brief The quality of the last render().
+    RenderQuality lastQuality() const;
+    /// @brief Point the camera along another frame of the same size in pixels
+    /// (OrbitCamera.h): a parallel projection whose pixel (x, y) shows the ray
+    /// through frame.toWorld(x, y). The orientation letters follow it.
+    void setCamera(const ViewFrame& frame);
     /// @brief The ray caster in use (Auto resolved).
     RayCaster caster() const;
     /// @brief Move (or remove) the live needle drawn in the view.

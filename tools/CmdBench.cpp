@@ -86,7 +86,7 @@ int runServo(BenchOptions o)
 
 int runRender(BenchOptions o)
 {
-    if (o.quick) o.render.firstFrames = 1, o.render.steadyFrames = 2;
+    if (o.quick) o.render.firstFrames = 1, o.render.steadyFrames = 2, o.render.orbitFrames = 12;
     const auto progress = progressLine();
     const auto report = bench::runRenderBench(o.render, progress);
     progress(-1.0, "");
@@ -141,15 +141,23 @@ Action registerBench(CLI::App& app)
         ->check(CLI::Range(0.5, 3600.0));
     servo->add_flag("--quick", o->quick, "5 s at 1 kHz and 1 s per ladder rate");
     servo->add_option("--json", o->json, "Also write the figures as JSON");
-    CLI::App* render = cmd->add_subcommand(
-        "render", "Four-view frame of the viewer, first and steady, on a CT (--ct) and a 256^3 torso phantom");
+    CLI::App* render = cmd->add_subcommand("render",
+        "Four-view frame of the viewer, first and steady, and the interactive 3D orbit (moving fps, full quality after "
+        "stopping), on a CT (--ct) and a 256^3 torso phantom");
     render->add_option("--ct", o->render.ct, "A CT: DICOM folder or volume file (default: the phantom only)")
         ->check(CLI::ExistingPath);
     render->add_option("--first", o->render.firstFrames, "Fresh viewers timed on their first frame (default 2)")
         ->check(CLI::Range(1, 100));
     render->add_option("--steady", o->render.steadyFrames, "Steady frames per volume (default 5)")
         ->check(CLI::Range(1, 1000));
-    render->add_flag("--quick", o->quick, "One first frame and two steady frames");
+    render
+        ->add_option("--orbit-frames", o->render.orbitFrames,
+            "Moving frames of the 3D orbit per moving path, 512x375 (default 36; 0: no orbit)")
+        ->check(CLI::Range(0, 10000));
+    render->add_flag_function(
+        "--orbit-only", [o](std::int64_t) { o->render.fourView = false; },
+        "Only the interactive 3D orbit, not the four-view frames");
+    render->add_flag("--quick", o->quick, "One first frame, two steady frames, a 12-frame orbit");
     render->add_option("--json", o->json, "Also write the figures as JSON");
     return [o, servo, render] {
         return servo->parsed() ? runServo(*o) : render->parsed() ? runRender(*o) : runSampler(*o);

@@ -231,6 +231,12 @@ int run(const ViewOptions& o)
                 case render::WindowInput::Kind::Scroll:
                     viewer.scrollWindow(in.x, in.y, in.steps);
                     break;
+                case render::WindowInput::Kind::Motion:
+                    viewer.dragWindow(in.x, in.y);
+                    break;
+                case render::WindowInput::Kind::Release:
+                    viewer.releaseWindow();
+                    break;
                 case render::WindowInput::Kind::Key: {
                     render::ViewerEvent e;
                     e.kind = render::ViewerEvent::Kind::Key;
@@ -244,6 +250,7 @@ int run(const ViewOptions& o)
                 }
             }
             feed.pump(viewer);
+            viewer.settle(); // full quality once the 3D camera has stopped
             if (win.mapped() && !script.done()) running = script.advance(viewer, feed) && running;
             if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
                 why = "timeout";
@@ -267,6 +274,7 @@ int run(const ViewOptions& o)
             }
         }
         feed.pump(viewer);
+        viewer.settle(std::chrono::steady_clock::time_point::max()); // the snapshot at full quality
         // A window shows a failed save in its status bar; a headless run fails on it.
         if (!viewer.saveError().empty()) throw IoError(viewer.saveError());
         render::writePng(viewer.render(), o.snapshot);
@@ -305,14 +313,19 @@ Action registerView(CLI::App& app)
     CLI::App* cmd = app.add_subcommand("view",
         "Interactive viewer: axial, sagittal, coronal and 3D panes; click the entry and target, measure "
         "distances and angles; show a live needle streamed by `voxhap serve --viewer`");
-    cmd->footer("Keys: n navigate (click moves the slices), p plan (click entry, then target), d distance, a angle\n"
-                "(two segments), arrows or wheel: slices, w window preset, c clear, s save the plan, q quit.\n"
-                "Views are radiological: axial from the feet, coronal from the front (patient's left on the right).");
+    cmd->footer(
+        "Keys: n navigate (click moves the slices), p plan (click entry, then target), d distance, a angle\n"
+        "(two segments), arrows or wheel: slices, w window preset, c clear, s save the plan, q quit.\n"
+        "3D pane: drag rotates (200 degrees across the pane), wheel zooms (1.21x a step), r resets the camera;\n"
+        "while it moves the pane is drawn at reduced quality, at full quality once the drag ends or\n"
+        "0.3 s after the last wheel step.\n"
+        "Views are radiological: axial from the feet, coronal from the front (patient's left on the right).");
     cmd->add_option("volume", o->input, "A volume: .vdb, .nrrd, .nii, .mha or a DICOM folder")->required();
     cmd->add_option("--plan", o->plan, "Paths to show: plan.json (voxhap-plan/1) or a 3D Slicer .mrk.json line")
         ->check(CLI::ExistingFile);
     cmd->add_option("--save", o->save, "Where key s saves the plan (default plan.json)");
-    cmd->add_option("--script", o->script, "Play events from a file (key, click, scroll, wait-pose, sleep; one a line)")
+    cmd->add_option("--script", o->script,
+           "Play events from a file (key, click, scroll, drag, release, wait-pose, sleep; one a line)")
         ->check(CLI::ExistingFile);
     cmd->add_option("--snapshot", o->snapshot, "No window: play the script, write the window as this PNG and exit");
     cmd->add_option("--listen", o->listen,

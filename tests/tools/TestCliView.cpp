@@ -23,6 +23,7 @@
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -143,6 +144,49 @@ TEST_F(CliView, ScriptedClicksWriteThePlanAndASnapshot)
     EXPECT_GT(
         viewGreySpread(shot, x0, y0, x0 + p3["image_size"][0].get<int>(), y0 + p3["image_size"][1].get<int>()), 5.0)
         << "blank 3D pane";
+}
+
+TEST_F(CliView, ScriptedDragTurnsThe3dPaneAndResetRestoresIt)
+{
+    // Three snapshots of the same viewer: untouched, after a drag (the camera
+    // turned), and after the same drag followed by r (the camera reset). The
+    // snapshot is drawn at full quality (the drag released), so the reset one
+    // is pixel-identical to the untouched one and the turned one is not.
+    write("none.txt", "key n\n");
+    write("turn.txt", "drag 3d 30 0\ndrag 3d 15 10\nrelease\n");
+    write("reset.txt", "drag 3d 30 0\ndrag 3d 15 10\nrelease\nscroll 3d 2\nkey r\n");
+    nlohmann::json j;
+    std::vector<Image> shots;
+    for (const std::string name : {"none", "turn", "reset"}) {
+        const Result r = run("view s.vdb --script " + name + ".txt --snapshot " + name + ".png " + kViewSize +
+            " --point 0,-20,0 --json");
+        ASSERT_EQ(r.exitCode, 0) << name << ": " << r.err;
+        j = nlohmann::json::parse(r.out);
+        shots.push_back(voxhap::render::readImage(mDir / (name + ".png")));
+    }
+    const auto& p3 = j["panes"][3];
+    ASSERT_EQ(p3["view"], "3d");
+    const int x0 = p3["image_origin"][0], y0 = p3["image_origin"][1];
+    const int w = p3["image_size"][0], h = p3["image_size"][1];
+    const auto differing = [&](const Image& a, const Image& b) {
+        long n = 0;
+        for (int y = y0; y < y0 + h; ++y) {
+            for (int x = x0; x < x0 + w; ++x) n += !(a.at(x, y) == b.at(x, y));
+        }
+        return n;
+    };
+    EXPECT_GT(differing(shots[0], shots[1]), long(w) * h / 20) << "a 45 degree turn changes the 3D pane";
+    EXPECT_EQ(differing(shots[0], shots[2]), 0) << "r restores the first camera";
+    // The slices do not follow the 3D camera.
+    const auto& p0 = j["panes"][0];
+    const int ax = p0["image_origin"][0], ay = p0["image_origin"][1];
+    for (int y = ay; y < ay + p0["image_size"][1].get<int>(); ++y) {
+        for (int x = ax; x < ax + p0["image_size"][0].get<int>(); ++x)
+            ASSERT_TRUE(shots[0].at(x, y) == shots[1].at(x, y)) << x << "," << y;
+    }
+    const Result help = run("view --help");
+    EXPECT_NE(help.out.find("drag rotates"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("r resets"), std::string::npos);
 }
 
 TEST_F(CliView, WindowRunsUnderXvfbAndQuitsFromTheScript)

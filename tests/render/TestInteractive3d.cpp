@@ -1,0 +1,317 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestInteractive3d.cpp
+/// @brief The interactive 3D pane (issue 28 item 7): the orbit camera against
+/// closed-form rotations, the viewer's drag, wheel and reset driven by
+/// synthetic events, and the reduced-quality path: what renders while the
+/// camera moves, what after it stops, and that the moving picture still shows
+/// the bone where the camera projects it. No timing here (that is
+/// `voxhap bench render`'s).
+
+#include "RenderFixtures.h"
+
+#include "common/BuiltinTable.h"
+#include "common/Tolerances.h"
+#include "render/Display.h"
+#include "render/OrbitCamera.h"
+#include "render/RenderVolume.h"
+#include "render/Viewer.h"
+#include "render/ViewerScript.h"
+#include "render/VolumeView3d.h"
+#include "core/Errors.h"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+namespace voxhap::render {
+namespace {
+
+using test::expectedPixel;
+using test::nearVec;
+using test::SpherePhantom;
+
+/// Unit vectors turned by Eigen's angle-axis: a few roundings of numbers of
+/// order 1, so 1e-12 is far above round-off and far below any visible turn.
+constexpr double kCameraTol = 1e-12;
+
+ViewFrame frontFrame(int w = 100, int h = 80)
+{
+    const WorldBounds box{Vec3d(-30, -40, -25), Vec3d(20, 10, 35)};
+    ViewFrame f = viewFrame(ViewKind::ThreeD, box, 0.5 * (box.min + box.max), 1.0);
+    const Vec3d c = f.centre();
+    f.width = w, f.height = h;
+    f.origin = c - f.pixelMm * (0.5 * (w - 1) * f.right + 0.5 * (h - 1) * f.down);
+    return f;
+}
+
+TEST(OrbitCamera, HorizontalDragTurnsAboutTheViewUp)
+{
+    const ViewFrame home = frontFrame();
+    OrbitCamera cam(home);
+    ASSERT_TRUE(nearVec(home.normal, Vec3d(0, 1, 0), kCameraTol)) << "from the front, looking posterior";
+    // 90° is 90/200 of the pane's width; dragging right turns the camera by
+    // −90° about +z (VTK's Azimuth(−90)): it then looks along +x, from the
+    // patient's right, with the patient's posterior on the image's left.
+    cam.drag(home.width * 90.0 / kOrbitDegreesPerPane, 0.0);
+    EXPECT_TRUE(nearVec(cam.frame().normal, Vec3d(1, 0, 0), kCameraTol));
+    EXPECT_TRUE(nearVec(cam.frame().right, Vec3d(0, -1, 0), kCameraTol));
+    EXPECT_TRUE(nearVec(cam.frame().down, home.down, kCameraTol)) << "the view up stays";
+    EXPECT_TRUE(nearVec(cam.frame().centre(), home.centre(), kCameraTol)) << "it orbits the centre";
+    EXPECT_EQ(cam.frame().pixelMm, home.pixelMm);
+    EXPECT_FALSE(cam.atHome());
+}
+
+TEST(OrbitCamera, VerticalDragTurnsAboutTheScreenAxisAndWheelZooms)
+{
+    const ViewFrame home = frontFrame();
+    OrbitCamera cam(home);
+    // Dragging down by 90/200 of the height: Elevation(+90), the camera rises
+    // over the head and looks down (−z); its view up, +z before, turns with
+    // it to posterior (+y), so anterior is at the bottom of the image.
+    cam.drag(0.0, home.height * 90.0 / kOrbitDegreesPerPane);
+    EXPECT_TRUE(nearVec(cam.frame().normal, Vec3d(0, 0, -1), kCameraTol));
+    EXPECT_TRUE(nearVec(cam.frame().down, Vec3d(0, -1, 0), kCameraTol));
+    EXPECT_TRUE(nearVec(cam.frame().right, home.right, kCameraTol));
+    // Two wheel steps in: the pixel shrinks by 1.21², about the same centre.
+    cam.wheel(2);
+    EXPECT_NEAR(cam.frame().pixelMm, home.pixelMm / (kWheelZoom * kWheelZoom), kCameraTol * home.pixelMm);
+    EXPECT_TRUE(nearVec(cam.frame().centre(), home.centre(), kCameraTol));
+    cam.wheel(-2);
+    EXPECT_NEAR(cam.frame().pixelMm, home.pixelMm, kCameraTol * home.pixelMm);
+    // Reset gives back the home frame exactly, not a frame near it.
+    cam.reset();
+    EXPECT_TRUE(cam.atHome());
+    EXPECT_EQ(cam.frame().origin, home.origin);
+    EXPECT_EQ(cam.frame().normal, home.normal);
+}
+
+TEST(ViewerScript, DragAndReleaseSteps)
+{
+    const auto steps = parseViewerScript("drag 3d 40 -10.5\nrelease\n", "ev.txt");
+    ASSERT_EQ(steps.size(), 2u);
+    EXPECT_EQ(steps[0].event.kind, ViewerEvent::Kind::Drag);
+    EXPECT_EQ(steps[0].event.pane, ViewKind::ThreeD);
+    EXPECT_EQ(steps[0].event.px, Vec2d(40, -10.5));
+    EXPECT_EQ(steps[1].event.kind, ViewerEvent::Kind::Release);
+    EXPECT_THROW(parseViewerScript("drag 3d 40\n", "ev.txt"), ValueError);
+    EXPECT_THROW(parseViewerScript("release now\n", "ev.txt"), ValueError);
+}
+
+/// The reduced-quality path of VolumeView3d on a bone sphere in fat (colour mode, the viewer's default).
+class Interactive3d : public testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        sDisplay = new DisplayGuard();
+        if (!sDisplay->available()) GTEST_FAIL() << "no display for the 3D view: " << sDisplay->why();
+    }
+    static void TearDownTestSuite()
+    {
+        delete sDisplay;
+        sDisplay = nullptr;
+    }
+    void SetUp() override
+    {
+        if (!sDisplay->available()) GTEST_SKIP() << sDisplay->why();
+        volume::GridSpec grid;
+        grid.spacing = Vec3d(0.5, 0.5, 0.5);
+        mVolume = std::make_unique<volume::Volume>(mPhantom.make(grid));
+        const auto b = mVolume->worldBounds();
+        mBox = {b[0], b[1]};
+        mFrame = viewFrame(ViewKind::ThreeD, mBox, 0.5 * (mBox.min + mBox.max), 0.5);
+    }
+    static DisplayGuard* sDisplay;
+    SpherePhantom mPhantom; // cortical bone, radius 6 mm, centre (8, −12, 5), off the box centre
+    std::unique_ptr<volume::Volume> mVolume;
+    WorldBounds mBox;
+    ViewFrame mFrame;
+};
+
+DisplayGuard* Interactive3d::sDisplay = nullptr;
+
+double grey(const Rgb& p) { return (p.r + p.g + p.b) / 3.0; }
+
+/// Mean grey of the 3 × 3 pixels around @p at.
+double greyAround(const Image& img, const Vec2d& at)
+{
+    double s = 0;
+    int n = 0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int x = int(std::lround(at.x())) + dx, y = int(std::lround(at.y())) + dy;
+            if (img.contains(x, y)) s += grey(img.at(x, y)), ++n;
+        }
+    }
+    return n ? s / n : 0.0;
+}
+
+double meanGreyDifference(const Image& a, const Image& b)
+{
+    double s = 0;
+    for (int y = 0; y < a.height(); ++y) {
+        for (int x = 0; x < a.width(); ++x) s += std::abs(grey(a.at(x, y)) - grey(b.at(x, y)));
+    }
+    return s / (double(a.width()) * a.height());
+}
+
+long differingPixels(const Image& a, const Image& b)
+{
+    long n = 0;
+    for (int y = 0; y < a.height(); ++y) {
+        for (int x = 0; x < a.width(); ++x) n += !(a.at(x, y) == b.at(x, y));
+    }
+    return n;
+}
+
+/// The moving picture against the full one, mean |grey| over the image: the
+/// bone sphere's rim and the box's edges move by up to a reduced pixel (3 px
+/// at the default factor) and nearest-voxel steps band the shading.
+/// `voxhap bench render` measures 1.6 (torso phantom) to 4.9 (CT) grey levels
+/// for the default path; 12 (5 % of the range) leaves room for that and still
+/// fails a frame that misses the sphere or draws the box elsewhere (tens).
+constexpr double kMovingMeanGrey = 12.0;
+/// The bone sphere's projected centre is bright at both qualities: cortical
+/// bone (table colour 255, 255, 240) at 0.3 opacity per mm over a 12 mm chord
+/// saturates; fat around it (250, 220, 120 at 0.004 per mm) stays far below.
+/// The centre must be at least this much greyer than the fat beside the sphere.
+constexpr double kBoneOverFatGrey = 40.0;
+
+TEST_F(Interactive3d, MovingFramesAreReducedAndShowTheBoneWhereTheCameraPutsIt)
+{
+    const RenderVolume rv(*mVolume, false);
+    for (const MovingPath path : {MovingPath::Subsample, MovingPath::Shrunk}) {
+        SCOPED_TRACE(path == MovingPath::Subsample ? "subsample" : "shrunk");
+        View3dStyle style;
+        style.moving = path;
+        Overlays none;
+        none.letters = false, none.scaleBar = false;
+        VolumeView3d view(rv, mFrame, style, volume::TissueTable::builtin(), none);
+        const Image full = view.render(RenderQuality::Full);
+        EXPECT_EQ(view.lastQuality(), RenderQuality::Full);
+        const Image moving = view.render(RenderQuality::Moving);
+        EXPECT_EQ(view.lastQuality(), RenderQuality::Moving);
+        ASSERT_EQ(moving.width(), full.width());
+        ASSERT_EQ(moving.height(), full.height());
+        // Reduced: not the full picture, yet close to it.
+        EXPECT_GT(differingPixels(moving, full), 0) << "the moving frame is the full frame";
+        EXPECT_LT(meanGreyDifference(moving, full), kMovingMeanGrey);
+        // The bone at the sphere's projected centre (closed form), brighter than the fat beside it.
+        const Vec2d c = expectedPixel("3d", mPhantom.centre, mBox.min, mBox.max, mFrame.pixelMm);
+        const Vec2d fat = expectedPixel(
+            "3d", mPhantom.centre + Vec3d(-2.0 * mPhantom.radius, 0, 0), mBox.min, mBox.max, mFrame.pixelMm);
+        for (const Image* img : {&full, &moving}) {
+            EXPECT_GT(greyAround(*img, c), greyAround(*img, fat) + kBoneOverFatGrey)
+                << (img == &full ? "full" : "moving");
+        }
+        // Turned 90° (a horizontal drag): the sphere is where the camera frame
+        // projects it, in the moving frame and then the full one.
+        OrbitCamera cam(mFrame);
+        cam.azimuth(-90.0);
+        view.setCamera(cam.frame());
+        const Vec2d turned = cam.frame().toPixel(mPhantom.centre);
+        ASSERT_GT(std::abs(turned.x() - c.x()), 10.0) << "the test needs the turn to move the sphere";
+        const Vec2d fatTurned = cam.frame().toPixel(mPhantom.centre + Vec3d(0, 2.0 * mPhantom.radius, 0));
+        const Image movingTurned = view.render(RenderQuality::Moving);
+        const Image fullTurned = view.render(RenderQuality::Full);
+        for (const Image* img : {&fullTurned, &movingTurned}) {
+            EXPECT_GT(greyAround(*img, turned), greyAround(*img, fatTurned) + kBoneOverFatGrey)
+                << (img == &fullTurned ? "full, turned" : "moving, turned");
+        }
+        // Back at full quality the picture is the full path's again: the same as
+        // a full frame before any moving one, at the home camera.
+        view.setCamera(mFrame);
+        EXPECT_EQ(differingPixels(view.render(RenderQuality::Full), full), 0) << "full quality restored";
+    }
+}
+
+/// The viewer's 3D pane driven by synthetic drag, wheel, release and key events.
+class Viewer3dCamera : public Interactive3d {
+protected:
+    void SetUp() override
+    {
+        Interactive3d::SetUp();
+        if (IsSkipped()) return;
+        mOpt.width = 244, mOpt.height = 268; // 120 px panes
+        mOpt.point = mPhantom.centre;
+        mOpt.threeD = true;
+    }
+    static ViewerEvent drag(double dx, double dy)
+    {
+        ViewerEvent e;
+        e.kind = ViewerEvent::Kind::Drag;
+        e.pane = ViewKind::ThreeD;
+        e.px = Vec2d(dx, dy);
+        return e;
+    }
+    ViewerOptions mOpt;
+};
+
+TEST_F(Viewer3dCamera, DragRotatesWhileMovingAndReleaseRendersFullQuality)
+{
+    Viewer v(*mVolume, mOpt, test::table());
+    const ViewFrame home = v.frame(ViewKind::ThreeD);
+    v.render();
+    EXPECT_EQ(v.last3dQuality(), RenderQuality::Full);
+    // A drag of 45/200 of the pane's width: azimuth −45° about the view up.
+    v.handle(drag(home.width * 45.0 / kOrbitDegreesPerPane, 0));
+    const double c = std::cos(std::numbers::pi / 4), s = std::sin(std::numbers::pi / 4);
+    EXPECT_TRUE(nearVec(v.frame(ViewKind::ThreeD).normal, Vec3d(s, c, 0), kCameraTol));
+    EXPECT_TRUE(nearVec(v.frame(ViewKind::ThreeD).down, home.down, kCameraTol));
+    EXPECT_TRUE(v.moving());
+    v.render();
+    EXPECT_EQ(v.last3dQuality(), RenderQuality::Moving) << "while the button is held";
+    // Held still: a drag does not settle by time, only by its release.
+    EXPECT_FALSE(v.settle(std::chrono::steady_clock::now() + std::chrono::seconds(10)));
+    v.handle(ViewerEvent{ViewerEvent::Kind::Release, ViewKind::ThreeD, {0, 0}, "", 0});
+    EXPECT_FALSE(v.moving());
+    v.render();
+    EXPECT_EQ(v.last3dQuality(), RenderQuality::Full) << "after the release";
+    // The slices are untouched by the 3D camera.
+    EXPECT_EQ(v.point(), mPhantom.centre);
+    // r resets the camera to the first one, exactly.
+    v.handle(ViewerEvent{ViewerEvent::Kind::Key, ViewKind::Axial, {0, 0}, "r", 0});
+    EXPECT_TRUE(v.camera().atHome());
+    EXPECT_EQ(v.frame(ViewKind::ThreeD).normal, home.normal);
+    EXPECT_EQ(v.frame(ViewKind::ThreeD).origin, home.origin);
+}
+
+TEST_F(Viewer3dCamera, WheelZoomsAndFullQualityFollowsTheSettleTime)
+{
+    Viewer v(*mVolume, mOpt, test::table());
+    const ViewFrame home = v.frame(ViewKind::ThreeD);
+    // The wheel over the 3D pane, in window pixels: one step in.
+    const PaneRect& pane = v.layout().pane(ViewKind::ThreeD);
+    const auto before = std::chrono::steady_clock::now();
+    v.scrollWindow(pane.x + pane.width / 2, pane.y + pane.height / 2, 1);
+    EXPECT_NEAR(v.frame(ViewKind::ThreeD).pixelMm, home.pixelMm / kWheelZoom, kCameraTol * home.pixelMm);
+    EXPECT_TRUE(nearVec(v.frame(ViewKind::ThreeD).centre(), home.centre(), kCameraTol));
+    v.render();
+    EXPECT_EQ(v.last3dQuality(), RenderQuality::Moving);
+    EXPECT_FALSE(v.settle(before)) << "before the settle time";
+    EXPECT_FALSE(v.dirty());
+    const auto later = std::chrono::steady_clock::now() + std::chrono::milliseconds(int(1000 * kSettleS) + 1);
+    EXPECT_TRUE(v.settle(later));
+    EXPECT_TRUE(v.dirty()) << "the full-quality redraw is due";
+    v.render();
+    EXPECT_EQ(v.last3dQuality(), RenderQuality::Full);
+    // A window drag: button down in the 3D pane, motion, release. Whole
+    // pixels: dy px turn the camera by dy · 200 / height degrees (Elevation).
+    const int dy = int(home.height * 90.0 / kOrbitDegreesPerPane);
+    const double theta = dy * kOrbitDegreesPerPane / home.height * std::numbers::pi / 180.0;
+    EXPECT_TRUE(v.clickWindow(pane.x + 10, pane.y + 10));
+    v.dragWindow(pane.x + 10, pane.y + 10 + dy);
+    EXPECT_TRUE(v.moving());
+    v.releaseWindow();
+    EXPECT_FALSE(v.moving());
+    EXPECT_TRUE(nearVec(v.frame(ViewKind::ThreeD).normal, Vec3d(0, std::cos(theta), -std::sin(theta)), kCameraTol));
+    // A drag that starts on a slice does not turn the 3D camera.
+    const ViewFrame turned = v.frame(ViewKind::ThreeD);
+    const Vec2d axial = v.imageOrigin(ViewKind::Axial);
+    v.clickWindow(int(axial.x()) + 5, int(axial.y()) + 5);
+    v.dragWindow(int(axial.x()) + 50, int(axial.y()) + 5);
+    v.releaseWindow();
+    EXPECT_EQ(v.frame(ViewKind::ThreeD).normal, turned.normal);
+}
+
+} // namespace
+} // namespace voxhap::render
