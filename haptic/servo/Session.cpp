@@ -2,6 +2,8 @@
 /// @file Session.cpp
 #include "haptic/servo/Session.h"
 
+#include "core/BoundedRead.h"
+
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 
@@ -76,6 +78,9 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const fs::
 
 std::vector<ServoRecord> readSessionPoses(const fs::path& file)
 {
+    // A regular file only (a FIFO or /dev/zero would never end); sessions are
+    // read line by line, so their length is bounded by the file's, not by a limit.
+    requireRegularFile(file, "session");
     std::ifstream in(file);
     if (!in) throw IoError(file.string() + ": cannot open the session");
     std::string line;

@@ -69,6 +69,13 @@ TEST_F(SessionFile, MissingFileIsRefusedNamingIt)
     test::expectRefused<IoError>([](const fs::path& f) { readSessionPoses(f); }, mDir / "absent.csv", "cannot open");
 }
 
+TEST_F(SessionFile, DeviceOrFifoIsRefusedUnopened)
+{
+    // /dev/zero never ends and a FIFO without a writer never answers: both are
+    // refused from the path alone, in one line naming the file.
+    test::expectRefused<IoError>([](const fs::path& f) { readSessionPoses(f); }, fs::path("/dev/zero"), "file type");
+}
+
 TEST_F(SessionFile, BadHeaderIsRefusedAtLineOne)
 {
     const std::string rows = "0,0,0,0,0,0,1\n0.001,0,0,1,0,0,1\n";
