@@ -26,6 +26,7 @@ struct BenchOptions {
     bool quick = false;
     bool noVtk = false;
     bool fidelityGiven = false;
+    bool noRealtime = false;
     std::string json, png;
 };
 
@@ -71,6 +72,7 @@ int runSampler(BenchOptions o)
 
 int runServo(BenchOptions o)
 {
+    o.servo.realtime = !o.noRealtime;
     if (o.quick) {
         o.servo.seconds = 5.0;
         o.servo.ladderSeconds = 1.0;
@@ -140,6 +142,14 @@ Action registerBench(CLI::App& app)
     servo->add_option("--seconds", o->servo.seconds, "Length of the 1 kHz run (default 30)")
         ->check(CLI::Range(0.5, 3600.0));
     servo->add_flag("--quick", o->quick, "5 s at 1 kHz and 1 s per ladder rate");
+    servo
+        ->add_option("--load", o->servo.load,
+            "Run N CPU-bound processes (a busy loop each, normal priority) beside the loop (default 0)")
+        ->check(CLI::Range(0, 64));
+    servo->add_option("--repeats", o->servo.repeats, "1 kHz runs per scene; their median is reported (default 1)")
+        ->check(CLI::Range(1, 100));
+    servo->add_flag("--no-realtime", o->noRealtime,
+        "Do not ask for real-time scheduling (SCHED_FIFO) and locked memory for the loop");
     servo->add_option("--json", o->json, "Also write the figures as JSON");
     CLI::App* render = cmd->add_subcommand("render",
         "Four-view frame of the viewer, first and steady, and the interactive 3D orbit (moving fps, full quality after "
