@@ -102,6 +102,18 @@ std::vector<std::vector<Segment>> makePaths(
     return paths;
 }
 
+/// makePaths from @p entry, inward along −y, as a path maker for any count and depth.
+std::function<std::vector<std::vector<Segment>>(int, int, std::mt19937&)> pathsFrom(
+    const Vec3d& entry, const SamplerBenchOptions& o, double jitterMm)
+{
+    return [entry, o, jitterMm](int count, int depths, std::mt19937& r) {
+        SamplerBenchOptions more = o;
+        more.paths = count;
+        more.depths = depths;
+        return makePaths(entry, Vec3d(0, -1, 0), more, r, jitterMm);
+    };
+}
+
 /// A workload on a phantom model at the options' spacing, β from workloadBeta().
 Workload phantomWorkload(const std::string& name, const volume::PhantomModel& model, const SamplerBenchOptions& o)
 {
@@ -121,13 +133,8 @@ Workload slabWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
     p.layers = kSlabLayers;
     p.halfWidthMm = 95.0; // a 60° shaft of 100 mm drifts 87 mm sideways
     Workload w = phantomWorkload("slab", volume::slabModel(p, volume::TissueTable::builtin()), o);
-    w.paths = makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), o, rng, o.spacingMm);
-    w.morePaths = [o](int count, int depths, std::mt19937& r) {
-        SamplerBenchOptions more = o;
-        more.paths = count;
-        more.depths = depths;
-        return makePaths(Vec3d::Zero(), Vec3d(0, -1, 0), more, r, o.spacingMm);
-    };
+    w.morePaths = pathsFrom(Vec3d::Zero(), o, o.spacingMm);
+    w.paths = w.morePaths(o.paths, o.depths, rng);
     // physics.md §7 R1 closed form, depth from the surface y = 0; β as the grid stores it (float).
     w.pcReference = [](const Segment& s) {
         const Vec3d d = s.tip - s.entry;
@@ -147,13 +154,8 @@ Workload torsoWorkload(const SamplerBenchOptions& o, std::mt19937& rng)
 {
     Workload w = phantomWorkload("torso", volume::torsoModel(volume::TorsoParams{}, volume::TissueTable::builtin()), o);
     // From the posterior skin 40 mm left of the midline, inward and tilted.
-    w.paths = makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), o, rng, 10.0);
-    w.morePaths = [o](int count, int depths, std::mt19937& r) {
-        SamplerBenchOptions more = o;
-        more.paths = count;
-        more.depths = depths;
-        return makePaths(Vec3d(40.0, -8.0, 0.0), Vec3d(0, -1, 0), more, r, 10.0);
-    };
+    w.morePaths = pathsFrom(Vec3d(40.0, -8.0, 0.0), o, 10.0);
+    w.paths = w.morePaths(o.paths, o.depths, rng);
     auto exact = std::shared_ptr<haptic::ShaftIntegrator>(
         haptic::makeIntegrator(*w.field, {haptic::Strategy::ExactVoxel, 0.1, false}));
     w.pcReference = [exact](const Segment& s) {
@@ -201,6 +203,13 @@ std::vector<std::vector<Segment>> bodyPaths(const volume::FloatGrid& body, int c
     return paths;
 }
 
+/// bodyPaths through @p body, as a path maker for any count and depth.
+std::function<std::vector<std::vector<Segment>>(int, int, std::mt19937&)> pathsThroughBody(
+    volume::FloatGrid::ConstPtr body)
+{
+    return [body](int count, int depths, std::mt19937& r) { return bodyPaths(*body, count, depths, r); };
+}
+
 /// The shared CT: loaded and segmented as `voxhap segment` does, β per label
 /// from the tissue table through the mapping layer (MaterialField).
 Workload ctWorkload(const SamplerBenchOptions& o, std::mt19937& rng, const Progress& progress)
@@ -213,9 +222,8 @@ Workload ctWorkload(const SamplerBenchOptions& o, std::mt19937& rng, const Progr
     w.field =
         std::make_unique<haptic::MaterialField>(*w.volume, volume::TissueTable::builtin(), haptic::MaterialOptions{});
     w.voxelMm = w.volume->geometry().spacing.minCoeff();
-    const auto body = openvdb::gridConstPtrCast<volume::FloatGrid>(w.field->damping());
-    w.paths = bodyPaths(*body, o.paths, o.depths, rng);
-    w.morePaths = [body](int count, int depths, std::mt19937& r) { return bodyPaths(*body, count, depths, r); };
+    w.morePaths = pathsThroughBody(openvdb::gridConstPtrCast<volume::FloatGrid>(w.field->damping()));
+    w.paths = w.morePaths(o.paths, o.depths, rng);
     return w;
 }
 
@@ -248,8 +256,8 @@ Workload mrWorkload(const SamplerBenchOptions& o, std::mt19937& rng, const Progr
     openvdb::tools::changeBackground(beta->tree(), 0.0f);
     w.field = std::make_unique<haptic::MaterialField>(beta, nullptr, volume::TissueTable::builtin());
     w.voxelMm = v.geometry().spacing.minCoeff();
-    w.paths = bodyPaths(*beta, o.paths, o.depths, rng);
-    w.morePaths = [beta](int count, int depths, std::mt19937& r) { return bodyPaths(*beta, count, depths, r); };
+    w.morePaths = pathsThroughBody(beta);
+    w.paths = w.morePaths(o.paths, o.depths, rng);
     return w;
 }
 

@@ -5,6 +5,7 @@
 /// (fuzz/FuzzNiftiHeader.cpp).
 
 #include "volume/io/NiftiHeader.h"
+#include "volume/io/RasterLayout.h"
 
 #include "volume/io/ByteSource.h"
 #include "core/BoundedRead.h"
@@ -52,24 +53,6 @@ SampleType sampleType(int datatype, const std::string& file)
         break;
     }
     throw IoError(file + ": datatype: code " + std::to_string(datatype) + " is not a supported scalar type");
-}
-
-std::size_t niftiSampleBytes(SampleType t)
-{
-    switch (t) {
-    case SampleType::Int8:
-    case SampleType::UInt8:
-        return 1;
-    case SampleType::Int16:
-    case SampleType::UInt16:
-        return 2;
-    case SampleType::Int32:
-    case SampleType::UInt32:
-    case SampleType::Float32:
-        return 4;
-    default:
-        return 8;
-    }
 }
 
 std::string niftiNumber(double v)
@@ -132,7 +115,7 @@ NiftiRawHeader checkRawHeader(const std::filesystem::path& file, const std::stri
     const auto checkDims = [&](std::int64_t ndim, auto dim, SampleType type) {
         if (ndim < 1 || ndim > 7)
             throw IoError(name + ": dim: dim[0] = " + std::to_string(ndim) + " (1 to 7 expected)");
-        std::uint64_t bytes = niftiSampleBytes(type);
+        std::uint64_t bytes = sampleBytes(type);
         for (int a = 1; a <= ndim; ++a) {
             if (dim(a) < 1)
                 throw IoError(
