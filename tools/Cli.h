@@ -90,6 +90,7 @@ Action registerRender(CLI::App& app);
 Action registerPlot(CLI::App& app);
 Action registerView(CLI::App& app);
 Action registerPlan(CLI::App& app);
+Action registerRegress(CLI::App& app);
 
 /// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
 struct PlanFiles {

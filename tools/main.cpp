@@ -32,6 +32,7 @@ int main(int argc, char** argv)
         {"plot", registerPlot(app)},
         {"view", registerView(app)},
         {"bench", registerBench(app)},
+        {"regress", registerRegress(app)},
     };
 
     if (argc > 1 && argv[1][0] != '-' && !actions.count(argv[1])) {

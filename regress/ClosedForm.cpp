@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file ClosedForm.cpp
+/// @brief The analytic regression phantoms of physics.md §7 as references of a
+/// regression case: R1 (layered damping slab, tilted or not) and R5 (sphere in a
+/// slab), for a model whose only axial term is Kyung's voxel damping (§1.2 Eq. 5).
+
+#include "regress/CaseRunner.h"
+
+#include "haptic/force/NeedleForceModel.h"
+#include "volume/phantoms/Phantoms.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+namespace voxhap::regress {
+
+namespace {
+
+/// A value of the record, else of the current inputs.
+struct Lookup {
+    const Inputs& recorded;
+    const Inputs& current;
+    const InputValue* find(const std::string& key) const
+    {
+        if (auto it = recorded.find(key); it != recorded.end()) return &it->second;
+        if (auto it = current.find(key); it != current.end()) return &it->second;
+        return nullptr;
+    }
+    std::optional<double> number(const std::string& key) const
+    {
+        const InputValue* v = find(key);
+        return v ? v->number : std::nullopt;
+    }
+    std::string text(const std::string& key) const
+    {
+        const InputValue* v = find(key);
+        return v ? v->text : std::string();
+    }
+};
+
+std::optional<Vec3d> vecOf(const std::string& text)
+{
+    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    if (!j.is_array() || j.size() != 3) return std::nullopt;
+    return Vec3d(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+}
+
+/// Length of [a, b] inside [lo, hi].
+double overlap(double a, double b, double lo, double hi) { return std::max(0.0, std::min(b, hi) - std::max(a, lo)); }
+
+/// The model has voxel damping as its only axial term: Kyung's scene without
+/// bone on the path (§1.2, §1.3).
+bool dampingOnly(const Lookup& in)
+{
+    bool damping = false;
+    for (const auto& [key, v] : in.current) {
+        if (key.rfind("scene.terms.", 0) != 0) continue;
+        const std::string term = key.substr(12, key.find('.', 12) - 12);
+        if (term == "damping") damping = damping || v.text != "false";
+        if ((term == "tip" || term == "cutting" || term == "viscous" || term == "karnopp" || term == "lor" ||
+                term == "lock") &&
+            v.text != "false")
+            return false;
+    }
+    return damping;
+}
+
+} // namespace
+
+std::optional<ClosedForm> closedForm(
+    const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples)
+{
+    const Lookup in{recorded, current};
+    const std::string kind = c.volume.kind;
+    if ((kind != "slab" && kind != "sphere") || !c.script.empty() || !dampingOnly(in)) return std::nullopt;
+    const auto entry = vecOf(in.current.at("case.entry").text), target = vecOf(in.current.at("case.target").text);
+    const auto speed = in.current.find("case.speed_mm_per_s");
+    if (!entry || !target || speed == in.current.end() || !speed->second.number) return std::nullopt;
+    const Vec3d u = (*target - *entry).normalized();
+    const double v0 = *speed->second.number;
+    const double needle = in.number("scene.needle.length_mm").value_or(haptic::Needle{}.lengthMm);
+    const auto beta = [&](const std::string& tissue) { return in.number(tissue + ".beta_used").value_or(0.0); };
+
+    haptic::ForceTerms::Damping damping;
+    damping.on = true;
+    damping.capN = in.number("damping.cap_N").value_or(damping.capN);
+    damping.referenceSpeedMmPerS = in.number("damping.reference_speed_mm_per_s").value_or(damping.referenceSpeedMmPerS);
+    haptic::DeviceLimits device;
+    device.maxDampingNsPerMm = in.number("device.max_damping_Ns_per_mm").value_or(device.maxDampingNsPerMm);
+    // splitDamping is Lipschitz in ∫β with constant max(v, v_ref) (§6.2): the bound on ∫β times it bounds F.
+    const double lipschitz = std::max(v0, damping.referenceSpeedMmPerS);
+
+    const double h = c.volume.spacingMm.maxCoeff();
+    const double step = 0.25 * c.volume.spacingMm.minCoeff(); // the march step (CaseRunner.cpp)
+    const std::string& strategy = c.strategy;
+
+    ClosedForm cf;
+    std::function<double(double, double)> integral; // ∫β over the shaft [a, s] of the path
+    double boundTerm = 0;                           // bound on |Δ∫β| [N·s/mm]
+
+    if (kind == "slab") {
+        std::vector<std::pair<std::string, double>> layers = c.volume.layers;
+        if (layers.empty()) {
+            for (const auto& l : volume::SlabParams{}.layers) layers.emplace_back(l.tissue, l.thicknessMm);
+        }
+        for (const auto& [t, mm] : layers) {
+            if (in.text(t + ".rigid") == "true") return std::nullopt; // bone: contact, not damping (§1.3)
+        }
+        const double tilt = c.volume.tiltDeg * kPi / 180.0;
+        const Vec3d normal(0.0, std::cos(tilt), std::sin(tilt)); // SlabPhantoms.cpp: outward normal
+        const double cosT = -u.dot(normal);
+        if (!(cosT > 0.2)) return std::nullopt;
+        const double d0 = -normal.dot(*entry); // the entry's depth below the surface
+        std::vector<double> z{0.0}, b;
+        for (const auto& [t, mm] : layers) z.push_back(z.back() + mm), b.push_back(beta(t));
+        integral = [=](double a, double s) {
+            double sum = 0;
+            for (std::size_t j = 0; j < b.size(); ++j)
+                sum += b[j] * overlap(d0 + a * cosT, d0 + s * cosT, z[j], z[j + 1]);
+            return sum / cosT;
+        };
+        // Boundaries fall on voxel faces when the grid is turned with the layers
+        // (rotation (tilt, 0, 0)), the entry lies on the surface and the spacing
+        // across the layers divides every depth (physics.md §7 R1); otherwise each
+        // voxelised plane lies within half a voxel diagonal of the true one
+        // (TestPhantoms: TiltedLayersWithinHalfAVoxelDiagonal), a band √3·h/cosθ
+        // long on the path.
+        const double hy = c.volume.spacingMm.y();
+        bool aligned = (c.volume.rotationDeg - Vec3d(c.volume.tiltDeg, 0, 0)).norm() < 1e-12 && std::abs(d0) < 1e-9;
+        for (const double depth : z) aligned = aligned && std::abs(depth / hy - std::round(depth / hy)) < 1e-9;
+        double sumJump = 0, maxJump = 0;
+        for (std::size_t j = 0; j <= b.size(); ++j) {
+            const double jump = std::abs((j < b.size() ? b[j] : 0.0) - (j > 0 ? b[j - 1] : 0.0));
+            sumJump += jump;
+            maxJump = std::max(maxJump, jump);
+        }
+        if (!aligned) boundTerm += sumJump * std::sqrt(3.0) * h / cosT;
+        if (strategy == "march-trilinear")
+            boundTerm += maxJump * h / (8 * cosT) + sumJump * cosT * step * step / (4 * h); // R1's bound
+        else if (strategy == "exact-trilinear")
+            boundTerm += maxJump * h / (8 * cosT); // R1's smearing term
+        else if (strategy == "march-nearest")
+            boundTerm += sumJump * step; // the trapezoid rule across each jump
+        cf.rule = "physics.md §7 R1 (layered damping slab" + std::string(c.volume.tiltDeg != 0 ? ", tilted" : "") + ")";
+    } else {
+        const double T = c.volume.slabThicknessMm, R = c.volume.radiusMm;
+        const Vec3d centre(0.0, -0.5 * T, 0.0); // SlabPhantoms.cpp: sphereModel
+        const double b0 = beta(c.volume.slabTissue), bs = beta(c.volume.sphereTissue);
+        if (!(std::abs(u.y()) > 0.2)) return std::nullopt;
+        // The slab's planes y = 0 and y = -T along the path, and the sphere's chord.
+        const double y0 = entry->y();
+        const double sIn = (y0 - 0.0) / -u.y(), sOut = (y0 + T) / -u.y();
+        const double m = (centre - *entry).dot(u);
+        const double rho2 = (centre - *entry).squaredNorm() - m * m;
+        if (rho2 > 0.64 * R * R) return std::nullopt; // R5's voxel bound holds for ρ ≤ 0.8R
+        const double half = std::sqrt(R * R - rho2);
+        integral = [=](double a, double s) {
+            return b0 * overlap(a, s, std::min(sIn, sOut), std::max(sIn, sOut)) +
+                (bs - b0) * overlap(a, s, m - half, m + half);
+        };
+        const double jump = std::abs(bs - b0);
+        boundTerm += 2 * h * jump; // R5: |ΔF| ≤ 2h·|Δβ|·v0
+        const bool gridTurned = c.volume.rotationDeg.norm() > 1e-12;
+        if (gridTurned) boundTerm += 2 * b0 * std::sqrt(3.0) * h / std::abs(u.y());
+        if (strategy == "march-trilinear")
+            boundTerm += std::max(jump, b0) * h / 8 + (2 * jump + 2 * b0) * step * step / (4 * h);
+        else if (strategy == "exact-trilinear")
+            boundTerm += std::max(jump, b0) * h / 8;
+        else if (strategy == "march-nearest")
+            boundTerm += (2 * jump + 2 * b0) * step;
+        cf.rule = "physics.md §7 R5 (sphere in a slab)";
+    }
+    for (const Sample& smp : samples) {
+        const double s = smp.depthMm;
+        const double b = integral(s - needle, s);
+        const haptic::DampingSplit split = haptic::splitDamping(damping, device, b, v0);
+        const double f = split.viscousN + split.frictionN;
+        cf.modelN.push_back(f);
+        // R1: exact traversal to 1e-9 relative; the rest as bounded above.
+        cf.toleranceN.push_back(lipschitz * boundTerm + 1e-9 * std::abs(f) + 1e-9);
+    }
+    return cf;
+}
+
+} // namespace voxhap::regress

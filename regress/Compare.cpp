@@ -1,0 +1,257 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Compare.cpp
+#include "regress/Compare.h"
+
+#include "core/Errors.h"
+#include "core/Format.h"
+#include "core/JsonFields.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace voxhap::regress {
+
+namespace {
+
+using Json = nlohmann::json;
+
+/// The layer at @p depth along the path.
+std::string tissueAt(const std::vector<Band>& layers, double depth)
+{
+    for (const Band& b : layers) {
+        if (depth >= b.startMm && depth < b.endMm) return b.name;
+    }
+    return "outside the body";
+}
+
+/// Linear interpolation of @p ref's samples at @p depth (profiles of a
+/// constant-speed insertion are monotonic in depth).
+Sample sampleAt(const std::vector<Sample>& ref, double depth)
+{
+    if (ref.empty()) return {};
+    auto it = std::lower_bound(ref.begin(), ref.end(), depth, [](const Sample& s, double d) { return s.depthMm < d; });
+    if (it == ref.begin()) return ref.front();
+    if (it == ref.end()) return ref.back();
+    const Sample& b = *it;
+    const Sample& a = *(it - 1);
+    const double w = b.depthMm > a.depthMm ? (depth - a.depthMm) / (b.depthMm - a.depthMm) : 0.0;
+    return {depth, a.modelN + w * (b.modelN - a.modelN), a.renderedN + w * (b.renderedN - a.renderedN)};
+}
+
+std::vector<double> numbers(const JsonFields::Json& j, JsonFields& f, const std::string& key)
+{
+    if (!j.is_array()) f.fail(key, "must be a list of numbers");
+    std::vector<double> out;
+    out.reserve(j.size());
+    for (const Json& v : j) {
+        if (!v.is_number()) f.fail(key, "must be a list of numbers");
+        out.push_back(v.get<double>());
+    }
+    return out;
+}
+
+} // namespace
+
+std::filesystem::path baselinePath(const std::filesystem::path& dir, const std::string& name)
+{
+    return dir / (name + ".json");
+}
+
+nlohmann::json baselineJson(const Case& c, const CaseRun& run)
+{
+    Json inputs = Json::object();
+    for (const auto& [k, v] : run.inputs) {
+        if (v.number)
+            inputs[k] = v.unit.empty() ? Json(*v.number) : Json{{"value", *v.number}, {"unit", v.unit}};
+        else
+            inputs[k] = v.text;
+    }
+    Json depth = Json::array(), model = Json::array(), rendered = Json::array();
+    for (const Sample& s : run.profile.samples) {
+        depth.push_back(s.depthMm);
+        model.push_back(s.modelN);
+        rendered.push_back(s.renderedN);
+    }
+    Json events = Json::array();
+    for (const EventRecord& e : run.profile.events) events.push_back({{"event", e.event}, {"depth_mm", e.depthMm}});
+    return {{"schema", "voxhap-regress-baseline/1"}, {"case", c.name},
+        {"note", "reference output of `voxhap regress`; regenerate with `voxhap regress --update`"}, {"inputs", inputs},
+        {"digest", run.profile.digest}, {"peak_model_N", run.profile.peakModelN},
+        {"peak_rendered_N", run.profile.peakRenderedN}, {"events", events},
+        {"profile", {{"depth_mm", depth}, {"model_N", model}, {"rendered_N", rendered}}}};
+}
+
+std::string baselineText(const nlohmann::json& doc)
+{
+    std::string out = "{";
+    const char* sep = "\n";
+    for (const auto& [k, v] : doc.items()) {
+        out += sep + std::string(" ") + Json(k).dump() + ": ";
+        if (v.is_object()) {
+            out += "{";
+            const char* inner = "\n";
+            for (const auto& [k2, v2] : v.items()) {
+                out += inner + std::string("  ") + Json(k2).dump() + ": " + v2.dump();
+                inner = ",\n";
+            }
+            out += "\n }";
+        } else {
+            out += v.dump();
+        }
+        sep = ",\n";
+    }
+    return out + "\n}\n";
+}
+
+std::optional<Baseline> readBaseline(const std::filesystem::path& file)
+{
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec)) return std::nullopt;
+    const std::string origin = file.string();
+    // A truncated file is not valid JSON: parse() names the file.
+    const Json doc = JsonFields::readFile(file, "baseline");
+    return JsonFields::guarded(origin, [&] {
+        JsonFields top(doc, origin, "");
+        if (top.string("schema", "") != "voxhap-regress-baseline/1")
+            top.fail("schema", "must be \"voxhap-regress-baseline/1\"");
+        Baseline b;
+        b.file = origin;
+        top.string("case", "");
+        top.string("note", "");
+        b.profile.digest = top.string("digest", "");
+        b.profile.peakModelN = top.number("peak_model_N", 0.0);
+        b.profile.peakRenderedN = top.number("peak_rendered_N", 0.0);
+        const Json& inputs = top.raw("inputs");
+        if (!inputs.is_object()) top.fail("inputs", "must be an object");
+        for (const auto& [k, v] : inputs.items()) {
+            InputValue iv;
+            if (v.is_number()) {
+                iv.number = v.get<double>();
+            } else if (v.is_object() && v.contains("value") && v["value"].is_number() && v.contains("unit") &&
+                v["unit"].is_string()) {
+                iv.number = v["value"].get<double>();
+                iv.unit = v["unit"].get<std::string>();
+            } else if (v.is_string()) {
+                iv.text = v.get<std::string>();
+            } else {
+                top.fail("inputs." + k, "must be a number, {value, unit} or a text");
+            }
+            if (iv.number) iv.text = Json(*iv.number).dump();
+            b.inputs[k] = iv;
+        }
+        const Json& events = top.raw("events");
+        if (!events.is_array()) top.fail("events", "must be a list");
+        for (const Json& e : events) {
+            JsonFields f(e, origin, "events[]");
+            b.profile.events.push_back({f.string("event", ""), f.raw("depth_mm").get<double>()});
+        }
+        JsonFields p = top.sub("profile");
+        const auto depth = numbers(p.raw("depth_mm"), p, "depth_mm");
+        const auto model = numbers(p.raw("model_N"), p, "model_N");
+        const auto rendered = numbers(p.raw("rendered_N"), p, "rendered_N");
+        if (depth.empty() || model.size() != depth.size() || rendered.size() != depth.size())
+            p.fail("", "depth_mm, model_N and rendered_N must be non-empty lists of one length");
+        for (std::size_t i = 0; i < depth.size(); ++i) b.profile.samples.push_back({depth[i], model[i], rendered[i]});
+        return b;
+    });
+}
+
+std::vector<std::string> inputDifferences(const Inputs& before, const Inputs& now)
+{
+    std::vector<std::string> out;
+    const auto show = [](const InputValue& v) { return v.text + (v.unit.empty() ? "" : " " + v.unit); };
+    for (const auto& [k, v] : before) {
+        auto it = now.find(k);
+        if (it == now.end())
+            out.push_back(k + " " + show(v) + " → (absent)");
+        else if (!(it->second == v))
+            out.push_back(k + " " + v.text + " → " + show(it->second));
+    }
+    for (const auto& [k, v] : now) {
+        if (!before.count(k)) out.push_back(k + " (absent) → " + show(v));
+    }
+    return out;
+}
+
+CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Baseline>& baseline)
+{
+    CaseReport r;
+    r.name = c.name;
+    r.seconds = run.elapsedS;
+    r.hasBaseline = baseline.has_value();
+    r.digest = run.profile.digest;
+    const Tolerance& tol = c.tolerance;
+    const auto note = [&](double depth, double delta, double allowed, const std::string& against) {
+        if (!r.first || depth < r.first->depthMm)
+            r.first = Exceedance{depth, delta, allowed, against, tissueAt(run.layers, depth)};
+    };
+    const std::vector<Sample>& now = run.profile.samples;
+    r.reference = baseline ? "baseline" : "no baseline";
+
+    if (baseline) {
+        r.identical = !baseline->profile.digest.empty() && baseline->profile.digest == run.profile.digest;
+        r.inputDiffs = inputDifferences(baseline->inputs, run.inputs);
+        const bool sameGrid = baseline->profile.samples.size() == now.size();
+        for (std::size_t i = 0; i < now.size(); ++i) {
+            const Sample ref =
+                sameGrid ? baseline->profile.samples[i] : sampleAt(baseline->profile.samples, now[i].depthMm);
+            const double dm = std::abs(now[i].modelN - ref.modelN), dr = std::abs(now[i].renderedN - ref.renderedN);
+            const double d = std::max(dm, dr);
+            if (d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;
+            const double am = tol.absN + tol.rel * std::abs(ref.modelN),
+                         ar = tol.absN + tol.rel * std::abs(ref.renderedN);
+            if (dm > am)
+                note(now[i].depthMm, dm, am, "baseline");
+            else if (dr > ar)
+                note(now[i].depthMm, dr, ar, "baseline");
+        }
+        // Events: the count of each kind exactly, and the depth of each.
+        std::map<std::string, std::vector<double>> was, is;
+        for (const EventRecord& e : baseline->profile.events) was[e.event].push_back(e.depthMm);
+        for (const EventRecord& e : run.profile.events) is[e.event].push_back(e.depthMm);
+        std::map<std::string, bool> kinds;
+        for (const auto& [k, v] : was) kinds[k] = true;
+        for (const auto& [k, v] : is) kinds[k] = true;
+        for (const auto& [kind, unused] : kinds) {
+            const auto& a = was[kind];
+            const auto& b = is[kind];
+            if (tol.eventCounts && a.size() != b.size())
+                r.eventDiffs.push_back(kind + " count " + std::to_string(a.size()) + " → " + std::to_string(b.size()));
+            for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+                if (std::abs(a[i] - b[i]) > tol.eventDepthMm) {
+                    r.eventDiffs.push_back(kind + " #" + std::to_string(i + 1) + " depth " + fixed(a[i], 3) + " → " +
+                        fixed(b[i], 3) + " mm");
+                    note(std::min(a[i], b[i]), 0.0, 0.0, "baseline (" + kind + " moved)");
+                }
+            }
+        }
+        const auto peak = [&](const char* what, double a, double b) {
+            if (std::abs(a - b) > tol.peakN)
+                r.peakDiffs.push_back(std::string(what) + " " + fixed(a, 4) + " → " + fixed(b, 4) + " N");
+        };
+        peak("peak model force", baseline->profile.peakModelN, run.profile.peakModelN);
+        peak("peak rendered force", baseline->profile.peakRenderedN, run.profile.peakRenderedN);
+    }
+
+    // The closed form, with the values the baseline recorded (clarifications: an
+    // edited tissue value fails here too, not only against the stored profile).
+    static const Inputs kNone;
+    if (auto cf = closedForm(c, baseline ? baseline->inputs : kNone, run.inputs, now)) {
+        r.reference = std::string(baseline ? "baseline + " : "") + cf->rule;
+        double worst = 0;
+        for (std::size_t i = 0; i < now.size(); ++i) {
+            const double d = std::abs(now[i].modelN - cf->modelN[i]);
+            worst = std::max(worst, d);
+            if (!baseline && d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;
+            if (d > cf->toleranceN[i]) note(now[i].depthMm, d, cf->toleranceN[i], cf->rule);
+        }
+        r.closedFormMaxDeltaN = worst;
+    }
+    r.pass = baseline && !r.first && r.eventDiffs.empty() && r.peakDiffs.empty();
+    return r;
+}
+
+} // namespace voxhap::regress

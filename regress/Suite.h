@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Suite.h
+/// @brief Regression suites (`voxhap regress`, issue 29): a JSON file of cases,
+/// each a volume (a phantom spec or a volume file), a scene, a tissue table,
+/// an insertion, a shaft-integration strategy and the tolerances its force
+/// profile is compared with. The schema is documented in data/regress/README.md;
+/// every refusal names the file, the case and the field in one line.
+#pragma once
+
+#include "core/Math.h"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace voxhap::regress {
+
+/// @brief What a case compares, and how closely.
+struct Tolerance {
+    double absN = 1e-6;         ///< profile: |ΔF| allowed at each depth [N] ...
+    double rel = 1e-6;          ///< ... plus this fraction of the reference |F|
+    double peakN = 1e-6;        ///< peak model and rendered force [N]
+    double eventDepthMm = 0.01; ///< depth of each event [mm]
+    bool eventCounts = true;    ///< the count of each kind of event, exactly
+};
+
+/// @brief The volume of a case: a phantom built from its parameters, or a file.
+struct VolumeSpec {
+    std::string kind;               ///< "slab", "sphere", "lumbar", "torso", or "file"; empty: the scene's
+    std::string file;               ///< kind "file": a .vdb or other volume (relative to the suite)
+    Vec3d spacingMm{0.5, 0.5, 0.5}; ///< phantom voxel size [mm]
+    Vec3d rotationDeg{0, 0, 0};     ///< grid rotation, Euler angles about x, then y, then z [deg]
+    double tiltDeg = 0;             ///< slab: layer normal tilted from +y about x [deg]
+    std::vector<std::pair<std::string, double>> layers; ///< slab: (tissue, thickness [mm]); empty: the default stack
+    std::string preset = "average";                     ///< lumbar preset
+    std::optional<double> bmi;                          ///< lumbar BMI
+    std::string slabTissue = "fat", sphereTissue = "muscle"; ///< sphere phantom
+    double radiusMm = 10, slabThicknessMm = 40;              ///< sphere phantom [mm]
+    double lesionRadiusMm = 8;                               ///< torso [mm]
+};
+
+/// @brief The shaft-integration strategies a case may name ("sampler strategies").
+/// "servo" is what the servo loop runs (exact voxel off the path, the locked
+/// profile on it: haptic::SceneInstance::makeModel).
+inline const std::vector<std::string> kStrategies = {
+    "servo", "exact-voxel", "exact-trilinear", "march-trilinear", "march-nearest"};
+
+/// @brief One regression case.
+struct Case {
+    std::string name;                          ///< unique; [a-z0-9._-]; also the baseline's file name
+    std::string scene;                         ///< built-in scene name or a scene file (relative to the suite)
+    std::string tissues;                       ///< tissue table file (relative to the suite); empty: the built-in table
+    VolumeSpec volume;                         ///< kind empty: the scene's own phantom
+    std::optional<Vec3d> entry, target;        ///< path [mm, LPS]; else landmarks, else the phantom's reference path
+    std::string entryLandmark, targetLandmark; ///< override the scene's landmarks
+    std::optional<double> speedMmPerS, depthMm; ///< else the scene's
+    std::string script;                         ///< motion script CSV (relative to the suite); empty: constant speed
+    std::string strategy = "servo";
+    double sampleMm = 0.2; ///< spacing of the stored profile samples along the depth [mm]
+    Tolerance tolerance;
+};
+
+/// @brief A parsed suite.
+struct Suite {
+    std::string origin;                 ///< the file, or "builtin"
+    std::filesystem::path dir;          ///< relative paths in the suite are relative to this
+    std::filesystem::path baselinesDir; ///< where the baselines are
+    std::string description;
+    std::vector<Case> cases;
+};
+
+/// @brief Parse suite JSON; relative paths resolve against @p dir.
+/// @throw ValueError "origin: cases[i] (name).field: why"
+Suite parseSuite(const std::string& text, const std::string& origin, const std::filesystem::path& dir);
+/// @brief Read and parse a suite file. @throw IoError, ValueError
+Suite loadSuite(const std::filesystem::path& file);
+/// @brief The built-in suite: data/regress/suite.json of the source tree, with its baselines beside it.
+Suite builtinSuite();
+/// @brief The folder of the built-in suite and its baselines.
+std::filesystem::path builtinSuiteDir();
+
+/// @brief True when @p name matches @p pattern: a shell glob (*, ?, [..]) or, without
+/// glob characters, a substring; several patterns separated by commas.
+bool matchesPattern(const std::string& name, const std::string& pattern);
+
+} // namespace voxhap::regress

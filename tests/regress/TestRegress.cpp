@@ -1,0 +1,301 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file TestRegress.cpp
+/// @brief The regression engine (issue 29): suite validation, the closed form
+/// against a hand evaluation of physics.md §7 R1, determinism across thread
+/// counts and runs, baselines written and read back, stale baselines.
+
+#include "regress/Regress.h"
+
+#include "common/TempDirTest.h"
+#include "core/Errors.h"
+#include "haptic/scene/Scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <set>
+
+namespace {
+
+using namespace voxhap;
+using namespace voxhap::regress;
+namespace fs = std::filesystem;
+
+std::vector<std::size_t> indicesOf(const Suite& s, const std::vector<std::string>& names)
+{
+    std::vector<std::size_t> out;
+    for (const auto& n : names) {
+        for (std::size_t i = 0; i < s.cases.size(); ++i) {
+            if (s.cases[i].name == n) out.push_back(i);
+        }
+    }
+    EXPECT_EQ(out.size(), names.size()) << "a case of the built-in suite is missing";
+    return out;
+}
+
+/// The refusal of @p text as a suite names the file and @p field on one line.
+void expectSuiteRefused(const std::string& text, const std::string& field)
+{
+    try {
+        (void)parseSuite(text, "my-suite.json", ".");
+        ADD_FAILURE() << "accepted; expected an error about " << field;
+    } catch (const ValueError& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind("my-suite.json: ", 0), 0u) << m;
+        EXPECT_NE(m.find(field), std::string::npos) << m;
+        EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    }
+}
+
+const char* kHeader = R"({"schema": "voxhap-regress/1", "cases": [)";
+
+TEST(RegressSuite, BuiltinSuiteCoversWhatTheIssueAsks)
+{
+    const Suite s = builtinSuite();
+    EXPECT_GE(s.cases.size(), 40u);
+    std::set<std::string> kinds, strategies, scenes, presets;
+    double minSpacing = 1e9, maxSpacing = 0;
+    bool rotated = false, tilted = false;
+    for (const Case& c : s.cases) {
+        strategies.insert(c.strategy);
+        scenes.insert(c.scene);
+        if (c.volume.kind.empty()) continue;
+        kinds.insert(c.volume.kind);
+        if (c.volume.kind == "lumbar") presets.insert(c.volume.preset);
+        minSpacing = std::min(minSpacing, c.volume.spacingMm.minCoeff());
+        maxSpacing = std::max(maxSpacing, c.volume.spacingMm.maxCoeff());
+        rotated = rotated || c.volume.rotationDeg.norm() > 0;
+        tilted = tilted || c.volume.tiltDeg != 0;
+    }
+    EXPECT_EQ(kinds, (std::set<std::string>{"slab", "sphere", "lumbar", "torso"}));
+    EXPECT_EQ(strategies.size(), kStrategies.size());
+    for (const auto& name : haptic::builtinSceneNames()) EXPECT_TRUE(scenes.count(name)) << name;
+    EXPECT_EQ(presets, (std::set<std::string>{"average", "overweight", "calcified"}));
+    EXPECT_LE(minSpacing, 0.25);
+    EXPECT_GE(maxSpacing, 1.0);
+    EXPECT_TRUE(rotated);
+    EXPECT_TRUE(tilted);
+}
+
+TEST(RegressSuite, DamagedSuitesAreRefusedNamingFileCaseAndField)
+{
+    expectSuiteRefused("{", "not valid JSON");
+    expectSuiteRefused(R"({"schema": "voxhap-regress/2", "cases": []})", "schema");
+    expectSuiteRefused(R"({"schema": "voxhap-regress/1"})", "cases");
+    expectSuiteRefused(std::string(kHeader) + R"({"scene": "kyung"}]})", "cases[0].name");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "a"}]})", "cases.a.scene");
+    expectSuiteRefused(
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung", "strategy": "fast"}]})", "cases.a.strategy");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "a", "scene": "kyung", "tolerance": {"profile_abs_N": 0}}]})",
+        "cases.a.tolerance.profile_abs_N");
+    expectSuiteRefused(
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung", "tolerance": {"event_depth_mm": -1}}]})",
+        "cases.a.tolerance.event_depth_mm");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "a", "scene": "kyung", "speed": 3}]})", "cases.a.speed");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "a", "scene": "kyung", "volume": {"phantom": "cube"}}]})",
+        "cases.a.volume.phantom");
+    expectSuiteRefused(
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung"}, {"name": "a", "scene": "conci"}]})", "duplicate");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "A/b", "scene": "kyung"}]})", "name");
+}
+
+TEST(RegressSuite, UnknownSceneAndTissueAreRefusedBeforeAnythingRuns)
+{
+    const Suite s = parseSuite(std::string(kHeader) + R"({"name": "a", "scene": "no-such-scene"},
+        {"name": "b", "scene": "kyung", "volume": {"phantom": "slab", "layers": [["skin", 2], ["gristle", 3]]}}]})",
+        "my-suite.json", ".");
+    try {
+        Runner r(s, {0}, {});
+        ADD_FAILURE() << "an unknown scene was accepted";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("my-suite.json: cases.a.scene: "), std::string::npos) << e.what();
+    }
+    try {
+        Runner r(s, {1}, {});
+        ADD_FAILURE() << "an unknown tissue was accepted";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("cases.b.volume.layers: unknown tissue 'gristle'"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(RegressSuite, OnlySelectsByGlobOrSubstring)
+{
+    EXPECT_TRUE(matchesPattern("slab-tilt30", "slab-*"));
+    EXPECT_TRUE(matchesPattern("slab-tilt30", "tilt"));
+    EXPECT_TRUE(matchesPattern("sphere", "torso*,sph*"));
+    EXPECT_FALSE(matchesPattern("slab-tilt30", "sphere*"));
+    EXPECT_FALSE(matchesPattern("slab-tilt30", "*tilt"));
+}
+
+/// physics.md §7 R1 by hand: the untilted default slab (skin 2 mm, fat 8 mm,
+/// muscle 20 mm) at 10 mm/s; β of skin from the table, β of fat and muscle from
+/// Kyung's T1 law at 1.5 T (§5.4: C1 = 2464 N·s/m², C2 = 1.398e-3 /ms).
+TEST(RegressClosedForm, SlabProfileMatchesHandEvaluatedR1)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"slab-servo"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const double betaSkin = 8152e-6;                             // N·s/m² → N·s/mm²
+    const double betaFat = 2464e-6 * std::exp(1.398e-3 * 290.0); // T1 of fat at 1.5 T [ms]
+    const double betaMuscle = 2464e-6 * std::exp(1.398e-3 * 856.0);
+    // The β grid is float: 1e-6 relative covers its rounding.
+    EXPECT_NEAR(*run.inputs.at("skin.beta_used").number, betaSkin, 1e-6 * betaSkin);
+    EXPECT_NEAR(*run.inputs.at("fat.beta_used").number, betaFat, 1e-6 * betaFat);
+    EXPECT_NEAR(*run.inputs.at("muscle.beta_used").number, betaMuscle, 1e-6 * betaMuscle);
+    int checked = 0;
+    for (const Sample& smp : run.profile.samples) {
+        const double s0 = smp.depthMm;
+        if (s0 < 0.5 || s0 > 29.5) continue;
+        const double chordSkin = std::clamp(s0, 0.0, 2.0), chordFat = std::clamp(s0 - 2.0, 0.0, 8.0),
+                     chordMuscle = std::clamp(s0 - 10.0, 0.0, 20.0);
+        // At 10 mm/s, the reference speed, viscous and friction parts add up to v·∫β (§6.2).
+        const double expected = 10.0 * (betaSkin * chordSkin + betaFat * chordFat + betaMuscle * chordMuscle);
+        EXPECT_NEAR(smp.modelN, expected, 1e-5 * expected) << "at " << s0 << " mm";
+        ++checked;
+    }
+    EXPECT_GT(checked, 100);
+    const auto cf = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
+    ASSERT_TRUE(cf);
+    EXPECT_NE(cf->rule.find("R1"), std::string::npos);
+}
+
+TEST(RegressClosedForm, EditedBetaInTheRecordMovesTheClosedForm)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"slab-servo"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    Inputs recorded = run.inputs;
+    recorded["fat.beta_used"].number = *recorded["fat.beta_used"].number * 1.03;
+    const auto fresh = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
+    const auto edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
+    ASSERT_TRUE(fresh && edited);
+    // Deep in the muscle the fat's 8 mm chord carries the 3 %.
+    const std::size_t last = run.profile.samples.size() - 1;
+    EXPECT_NEAR(
+        edited->modelN[last] - fresh->modelN[last], 10.0 * 0.03 * *run.inputs.at("fat.beta_used").number * 8.0, 1e-9);
+}
+
+/// Issue 29 item 7: the profiles are the same bit for bit with one thread and
+/// with all, and from one run to the next.
+TEST(RegressDeterminism, OneThreadAllThreadsAndRunToRunAgreeBitForBit)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s,
+        {"kyung", "senac-average", "lumbar-puncture", "slab-march-trilinear", "sphere", "torso-exact-trilinear",
+            "slab-rotated-grid"});
+    const auto runWith = [&](int threads) {
+        RunOptions o;
+        o.threads = threads;
+        Runner r(s, sel, o);
+        return r.run();
+    };
+    const auto one = runWith(1), all = runWith(0), again = runWith(0);
+    for (std::size_t k = 0; k < sel.size(); ++k) {
+        for (const auto* other : {&all, &again}) {
+            const auto& a = one[k].profile.samples;
+            const auto& b = (*other)[k].profile.samples;
+            ASSERT_EQ(a.size(), b.size()) << s.cases[sel[k]].name;
+            EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Sample)), 0) << s.cases[sel[k]].name;
+            EXPECT_EQ(one[k].profile.digest, (*other)[k].profile.digest) << s.cases[sel[k]].name;
+            EXPECT_EQ(one[k].inputs, (*other)[k].inputs) << s.cases[sel[k]].name;
+        }
+    }
+}
+
+class RegressBaselines : public voxhap::test::TempDirTest {
+protected:
+    Suite suiteWith(const std::string& cases) const
+    {
+        std::ofstream(mDir / "suite.json") << kHeader << cases << "]}";
+        return loadSuite(mDir / "suite.json");
+    }
+};
+
+TEST_F(RegressBaselines, UpdateWritesBaselinesThatTheNextRunPasses)
+{
+    const std::string cases = R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}},
+        {"name": "lp", "scene": "lumbar-puncture", "volume": {"phantom": "lumbar", "spacing_mm": 1}})";
+    const Suite s = suiteWith(cases);
+    RegressOptions o;
+    const RegressResult before = runRegression(s, o);
+    ASSERT_EQ(before.cases.size(), 2u);
+    for (const auto& c : before.cases) EXPECT_FALSE(c.pass) << "a case without a baseline cannot pass";
+    EXPECT_FALSE(fs::exists(mDir / "slab.json")) << "written without --update";
+
+    o.update = true;
+    const RegressResult update = runRegression(s, o);
+    EXPECT_EQ(update.updated.size(), 2u);
+    ASSERT_TRUE(fs::exists(mDir / "slab.json"));
+    ASSERT_TRUE(fs::exists(mDir / "lp.json"));
+
+    o.update = false;
+    const RegressResult after = runRegression(s, o);
+    for (const auto& c : after.cases) {
+        EXPECT_TRUE(c.pass) << c.name;
+        EXPECT_TRUE(c.identical) << c.name;
+        EXPECT_TRUE(c.inputDiffs.empty()) << c.name;
+    }
+    // The baseline read back holds what the run produced.
+    const auto b = readBaseline(mDir / "lp.json");
+    ASSERT_TRUE(b);
+    Runner r(s, {1}, {});
+    const CaseRun run = r.run().at(0);
+    EXPECT_EQ(b->profile.digest, run.profile.digest);
+    ASSERT_EQ(b->profile.samples.size(), run.profile.samples.size());
+    EXPECT_EQ(b->profile.samples.back().modelN, run.profile.samples.back().modelN);
+    EXPECT_EQ(b->inputs, run.inputs);
+
+    o.update = true;
+    EXPECT_TRUE(runRegression(s, o).updated.empty()) << "nothing changed, nothing rewritten";
+}
+
+TEST_F(RegressBaselines, StaleBaselineIsReportedWithItsDifferences)
+{
+    Suite s = suiteWith(R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}})");
+    RegressOptions o;
+    o.update = true;
+    runRegression(s, o);
+    // The case changes under its baseline: faster insertion, another strategy.
+    s = suiteWith(R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1},
+        "insertion": {"speed_mm_per_s": 12}, "strategy": "exact-voxel"})");
+    o.update = false;
+    const CaseReport r = runRegression(s, o).cases.at(0);
+    EXPECT_FALSE(r.pass);
+    const auto has = [&](const std::string& d) {
+        return std::find(r.inputDiffs.begin(), r.inputDiffs.end(), d) != r.inputDiffs.end();
+    };
+    EXPECT_TRUE(has("case.speed_mm_per_s 10.0 → 12.0 mm/s")) << ::testing::PrintToString(r.inputDiffs);
+    EXPECT_TRUE(has("case.strategy servo → exact-voxel")) << ::testing::PrintToString(r.inputDiffs);
+    ASSERT_TRUE(r.first);
+    EXPECT_EQ(r.first->tissue, "skin"); // faster insertion, more damping from the first millimetre
+}
+
+TEST_F(RegressBaselines, TruncatedBaselineIsRefusedNamingTheFile)
+{
+    const Suite s = suiteWith(R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}})");
+    RegressOptions o;
+    o.update = true;
+    runRegression(s, o);
+    const std::string text = [&] {
+        std::ifstream in(mDir / "slab.json");
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    }();
+    std::ofstream(mDir / "slab.json") << text.substr(0, text.size() / 2);
+    o.update = false;
+    try {
+        runRegression(s, o);
+        ADD_FAILURE() << "a truncated baseline was read";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("slab.json"), std::string::npos) << e.what();
+    }
+    o.update = true; // --update replaces it
+    EXPECT_EQ(runRegression(s, o).updated.size(), 1u);
+}
+
+} // namespace
