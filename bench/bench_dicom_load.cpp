@@ -120,6 +120,13 @@ int main(int argc, char** argv)
         const std::string arg = argv[a];
         if (arg == "--peak-only" && a + 1 < argc) return peakOnly(argv[a + 1], false);
         if (arg == "--peak-warm" && a + 1 < argc) return peakOnly(argv[a + 1], true);
+        if (arg == "--loads-only" && a + 1 < argc) { // for a profiler: loads and nothing else
+            gdcm::Trace::SetWarning(false);
+            const int n = std::max(1, std::atoi(argv[++a]));
+            if (a + 1 < argc) dir = argv[a + 1];
+            for (int r = 0; r < n; ++r) (void)voxhap::volume::loadDicom({dir});
+            return 0;
+        }
         if (arg == "--repeat" && a + 1 < argc)
             repeat = std::max(1, std::atoi(argv[++a]));
         else if (arg == "--json" && a + 1 < argc)

@@ -11,7 +11,13 @@
 
 #include <tbb/parallel_for.h>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -42,21 +48,73 @@ void SparseSlabs::addSlab(float* data, int nx, int ny, int k0, int nz)
         nx, ny, k0, nz, false);
 }
 
+namespace {
+
+// The mask is written a byte at a time (addSlabRows): byte x·8 + y of a leaf's
+// 64-bit mask words holds bits x·64 + y·8 .. + 7 only on a little-endian host.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "leaf masks are written as bytes");
+
+using LeafT = FloatGrid::TreeType::LeafNodeType;
+constexpr int kDim = int(LeafT::DIM);
+
+/// One 8 x 8 block of a slab's image row: in[z] holds 8 floats (x = 0..7)
+/// of slice z; out[x * 8 + z] receives them, which is a leaf's own order for
+/// fixed y (LeafNode offsets: x slowest, z fastest). The transposition is
+/// what lets the leaf be written in runs of 8 contiguous values instead of
+/// one scattered store per voxel.
+inline void transpose8(const float* const in[kDim], float out[kDim * kDim])
+{
+#if defined(__SSE2__)
+    for (int zh = 0; zh < 2; ++zh) {
+        for (int xh = 0; xh < 2; ++xh) {
+            __m128 r0 = _mm_loadu_ps(in[4 * zh + 0] + 4 * xh), r1 = _mm_loadu_ps(in[4 * zh + 1] + 4 * xh);
+            __m128 r2 = _mm_loadu_ps(in[4 * zh + 2] + 4 * xh), r3 = _mm_loadu_ps(in[4 * zh + 3] + 4 * xh);
+            _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+            float* o = out + 4 * xh * kDim + 4 * zh;
+            _mm_storeu_ps(o, r0);
+            _mm_storeu_ps(o + kDim, r1);
+            _mm_storeu_ps(o + 2 * kDim, r2);
+            _mm_storeu_ps(o + 3 * kDim, r3);
+        }
+    }
+#else
+    for (int z = 0; z < kDim; ++z)
+        for (int x = 0; x < kDim; ++x) out[x * kDim + z] = in[z][x];
+#endif
+}
+
+/// Bit z set where @p v[z] is not below @p air (a NaN counts as not below,
+/// as `v < air` is false for it: the caller has refused NaNs before).
+inline unsigned notBelow(const float* v, float air)
+{
+#if defined(__SSE2__)
+    const __m128 a = _mm_set1_ps(air);
+    return unsigned(_mm_movemask_ps(_mm_cmpnlt_ps(_mm_loadu_ps(v), a))) |
+        unsigned(_mm_movemask_ps(_mm_cmpnlt_ps(_mm_loadu_ps(v + 4), a))) << 4;
+#else
+    unsigned bits = 0;
+    for (int z = 0; z < kDim; ++z) bits |= unsigned(!(v[z] < air)) << z;
+    return bits;
+#endif
+}
+
+} // namespace
+
 void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite)
 {
-    using LeafT = FloatGrid::TreeType::LeafNodeType;
-    constexpr int kDim = int(LeafT::DIM);
     static_assert(kSlabSlices == kDim, "a slab is one layer of leaves");
     if (k0 % kDim != 0 || nz < 1 || nz > kDim)
         throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
     const float air = mImpl->airBelow, bg = mImpl->background;
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
-    // One leaf per 8 × 8 column block of the slab, built straight from the
+    const unsigned zValid = (1u << nz) - 1; // slices beyond the slab's last stay inactive background
+    // One leaf per 8 x 8 column block of the slab, built straight from the
     // dense values (exact, no tolerance); all-air blocks make no leaf. This
     // avoids copyFromDense's probing of the growing tree and its whole-tree
-    // prune after every slab. Each task takes one row of blocks and reads its
-    // 8 image rows of every slice front to back, so the slab streams through
-    // the cache once while the row's leaves (bx × 2 KiB) stay in it.
+    // prune after every slab. Each task takes one row of blocks; for each of
+    // its 8 image rows it takes that row of every slice, and each 8 x 8
+    // (slice x column) block of those becomes 8 runs of a leaf's values
+    // (transpose8) and one byte of its mask per column.
     std::vector<LeafT*> leaves(std::size_t(bx) * std::size_t(by), nullptr);
     const auto fail = [&](int x, int y, int z) {
         throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(k0 + z) +
@@ -66,38 +124,60 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
         tbb::parallel_for(0, by, [&](int yb) {
             const int y0 = yb * kDim;
             LeafT** row = leaves.data() + std::size_t(yb) * std::size_t(bx);
-            // Each leaf's buffer, fetched once (every buffer access checks delayed loading).
+            // Each leaf's buffer and mask, fetched once (every buffer access checks delayed loading).
             std::vector<float*> values(std::size_t(bx), nullptr);
-            std::vector<float> scratch(static_cast<std::size_t>(nx));
-            for (int z = 0; z < nz; ++z) {
-                for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
-                    const float* in = rows(z, y, scratch.data());
-                    // One pass proves the row finite (or the source promised it),
-                    // so that the per-voxel loop has one test: air or not.
-                    bool rowFinite = finite;
-                    if (!rowFinite) {
-                        int ok = 1;
-                        for (int x = 0; x < nx; ++x) ok &= int(std::abs(in[x]) <= std::numeric_limits<float>::max());
-                        rowFinite = ok;
-                    }
-                    if (!rowFinite) {
+            std::vector<std::uint8_t*> masks(std::size_t(bx), nullptr);
+            std::vector<float> scratch(std::size_t(nx) * kDim);
+            const float* in[kDim];
+            const float* block[kDim];
+            float edge[kDim][kDim] = {}; // the last, partial column block, padded
+            static const float kUnused[kDim] = {}; // slices past the slab's end: read, then masked out
+            alignas(16) float t[kDim * kDim];
+            for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
+                const int yy = y - y0;
+                for (int z = 0; z < nz; ++z) {
+                    in[z] = rows(z, y, scratch.data() + std::size_t(z) * std::size_t(nx));
+                    if (finite) continue;
+                    // One pass proves the row finite, so that the block loop below
+                    // has only one test: air or not.
+                    int ok = 1;
+                    for (int x = 0; x < nx; ++x) ok &= int(std::abs(in[z][x]) <= std::numeric_limits<float>::max());
+                    if (!ok) {
                         for (int x = 0; x < nx; ++x) {
-                            if (!(std::abs(in[x]) <= std::numeric_limits<float>::max())) fail(x, y, z); // NaN, ±inf
+                            if (!(std::abs(in[z][x]) <= std::numeric_limits<float>::max())) fail(x, y, z); // NaN, ±inf
                         }
                     }
-                    const float airBelow = air; // a local: the compiler keeps it in a register
-                    for (int x = 0; x < nx; ++x) {
-                        const float v = in[x];
-                        if (v < airBelow) continue; // air: the inactive background
-                        const int b = x / kDim;
-                        if (!row[b]) {
-                            row[b] = new LeafT(openvdb::Coord(x - x % kDim, y0, k0), bg, false);
-                            values[std::size_t(b)] = row[b]->buffer().data();
+                }
+                for (int b = 0; b < bx; ++b) {
+                    const int x0 = b * kDim, w = std::min(kDim, nx - x0);
+                    for (int z = 0; z < kDim; ++z) {
+                        if (z >= nz) {
+                            block[z] = kUnused;
+                        } else if (w == kDim) {
+                            block[z] = in[z] + x0;
+                        } else { // never read past a row's end: the row may be the caller's own data
+                            std::copy(in[z] + x0, in[z] + x0 + w, edge[z]);
+                            block[z] = edge[z];
                         }
-                        // LeafNode offsets: x slowest, z fastest, within the 8³ block.
-                        const openvdb::Index n = openvdb::Index(((x % kDim) << 6) | ((y - y0) << 3) | z);
-                        values[std::size_t(b)][n] = v;
-                        row[b]->getValueMask().setOn(n);
+                    }
+                    transpose8(block, t);
+                    unsigned bits[kDim], any = 0;
+                    for (int xx = 0; xx < w; ++xx) any |= bits[xx] = notBelow(t + xx * kDim, air) & zValid;
+                    if (!any) continue; // air: the inactive background, no leaf needed for it
+                    if (!row[b]) {
+                        row[b] = new LeafT(openvdb::Coord(x0, y0, k0), bg, false);
+                        values[std::size_t(b)] = row[b]->buffer().data();
+                        masks[std::size_t(b)] = &row[b]->getValueMask().template getWord<std::uint8_t>(0);
+                    }
+                    float* v = values[std::size_t(b)];
+                    std::uint8_t* m = masks[std::size_t(b)];
+                    for (int xx = 0; xx < w; ++xx) {
+                        if (!bits[xx]) continue;
+                        // Offset x·64 + y·8 + z: the 8 slices of (x, y) are contiguous, and
+                        // their mask bits are byte x·8 + y of the (little-endian) mask.
+                        float* out = v + (xx << 6) + (yy << 3);
+                        for (int z = 0; z < kDim; ++z) out[z] = (bits[xx] >> z) & 1u ? t[xx * kDim + z] : bg;
+                        m[(xx << 3) + yy] = std::uint8_t(bits[xx]);
                     }
                 }
             }

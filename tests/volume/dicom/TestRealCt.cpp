@@ -16,8 +16,10 @@
 #include <openvdb/tools/Statistics.h>
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <memory>
+#include <set>
 
 namespace {
 
@@ -164,6 +166,55 @@ TEST_F(RealCt, VoxelsAreTheRescaledStoredValuesExactly)
             }
         }
         EXPECT_EQ(mismatches, 0) << name;
+    }
+}
+
+TEST_F(RealCt, EveryVoxelOfEverySliceIsTheRescaledStoredValueInMinimalLeaves)
+{
+    // Every slice against GDCM's own decode (not the loader's reading of the
+    // files): what a faster loader must keep bit for bit. Beyond the values,
+    // the sparse layout: inactive voxels hold the background, and a leaf
+    // exists exactly where an 8^3 block has an active voxel.
+    const auto grid = huGrid(*sVolume);
+    auto acc = grid->getConstAccessor();
+    const voxhap::Vec3i dims = sVolume->indexBox().dims();
+    std::set<openvdb::Coord> blocks; // origins of the 8^3 blocks that hold an active voxel
+    std::int64_t active = 0, mismatches = 0, files = 0;
+    for (const auto& entry : fs::directory_iterator(kCtDir)) {
+        const Slice s = readDirectly(entry.path());
+        ++files;
+        const Vec3d ijk = sVolume->worldToIndex(s.origin);
+        const int k = int(std::lround(ijk.z()));
+        ASSERT_NEAR(ijk.z(), k, 1e-6) << entry.path();
+        ASSERT_EQ(int(s.columns), dims.x());
+        ASSERT_EQ(int(s.rows), dims.y());
+        for (unsigned j = 0; j < s.rows; ++j) {
+            for (unsigned i = 0; i < s.columns; ++i) {
+                const double hu = s.hu[std::size_t(j) * s.columns + i];
+                const openvdb::Coord c(int(i), int(j), k);
+                const bool air = hu < -950.0;
+                const float want = air ? kAirHu : float(hu);
+                // Compared as bits: -0.0 and 0.0, or two NaNs, must not pass for each other.
+                const float got = acc.getValue(c);
+                const bool same = std::memcmp(&got, &want, sizeof got) == 0 && acc.isValueOn(c) == !air;
+                mismatches += same ? 0 : 1;
+                if (!air) {
+                    ++active;
+                    blocks.insert(openvdb::Coord(int(i) & ~7, int(j) & ~7, k & ~7));
+                }
+            }
+        }
+    }
+    EXPECT_EQ(files, dims.z());
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_EQ(std::int64_t(grid->activeVoxelCount()), active);
+    EXPECT_EQ(grid->tree().leafCount(), blocks.size()) << "one leaf per block with an active voxel, no more";
+    EXPECT_EQ(grid->tree().activeTileCount(), 0u) << "voxels stay voxels: no tolerance merges them into tiles";
+    for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+        ASSERT_TRUE(blocks.count(leaf->origin())) << leaf->origin();
+        for (auto v = leaf->cbeginValueOff(); v; ++v) {
+            ASSERT_EQ(*v, kAirHu) << v.getCoord() << ": an inactive voxel holds the background";
+        }
     }
 }
 

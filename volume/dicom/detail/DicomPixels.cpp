@@ -10,11 +10,16 @@
 #include <gdcmTrace.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 #include <fstream>
 #include <mutex>
 #include <string>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace voxhap::volume {
 
@@ -65,6 +70,66 @@ void toFloat(const char* raw, std::size_t count, int bitsStored, int shift, doub
     }
     padding ? run(No{}, Yes{}) : run(No{}, No{});
 }
+
+#if defined(__SSE2__)
+/// toFloat for 16-bit samples, eight at a time: what CT and most MR store.
+/// Bit for bit what the scalar toFloat gives (the tests compare them on
+/// every real CT voxel): the same masking and sign extension; the rescale in
+/// double (SSE2's mulpd, addpd and cvtpd2ps round as the scalar code does),
+/// or, when the slope is 1 and the intercept an integer of at most 2^23, in
+/// int32, whose sum (below 2^24 in magnitude) converts to float exactly, as
+/// the double sum does; the padding value compared as the integer it must be
+/// to equal a stored value. The last count mod 8 samples go to toFloat.
+template <bool Signed>
+void shortsToFloat(const char* raw, std::size_t count, int bitsStored, int shift, double slope, double intercept,
+    std::optional<double> padding, float air, float* out)
+{
+    using T = std::conditional_t<Signed, std::int16_t, std::uint16_t>;
+    const bool masked = bitsStored > 0 && (bitsStored < 16 || shift > 0);
+    const __m128i mask = _mm_set1_epi16(short(std::uint16_t((std::uint64_t(1) << std::min(bitsStored, 63)) - 1)));
+    const __m128i shiftBy = _mm_cvtsi32_si128(shift);
+    const __m128i extendBy = _mm_cvtsi32_si128(bitsStored > 0 && bitsStored < 16 ? 16 - bitsStored : 0);
+    const bool integer = slope == 1.0 && intercept == std::trunc(intercept) && std::abs(intercept) <= double(1 << 23);
+    const __m128i interceptInt = _mm_set1_epi32(integer ? int(intercept) : 0);
+    const __m128d slopeD = _mm_set1_pd(slope), interceptD = _mm_set1_pd(intercept);
+    // A padding value that is not an integer in int32's range equals no 16-bit sample.
+    const bool padded = padding && *padding == std::trunc(*padding) && std::abs(*padding) < 2147483648.0;
+    const __m128i pad = _mm_set1_epi32(padded ? int(*padding) : 0);
+    const __m128 airV = _mm_set1_ps(air);
+    const auto finish = [&](__m128i v, float* o) {
+        __m128 f;
+        if (integer) {
+            f = _mm_cvtepi32_ps(_mm_add_epi32(v, interceptInt));
+        } else {
+            const __m128 lo = _mm_cvtpd_ps(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(v), slopeD), interceptD));
+            const __m128 hi = _mm_cvtpd_ps(
+                _mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(_mm_shuffle_epi32(v, 0x4E)), slopeD), interceptD));
+            f = _mm_movelh_ps(lo, hi);
+        }
+        if (padded) {
+            const __m128 isPad = _mm_castsi128_ps(_mm_cmpeq_epi32(v, pad));
+            f = _mm_or_ps(_mm_and_ps(isPad, airV), _mm_andnot_ps(isPad, f));
+        }
+        _mm_storeu_ps(o, f);
+    };
+    std::size_t n = 0;
+    for (; n + 8 <= count; n += 8) {
+        __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(raw + 2 * n));
+        if (masked) {
+            v = _mm_and_si128(_mm_srl_epi16(v, shiftBy), mask);
+            if (Signed) v = _mm_sra_epi16(_mm_sll_epi16(v, extendBy), extendBy); // bit bitsStored-1 is the sign
+        }
+        // Widen to int32: zero-extended, or sign-extended (each word into the
+        // high half of a lane, then shifted down arithmetically).
+        const __m128i lo = Signed ? _mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16) : _mm_unpacklo_epi16(v, _mm_setzero_si128());
+        const __m128i hi = Signed ? _mm_srai_epi32(_mm_unpackhi_epi16(v, v), 16) : _mm_unpackhi_epi16(v, _mm_setzero_si128());
+        finish(lo, out + n);
+        finish(hi, out + n + 4);
+    }
+    if (n < count)
+        toFloat<T>(raw + 2 * n, count - n, bitsStored, shift, slope, intercept, padding, air, out + n);
+}
+#endif
 
 } // namespace
 
@@ -233,12 +298,21 @@ void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::siz
     case SampleType::Int8:
         toFloat<std::int8_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
         break;
+#if defined(__SSE2__)
+    case SampleType::UInt16:
+        shortsToFloat<false>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+    case SampleType::Int16:
+        shortsToFloat<true>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
+        break;
+#else
     case SampleType::UInt16:
         toFloat<std::uint16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
         break;
     case SampleType::Int16:
         toFloat<std::int16_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
         break;
+#endif
     case SampleType::UInt32:
         toFloat<std::uint32_t>(raw, plane, f.bitsStored, shift, slope, intercept, padding, air, out);
         break;
