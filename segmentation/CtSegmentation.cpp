@@ -12,8 +12,11 @@
 #include "segmentation/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
 #include "core/Errors.h"
+#include "volume/Grids.h"
 
+#include <openvdb/tools/Dense.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -99,14 +102,14 @@ double sliceAreaMm2(const Lattice& lat)
 /// Keep, per slice, the in-plane components of @p m whose area is within [minMm2, maxMm2].
 Mask filterSliceIslands(const Lattice& lat, const Mask& m, double minMm2, double maxMm2)
 {
-    const Components cc = connectedComponents(lat, m, Span::Slice);
+    const ComponentRuns cc = componentRuns(lat, m, Span::Slice);
     const double area = sliceAreaMm2(lat);
     std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
     for (std::size_t c = 0; c < cc.list.size(); ++c) {
         const double a = double(cc.list[c].voxels) * area;
         keep[c + 1] = (a >= minMm2 && a <= maxMm2) ? 1 : 0;
     }
-    return maskWhere(m.size(), [&](std::size_t i) { return keep[std::size_t(cc.id[i])] != 0; });
+    return cc.mask(lat, keep);
 }
 
 namespace {
@@ -114,12 +117,13 @@ namespace {
 /// Per-region figures for the classification of step 3.
 struct RegionStats {
     std::int64_t voxels = 0, dense = 0;
-    double sumX = 0, sumY = 0; // world x (patient left +) and y (posterior +) of the voxels [mm]
+    // Lattice positions summed in integers: exact in any order, so the sums are
+    // the same however the voxels are split between threads.
+    std::array<std::int64_t, 3> sum{};
+    double centreX = 0, centreY = 0; // world x (patient left +) and y (posterior +) of the mean voxel [mm]
     int sliceMin = 1 << 30, sliceMax = -1;
     std::array<std::int64_t, 128> histogram{}; // 25 HU bins from −400 HU
     double ml(const Lattice& lat) const { return double(voxels) * lat.voxelMl(); }
-    double centreX() const { return voxels ? sumX / double(voxels) : 0.0; }
-    double centreY() const { return voxels ? sumY / double(voxels) : 0.0; }
     double lengthMm(const Lattice& lat) const { return (sliceMax - sliceMin + 1) * lat.spacing[lat.sliceAxis]; }
     double meanAreaMm2(const Lattice& lat) const { return ml(lat) * 1e3 / lengthMm(lat); }
     double medianHu() const
@@ -136,21 +140,52 @@ struct RegionStats {
 std::vector<RegionStats> regionStats(const volume::Volume& v, const Lattice& lat,
     const std::vector<std::int32_t>& region, int regions, const std::vector<float>& hu)
 {
+    tbb::enumerable_thread_specific<std::vector<RegionStats>> partial(
+        [&] { return std::vector<RegionStats>(std::size_t(regions) + 1); });
+    const int nx = lat.dims.x(), ny = lat.dims.y();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::size_t(ny) * std::size_t(lat.dims.z()), 64),
+        [&](const tbb::blocked_range<std::size_t>& rows) {
+            std::vector<RegionStats>& s = partial.local();
+            for (std::size_t row = rows.begin(); row != rows.end(); ++row) {
+                const Vec3i p0(0, int(row % std::size_t(ny)), int(row / std::size_t(ny)));
+                for (int i = 0; i < nx; ++i) {
+                    const std::size_t n = row * std::size_t(nx) + std::size_t(i);
+                    const auto r = std::size_t(region[n]);
+                    if (!r) continue;
+                    RegionStats& st = s[r];
+                    const Vec3i p(i, p0.y(), p0.z());
+                    ++st.voxels;
+                    st.dense += hu[n] >= kDenseBoneHu;
+                    for (int a = 0; a < 3; ++a) st.sum[std::size_t(a)] += p[a];
+                    st.sliceMin = std::min(st.sliceMin, p[lat.sliceAxis]);
+                    st.sliceMax = std::max(st.sliceMax, p[lat.sliceAxis]);
+                    const int bin =
+                        std::clamp(int(std::floor((hu[n] + 400.0f) / 25.0f)), 0, int(st.histogram.size()) - 1);
+                    ++st.histogram[std::size_t(bin)];
+                }
+            }
+        });
     std::vector<RegionStats> s(std::size_t(regions) + 1);
-    for (std::size_t n = 0; n < region.size(); ++n) {
-        const auto r = std::size_t(region[n]);
-        if (!r) continue;
-        RegionStats& st = s[r];
-        const Vec3i p = lat.position(n);
-        ++st.voxels;
-        st.dense += hu[n] >= kDenseBoneHu;
-        const Vec3d w = v.indexToWorld((lat.origin + p).cast<double>());
-        st.sumX += w.x();
-        st.sumY += w.y();
-        st.sliceMin = std::min(st.sliceMin, p[lat.sliceAxis]);
-        st.sliceMax = std::max(st.sliceMax, p[lat.sliceAxis]);
-        const int bin = std::clamp(int(std::floor((hu[n] + 400.0f) / 25.0f)), 0, int(st.histogram.size()) - 1);
-        ++st.histogram[std::size_t(bin)];
+    for (const auto& part : partial) {
+        for (std::size_t r = 0; r < s.size(); ++r) {
+            RegionStats& st = s[r];
+            const RegionStats& q = part[r];
+            st.voxels += q.voxels;
+            st.dense += q.dense;
+            for (std::size_t a = 0; a < 3; ++a) st.sum[a] += q.sum[a];
+            st.sliceMin = std::min(st.sliceMin, q.sliceMin);
+            st.sliceMax = std::max(st.sliceMax, q.sliceMax);
+            for (std::size_t b = 0; b < st.histogram.size(); ++b) st.histogram[b] += q.histogram[b];
+        }
+    }
+    // The world map is affine: the mean of the voxels' positions is the position of their mean.
+    for (RegionStats& st : s) {
+        if (!st.voxels) continue;
+        const Vec3d mean(double(st.sum[0]) / double(st.voxels), double(st.sum[1]) / double(st.voxels),
+            double(st.sum[2]) / double(st.voxels));
+        const Vec3d w = v.indexToWorld(lat.origin.cast<double>() + mean);
+        st.centreX = w.x();
+        st.centreY = w.y();
     }
     return s;
 }
@@ -204,21 +239,106 @@ Mask bodyMask(const Lattice& lat, const Mask& dense)
 void markSkin(
     const Lattice& lat, const Mask& body, double thicknessMm, std::int32_t skinId, std::vector<std::int32_t>& labels)
 {
-    Mask outside(body.size());
-    forEachVoxel(body.size(), [&](std::size_t i) { outside[i] = body[i] ? 0 : 1; });
-    const std::vector<float> d2 = squaredDistance(lat, outside, Span::Slice);
     // A voxel centre at depth d below the surface lies d + h/2 from the nearest
     // outside centre on average (the surface passes between the two centres).
     const auto [a0, a1] = lat.planeAxes();
     const double reach = thicknessMm + 0.5 * std::min(lat.spacing[a0], lat.spacing[a1]);
-    const auto r2 = float(reach * reach);
+    const Mask shell = innerShell(lat, body, reach);
     forEachVoxel(body.size(), [&](std::size_t i) {
-        if (body[i] && d2[i] < r2) labels[i] = skinId;
+        if (shell[i]) labels[i] = skinId;
     });
 }
 
+namespace {
+
+// Bits of the smoothed HU's class per voxel: the rules compare the smoothed
+// values with these thresholds only, so a byte replaces a float array.
+constexpr std::uint8_t kSmoothBody = 1;     // ≥ kBodyHu
+constexpr std::uint8_t kSmoothGas = 2;      // < kGasHu
+constexpr std::uint8_t kSmoothBelowFat = 4; // < the table's fat maximum
+constexpr std::uint8_t kSmoothEnhanced = 8; // ≥ kEnhancedHu
+
+openvdb::CoordBBox latticeBox(const Lattice& lat)
+{
+    return {volume::toCoord(lat.origin), volume::toCoord(lat.origin + lat.dims - Vec3i::Ones())};
+}
+
+/// The k planes [k0, k1) of @p lat read from @p grid into @p out (i fastest).
+void readPlanes(const Lattice& lat, const volume::FloatGrid& grid, int k0, int k1, float* out)
+{
+    openvdb::CoordBBox box = latticeBox(lat);
+    box.min().z() = lat.origin.z() + k0;
+    box.max().z() = lat.origin.z() + k1 - 1;
+    openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(box, out);
+    openvdb::tools::copyToDense(grid, dense, /*serial=*/true); // called from parallel tasks
+}
+
+/// The sub-lattice @p crop of @p lat: a copy of the elements of @p full inside it.
+template <class T> std::vector<T> cropArray(const Lattice& lat, const Lattice& crop, const std::vector<T>& full)
+{
+    std::vector<T> out(crop.size());
+    const Vec3i off = crop.origin - lat.origin;
+    tbb::parallel_for(0, crop.dims.z(), [&](int k) {
+        for (int j = 0; j < crop.dims.y(); ++j) {
+            const std::size_t src = lat.index(off.x(), off.y() + j, off.z() + k);
+            std::copy_n(full.begin() + std::ptrdiff_t(src), crop.dims.x(),
+                out.begin() + std::ptrdiff_t(crop.index(0, j, k)));
+        }
+    });
+    return out;
+}
+
+/// The body's box widened in-plane by @p marginMm (and two voxels), clamped to
+/// @p lat; the slice axis stays whole. Every rule after the body mask works on
+/// voxels of the body or within the canal closing of them, and a margin of
+/// voxels outside the body around them leaves their distances, components and
+/// holes as on the whole lattice: the nearest voxel outside a box lies no
+/// nearer than the box's own outer layer.
+Lattice bodyBox(const Lattice& lat, const Mask& body, double marginMm)
+{
+    Vec3i lo = lat.dims, hi = -Vec3i::Ones();
+    const int nx = lat.dims.x(), ny = lat.dims.y();
+    struct Box {
+        Vec3i lo, hi;
+    };
+    tbb::enumerable_thread_specific<Box> boxes([&] { return Box{lo, hi}; });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::size_t(ny) * std::size_t(lat.dims.z()), 64),
+        [&](const tbb::blocked_range<std::size_t>& rows) {
+            Box& b = boxes.local();
+            for (std::size_t row = rows.begin(); row != rows.end(); ++row) {
+                const std::uint8_t* p = body.data() + row * std::size_t(nx);
+                int first = -1, last = -1;
+                for (int i = 0; i < nx; ++i) {
+                    if (!p[i]) continue;
+                    if (first < 0) first = i;
+                    last = i;
+                }
+                if (first < 0) continue;
+                const Vec3i a(first, int(row % std::size_t(ny)), int(row / std::size_t(ny)));
+                const Vec3i z(last, a.y(), a.z());
+                b.lo = b.lo.cwiseMin(a);
+                b.hi = b.hi.cwiseMax(z);
+            }
+        });
+    for (const Box& b : boxes) {
+        lo = lo.cwiseMin(b.lo);
+        hi = hi.cwiseMax(b.hi);
+    }
+    Lattice crop = lat;
+    if ((hi.array() < lo.array()).any()) return crop; // no body: nothing to gain
+    for (const int a : lat.planeAxes()) {
+        const int m = int(std::ceil(marginMm / lat.spacing[a])) + 2;
+        const int a0 = std::max(0, lo[a] - m), a1 = std::min(lat.dims[a] - 1, hi[a] + m);
+        crop.origin[a] = lat.origin[a] + a0;
+        crop.dims[a] = a1 - a0 + 1;
+    }
+    return crop;
+}
+
+} // namespace
+
 AutomaticLabels segmentCt(
-    const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu, const volume::TissueTable& table)
+    const volume::Volume& v, const Lattice& full, const volume::FloatGrid& huGrid, const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
     const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), lung = id("lung");
@@ -227,20 +347,50 @@ AutomaticLabels segmentCt(
     const float corticalHu = float(table.at("cortical_bone").huMin); // 700 HU
     const float fatMaxHu = float(table.at("fat").huMax);             // −30 HU
     const double skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
-
-    const std::vector<float> smooth = gaussianSmooth(lat, hu, kSmoothingMm);
-    const Mask body = ctBodyMask(lat, smooth);
     AutomaticLabels out;
-    out.extent = torsoExtent(v, lat, body);
+
+    // Step 1 on the whole box: smoothing streams k planes from the sparse grid
+    // into one class byte per voxel; the body mask works slice by slice.
+    std::vector<std::uint8_t> smoothClass(full.size());
+    {
+        const std::size_t plane = std::size_t(full.dims.x()) * std::size_t(full.dims.y());
+        gaussianSmoothPlanes(
+            full, kSmoothingMm, [&](int k0, int k1, float* buf) { readPlanes(full, huGrid, k0, k1, buf); },
+            [&](int k, const float* s) {
+                std::uint8_t* c = smoothClass.data() + plane * std::size_t(k);
+                for (std::size_t n = 0; n < plane; ++n) {
+                    c[n] = std::uint8_t((s[n] >= kBodyHu ? kSmoothBody : 0) | (s[n] < kGasHu ? kSmoothGas : 0) |
+                        (s[n] < fatMaxHu ? kSmoothBelowFat : 0) | (s[n] >= kEnhancedHu ? kSmoothEnhanced : 0));
+                }
+            });
+    }
+    Mask body = bodyMask(full, maskWhere(full.size(), [&](std::size_t i) { return (smoothClass[i] & kSmoothBody) != 0; }));
+    out.extent = torsoExtent(v, full, body);
+
+    // The rest on the body's box only (bodyBox says why the labels do not change).
+    const Lattice lat = bodyBox(full, body, kCanalClosingMm);
+    if (lat.dims != full.dims) {
+        body = cropArray(full, lat, body);
+        smoothClass = cropArray(full, lat, smoothClass);
+    }
+    const auto smoothAt = [&](std::size_t i, std::uint8_t bit) { return (smoothClass[i] & bit) != 0; };
+    std::vector<float> hu(lat.size());
+    {
+        openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(latticeBox(lat), hu.data());
+        if (!hu.empty()) openvdb::tools::copyToDense(huGrid, dense, /*serial=*/false);
+    }
 
     // Step 2: lung among the gas components.
-    const Mask gas = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smooth[i] < kGasHu; });
-    Mask lungMask(lat.size(), 0);
+    Mask lungMask;
     {
-        const Components cc = connectedComponents(lat, gas, Span::Volume);
+        const Mask gas = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smoothAt(i, kSmoothGas); });
+        const ComponentRuns cc = componentRuns(lat, gas, Span::Volume);
         std::vector<std::int64_t> pureAir(cc.list.size() + 1, 0);
-        for (std::size_t n = 0; n < gas.size(); ++n) {
-            if (cc.id[n] && hu[n] < kPureAirHu) ++pureAir[std::size_t(cc.id[n])];
+        const std::size_t nx = std::size_t(lat.dims.x());
+        for (std::size_t r = 0; r < cc.runs.size(); ++r) {
+            const std::size_t base = std::size_t(cc.runs[r].row) * nx;
+            for (int i = cc.runs[r].begin; i < cc.runs[r].end; ++i)
+                pureAir[std::size_t(cc.of[r])] += hu[base + std::size_t(i)] < kPureAirHu;
         }
         std::vector<std::uint8_t> isLung(cc.list.size() + 1, 0);
         for (std::size_t c = 0; c < cc.list.size(); ++c) {
@@ -248,30 +398,39 @@ AutomaticLabels segmentCt(
             const double air = double(pureAir[c + 1]) / double(cc.list[c].voxels);
             isLung[c + 1] = ml >= kLungMinMl && air <= kLungMaxPureAirFraction;
         }
-        lungMask = maskWhere(lat.size(), [&](std::size_t i) { return isLung[std::size_t(cc.id[i])] != 0; });
+        lungMask = cc.mask(lat, isLung);
         fillHolesPerSlice(lat, lungMask); // vessels and airways inside the lung are lung
         lungMask = maskAnd(lungMask, body);
     }
 
     // Step 3: enhanced structures, split by erosion, grown back, classified.
-    const Mask enhanced = maskWhere(lat.size(),
-        [&](std::size_t i) { return body[i] && !lungMask[i] && (smooth[i] >= kEnhancedHu || hu[i] >= kBoneHu); });
-    // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
-    // planes between organs, and the erosion would no longer split them.
-    const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
-    Components cores = connectedComponents(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
-    std::vector<std::int32_t> region = std::move(cores.id);
-    growRegions(lat, region, enhanced);
-    // Structures thinner than twice the erosion (ribs, laminae, small vessels) have no
-    // core: their bright voxels become regions of their own, classified like the rest.
-    const Components thin = connectedComponents(
-        lat, maskWhere(lat.size(), [&](std::size_t i) { return bright[i] && !region[i]; }), Span::Volume);
-    const auto offset = std::int32_t(cores.list.size());
-    forEachVoxel(lat.size(), [&](std::size_t i) {
-        if (thin.id[i]) region[i] = offset + thin.id[i];
+    const Mask enhanced = maskWhere(lat.size(), [&](std::size_t i) {
+        return body[i] && !lungMask[i] && (smoothAt(i, kSmoothEnhanced) || hu[i] >= kBoneHu);
     });
-    growRegions(lat, region, enhanced);
-    const int regions = int(cores.list.size() + thin.list.size());
+    // The region ids become the labels in place (step 3–4), so one 32-bit array serves both.
+    std::vector<std::int32_t> region(lat.size(), 0);
+    int regions = 0;
+    {
+        // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
+        // planes between organs, and the erosion would no longer split them.
+        const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
+        const ComponentRuns cores =
+            componentRuns(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
+        cores.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+            std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), c);
+        });
+        growRegions(lat, region, enhanced);
+        // Structures thinner than twice the erosion (ribs, laminae, small vessels) have no
+        // core: their bright voxels become regions of their own, classified like the rest.
+        const ComponentRuns thin = componentRuns(
+            lat, maskWhere(lat.size(), [&](std::size_t i) { return bright[i] && !region[i]; }), Span::Volume);
+        const auto offset = std::int32_t(cores.list.size());
+        thin.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+            std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), offset + c);
+        });
+        growRegions(lat, region, enhanced);
+        regions = int(cores.list.size() + thin.list.size());
+    }
     const std::vector<RegionStats> stats = regionStats(v, lat, region, regions, hu);
 
     enum class Kind : std::uint8_t {
@@ -291,39 +450,43 @@ AutomaticLabels segmentCt(
             largestBone = r;
         }
     }
-    const double spineX = largestBone ? stats[std::size_t(largestBone)].centreX() : 0.0;
-    const double spineY = largestBone ? stats[std::size_t(largestBone)].centreY() : 0.0;
+    const double spineX = largestBone ? stats[std::size_t(largestBone)].centreX : 0.0;
+    const double spineY = largestBone ? stats[std::size_t(largestBone)].centreY : 0.0;
     int bestAorta = 0;
     for (int r = 1; r <= regions; ++r) {
         if (kind[std::size_t(r)] != Kind::Other) continue;
         const RegionStats& s = stats[std::size_t(r)];
-        const double lateral = std::abs(s.centreX() - spineX), ml = s.ml(lat), median = s.medianHu();
+        const double lateral = std::abs(s.centreX - spineX), ml = s.ml(lat), median = s.medianHu();
         if (s.lengthMm(lat) >= kAortaMinLengthMm && s.meanAreaMm2(lat) >= kAortaMinAreaMm2 &&
             s.meanAreaMm2(lat) <= kAortaMaxAreaMm2 && lateral < kKidneyMinLateralMm &&
-            std::abs(s.centreY() - spineY) <= kAortaMaxAnteriorMm) {
+            std::abs(s.centreY - spineY) <= kAortaMaxAnteriorMm) {
             // Of several tubes (the vena cava in a venous phase), the aorta is the longest.
             if (!bestAorta || s.voxels > stats[std::size_t(bestAorta)].voxels) bestAorta = r;
         } else if (ml >= kKidneyMinMl && ml <= kKidneyMaxMl && median >= kKidneyMinHu && median <= kKidneyMaxHu &&
             lateral >= kKidneyMinLateralMm && lateral <= kKidneyMaxLateralMm &&
-            std::abs(s.centreY() - spineY) <= kKidneyMaxAnteriorMm) {
+            std::abs(s.centreY - spineY) <= kKidneyMaxAnteriorMm) {
             kind[std::size_t(r)] = Kind::Kidney;
         }
     }
     if (bestAorta) kind[std::size_t(bestAorta)] = Kind::Aorta;
 
-    // Steps 3–4: one label per body voxel.
-    std::vector<std::int32_t> labels(lat.size(), volume::kAirLabel);
+    // Steps 3–4: one label per body voxel, written over its region id.
+    std::vector<std::int32_t>& labels = region;
     forEachVoxel(lat.size(), [&](std::size_t i) {
-        if (!body[i]) return;
+        const Kind k = kind[std::size_t(region[i])];
+        if (!body[i]) {
+            labels[i] = volume::kAirLabel;
+            return;
+        }
         const auto byHu = [&] {
-            if (smooth[i] < kGasHu) return volume::kAirLabel; // bowel gas: no resistance, like air
-            return smooth[i] < fatMaxHu ? fat : muscle;
+            if (smoothAt(i, kSmoothGas)) return volume::kAirLabel; // bowel gas: no resistance, like air
+            return smoothAt(i, kSmoothBelowFat) ? fat : muscle;
         };
         if (lungMask[i]) {
             labels[i] = lung;
             return;
         }
-        switch (kind[std::size_t(region[i])]) {
+        switch (k) {
         case Kind::Bone:
             labels[i] = hu[i] >= kBoneHu ? (hu[i] >= corticalHu ? cortical : cancellous) : byHu();
             break;
@@ -341,11 +504,13 @@ AutomaticLabels segmentCt(
             break;
         }
     });
+    hu = {};
+    smoothClass = {};
 
     // Small holes in bone (marrow fat, noise) are bone; the kidney's sinus and
     // medulla (darker than the cortex in the arterial phase) are kidney.
     const auto fillSmallHoles = [&](std::int32_t a, std::int32_t b, std::int32_t as, double maxMm2) {
-        Mask m = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == a || labels[i] == b; });
+        const Mask m = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == a || labels[i] == b; });
         Mask filled = m;
         fillHolesPerSlice(lat, filled);
         const Mask holes = filterSliceIslands(lat, maskAndNot(filled, m), 0.0, maxMm2);
@@ -364,25 +529,27 @@ AutomaticLabels segmentCt(
         Mask filled = ring;
         fillHolesPerSlice(lat, filled);
         Mask hole = filterSliceIslands(lat, maskAndNot(filled, ring), kCanalMinAreaMm2, kCanalMaxAreaMm2);
+        filled = {};
         const Mask soft3 = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && !bone[i] && !lungMask[i]; });
         bridgeAlongSliceAxis(lat, hole, soft3, kCanalBridgeMm);
         // The canal is the soft tissue of those holes, the closing's ring excluded: the
         // ring's inner edge follows the bone except across the gaps it bridged.
         hole = maskAnd(hole, soft3);
-        const Components cc = connectedComponents(lat, hole, Span::Volume);
+        const ComponentRuns cc = componentRuns(lat, hole, Span::Volume);
         std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
         for (std::size_t c = 0; c < cc.list.size(); ++c) {
             const Component& k = cc.list[c];
             const double length = (k.max[lat.sliceAxis] - k.min[lat.sliceAxis] + 1) * lat.spacing[lat.sliceAxis];
             keep[c + 1] = length >= kCanalMinLengthMm;
         }
-        forEachVoxel(lat.size(), [&](std::size_t i) {
-            if (keep[std::size_t(cc.id[i])]) labels[i] = canal;
+        cc.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+            if (keep[std::size_t(c)]) std::fill(labels.begin() + std::ptrdiff_t(b), labels.begin() + std::ptrdiff_t(e), canal);
         });
     }
 
     // Outside the torso range the trunk's rules do not hold: keep what CT numbers
-    // say anywhere (skin, fat, bone, gas, lung), the rest is soft tissue.
+    // say anywhere (skin, fat, bone, gas, lung), the rest is soft tissue. The box
+    // keeps the whole slice axis, so its slice numbers are the volume's.
     if (!out.extent.all()) {
         const std::size_t stride = lat.strides()[std::size_t(lat.sliceAxis)];
         const auto slices = std::size_t(lat.dims[lat.sliceAxis]);
@@ -392,7 +559,7 @@ AutomaticLabels segmentCt(
             if (trunkClass && !out.extent.inTorso(int((i / stride) % slices))) labels[i] = soft;
         });
     }
-    if (std::string note = torsoNote(v, lat, out.extent, "CT torso rules",
+    if (std::string note = torsoNote(v, full, out.extent, "CT torso rules",
             "there muscle, kidney, aorta and spinal canal are not labelled (what those rules "
             "would call them is soft_tissue); skin, fat, bone, gas and lung are labelled from "
             "their CT numbers");
@@ -401,6 +568,7 @@ AutomaticLabels segmentCt(
     }
 
     markSkin(lat, body, skinMm, skin, labels);
+    out.lattice = lat;
     out.labels = std::move(labels);
     return out;
 }

@@ -30,6 +30,7 @@
 
 #include "segmentation/Lattice.h"
 #include "segmentation/TorsoExtent.h"
+#include "volume/Grids.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 
@@ -38,12 +39,15 @@
 
 namespace voxhap::segmentation {
 
-/// @brief Tissue ids per voxel of @p lat from the dense HU values @p hu, the
-/// torso range, and a note where the torso rules did not apply everywhere.
+/// @brief Tissue ids from the HU grid @p hu over @p lat, the torso range, and a
+/// note where the torso rules did not apply everywhere. The labels cover the
+/// body's box widened by the canal closing (AutomaticLabels::lattice); every
+/// voxel beyond it is air. Working memory: about 1.6 bytes per voxel of @p lat
+/// for the body mask, then about 14 per voxel of the body's box (ctWorkingBytes).
 /// @param v gives the world geometry (left-right for the kidney rule, widths)
 /// @throw ValueError if the table lacks a tissue the rules label
 AutomaticLabels segmentCt(
-    const volume::Volume& v, const Lattice& lat, const std::vector<float>& hu, const volume::TissueTable& table);
+    const volume::Volume& v, const Lattice& lat, const volume::FloatGrid& hu, const volume::TissueTable& table);
 
 /// @brief The body mask of step 1 alone (HU ≥ −500, table and rails removed).
 Mask ctBodyMask(const Lattice& lat, const std::vector<float>& smoothedHu);

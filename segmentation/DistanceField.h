@@ -15,6 +15,7 @@
 #include "volume/Volume.h"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,12 @@ std::string distanceFieldName(const std::string& tissue);
 /// and read as the background +@p bandMm; inside values are clamped at −@p bandMm.
 /// @return a FloatGrid (volume/Grids.h), handed out as a base pointer so that
 ///         this header does not bring OpenVDB's into every includer
-volume::Volume::GridPtr signedDistanceField(
-    const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm);
+/// The field is computed over the structure's box widened by the band and a voxel
+/// (clamped to @p bounds, default @p lat): beyond it every value is the background,
+/// and the widened box's outer layer is outside the structure, so its distances
+/// are those of the whole lattice.
+/// @param bounds the lattice the field may cover; @p lat must lie within it
+volume::Volume::GridPtr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels,
+    std::int32_t id, double bandMm, const std::optional<Lattice>& bounds = std::nullopt);
 
 } // namespace voxhap::segmentation

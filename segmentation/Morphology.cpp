@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace voxhap::segmentation {
 
@@ -26,31 +27,144 @@ template <class Op> Mask combine(const Mask& a, const Mask& b, Op op)
     return out;
 }
 
+constexpr float kInfF = std::numeric_limits<float>::infinity();
+
+/// One slice's two in-plane axes: a0 (u, fastest in the local buffer) and a1 (w).
+struct SliceAxes {
+    int a0, a1, n0, n1;
+    std::size_t s0, s1, ss;
+    explicit SliceAxes(const Lattice& lat)
+    {
+        const auto axes = lat.planeAxes();
+        const auto strides = lat.strides();
+        a0 = axes[0], a1 = axes[1];
+        n0 = lat.dims[a0], n1 = lat.dims[a1];
+        s0 = strides[std::size_t(a0)], s1 = strides[std::size_t(a1)];
+        ss = strides[std::size_t(lat.sliceAxis)];
+    }
+    std::size_t element(int slice, int u, int w) const
+    {
+        return std::size_t(slice) * ss + std::size_t(u) * s0 + std::size_t(w) * s1;
+    }
+};
+
+/// In-plane squared distances of a slice buffer holding 0 at features and +inf
+/// elsewhere: the passes of squaredDistance(Span::Slice), in its axis order.
+void sliceDistance(const Lattice& lat, const SliceAxes& g, std::vector<float>& buf, LineTransform& t0,
+    LineTransform& t1)
+{
+    if (lat.dims[g.a0] > 1)
+        for (int w = 0; w < g.n1; ++w) t0.apply(buf.data() + std::size_t(w) * std::size_t(g.n0), 1, g.n0, lat.spacing[g.a0]);
+    if (lat.dims[g.a1] > 1)
+        for (int u = 0; u < g.n0; ++u) t1.apply(buf.data() + u, std::size_t(g.n0), g.n1, lat.spacing[g.a1]);
+}
+
+/// out = keep(inMask, d2) per slice, where d2 is the in-plane squared distance to
+/// the voxels where feature(inMask) holds; @p twice applies a second such step
+/// to the first's result (a closing) without leaving the slice.
+template <class Feature, class Keep>
+Mask perSlice(const Lattice& lat, const Mask& m, Feature feature, Keep keep, bool twice = false,
+    std::function<bool(bool)> feature2 = {}, std::function<bool(bool, float)> keep2 = {})
+{
+    const SliceAxes g(lat);
+    Mask out(m.size());
+    tbb::parallel_for(0, lat.dims[lat.sliceAxis], [&](int k) {
+        const std::size_t plane = std::size_t(g.n0) * std::size_t(g.n1);
+        std::vector<float> buf(plane);
+        std::vector<std::uint8_t> cur(plane);
+        LineTransform t0(g.n0), t1(g.n1);
+        for (int w = 0; w < g.n1; ++w)
+            for (int u = 0; u < g.n0; ++u) cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)] = m[g.element(k, u, w)];
+        for (std::size_t n = 0; n < plane; ++n) buf[n] = feature(cur[n] != 0) ? 0.0f : kInfF;
+        sliceDistance(lat, g, buf, t0, t1);
+        for (std::size_t n = 0; n < plane; ++n) cur[n] = keep(cur[n] != 0, buf[n]) ? 1 : 0;
+        if (twice) {
+            for (std::size_t n = 0; n < plane; ++n) buf[n] = feature2(cur[n] != 0) ? 0.0f : kInfF;
+            sliceDistance(lat, g, buf, t0, t1);
+            for (std::size_t n = 0; n < plane; ++n) cur[n] = keep2(cur[n] != 0, buf[n]) ? 1 : 0;
+        }
+        for (int w = 0; w < g.n1; ++w)
+            for (int u = 0; u < g.n0; ++u) out[g.element(k, u, w)] = cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)];
+    });
+    return out;
+}
+
+/// The 3-D threshold test in slabs of k planes. The whole-lattice transform's
+/// last pass (along k) is min over p of ((k − p)·h)² + f[p], f the in-plane
+/// result; with the threshold r², planes with |k − p|·h > r add nothing, so a
+/// window of floor(r/h) + 1 planes each side gives the same decision.
+template <class Feature, class Keep>
+Mask perSlab(const Lattice& lat, const Mask& m, double radiusMm, Feature feature, Keep keep)
+{
+    const int nx = lat.dims.x(), ny = lat.dims.y(), nz = lat.dims.z();
+    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+    const double hz = lat.spacing.z();
+    const int reach = nz > 1 ? int(std::floor(radiusMm / hz)) + 1 : 0;
+    constexpr int kSlab = 8;
+    Mask out(m.size());
+    tbb::parallel_for(0, (nz + kSlab - 1) / kSlab, [&](int s) {
+        const int k0 = s * kSlab, k1 = std::min(nz, k0 + kSlab);
+        const int h0 = std::max(0, k0 - reach), h1 = std::min(nz, k1 + reach);
+        std::vector<float> buf(plane * std::size_t(h1 - h0));
+        LineTransform tx(nx), ty(ny);
+        for (int k = h0; k < h1; ++k) {
+            float* p = buf.data() + plane * std::size_t(k - h0);
+            const std::uint8_t* src = m.data() + plane * std::size_t(k);
+            for (std::size_t n = 0; n < plane; ++n) p[n] = feature(src[n] != 0) ? 0.0f : kInfF;
+            if (nx > 1)
+                for (int j = 0; j < ny; ++j) tx.apply(p + std::size_t(j) * std::size_t(nx), 1, nx, lat.spacing.x());
+            if (ny > 1)
+                for (int i = 0; i < nx; ++i) ty.apply(p + i, std::size_t(nx), ny, lat.spacing.y());
+        }
+        for (int k = k0; k < k1; ++k) {
+            const int lo = std::max(h0, k - reach), hi = std::min(h1 - 1, k + reach);
+            for (std::size_t n = 0; n < plane; ++n) {
+                double best = std::numeric_limits<double>::infinity();
+                for (int q = lo; q <= hi; ++q) {
+                    const float f = buf[plane * std::size_t(q - h0) + n];
+                    if (std::isinf(f)) continue;
+                    const double d = ((k - q) * hz) * ((k - q) * hz) + double(f);
+                    best = std::min(best, d);
+                }
+                const std::size_t e = plane * std::size_t(k) + n;
+                out[e] = keep(m[e] != 0, float(best)) ? 1 : 0;
+            }
+        }
+    });
+    return out;
+}
+
 } // namespace
 
 Mask erode(const Lattice& lat, const Mask& m, double radiusMm, Span span)
 {
-    Mask outside(m.size());
-    forEachVoxel(m.size(), [&](std::size_t i) { outside[i] = m[i] ? 0 : 1; });
-    const std::vector<float> d2 = squaredDistance(lat, outside, span);
     const float r2 = float(radiusMm * radiusMm);
-    Mask out(m.size());
-    forEachVoxel(m.size(), [&](std::size_t i) { out[i] = (m[i] && d2[i] > r2) ? 1 : 0; });
-    return out;
+    const auto feature = [](bool in) { return !in; };
+    const auto keep = [r2](bool in, float d2) { return in && d2 > r2; };
+    return span == Span::Slice ? perSlice(lat, m, feature, keep) : perSlab(lat, m, radiusMm, feature, keep);
 }
 
 Mask dilate(const Lattice& lat, const Mask& m, double radiusMm, Span span)
 {
-    const std::vector<float> d2 = squaredDistance(lat, m, span);
     const float r2 = float(radiusMm * radiusMm);
-    Mask out(m.size());
-    forEachVoxel(m.size(), [&](std::size_t i) { out[i] = d2[i] <= r2 ? 1 : 0; });
-    return out;
+    const auto feature = [](bool in) { return in; };
+    const auto keep = [r2](bool, float d2) { return d2 <= r2; };
+    return span == Span::Slice ? perSlice(lat, m, feature, keep) : perSlab(lat, m, radiusMm, feature, keep);
+}
+
+Mask innerShell(const Lattice& lat, const Mask& m, double radiusMm)
+{
+    const float r2 = float(radiusMm * radiusMm);
+    return perSlice(lat, m, [](bool in) { return !in; }, [r2](bool in, float d2) { return in && d2 < r2; });
 }
 
 Mask close(const Lattice& lat, const Mask& m, double radiusMm, Span span)
 {
-    return erode(lat, dilate(lat, m, radiusMm, span), radiusMm, span);
+    if (span == Span::Volume) return erode(lat, dilate(lat, m, radiusMm, span), radiusMm, span);
+    const float r2 = float(radiusMm * radiusMm);
+    return perSlice(
+        lat, m, [](bool in) { return in; }, [r2](bool, float d2) { return d2 <= r2; }, true,
+        [](bool in) { return !in; }, [r2](bool in, float d2) { return in && d2 > r2; });
 }
 
 void fillHolesPerSlice(const Lattice& lat, Mask& m)
@@ -97,40 +211,95 @@ void fillHolesPerSlice(const Lattice& lat, Mask& m)
     });
 }
 
+namespace {
+
+/// The normalised kernel of gaussianSmooth() along @p axis; empty if that axis is left alone.
+std::vector<double> kernel(const Lattice& lat, double sigmaMm, int axis)
+{
+    const double sigma = sigmaMm / lat.spacing[axis]; // in voxels
+    if (sigma < 0.5 || lat.dims[axis] < 2) return {};
+    const int radius = int(std::ceil(3.0 * sigma));
+    std::vector<double> w(std::size_t(2 * radius + 1));
+    double sum = 0;
+    for (int t = -radius; t <= radius; ++t) sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
+    for (double& x : w) x /= sum;
+    return w;
+}
+
+/// One line: dst[q·step] = Σ w[t]·src[clamp(q + t)·step], accumulated in double.
+void smoothLine(const float* src, float* dst, std::size_t step, int n, const std::vector<double>& w)
+{
+    const int radius = int(w.size() / 2);
+    for (int q = 0; q < n; ++q) {
+        double acc = 0;
+        for (int t = -radius; t <= radius; ++t) {
+            const int p = std::clamp(q + t, 0, n - 1);
+            acc += w[std::size_t(t + radius)] * src[std::size_t(p) * step];
+        }
+        dst[std::size_t(q) * step] = float(acc);
+    }
+}
+
+} // namespace
+
+void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm, const std::function<void(int k0, int k1, float* out)>& read,
+    const std::function<void(int k, const float* plane)>& sink)
+{
+    const int nx = lat.dims.x(), ny = lat.dims.y(), nz = lat.dims.z();
+    const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+    if (plane == 0 || nz == 0) return;
+    const std::vector<double> wx = kernel(lat, sigmaMm, 0), wy = kernel(lat, sigmaMm, 1), wz = kernel(lat, sigmaMm, 2);
+    const int reach = int(wz.size() / 2); // planes each side the k pass reads
+    // Passes along i, then j, then k, each rounded to float as gaussianSmooth()
+    // always did: a plane's i and j passes need only that plane.
+    constexpr int kSlab = 8;
+    tbb::parallel_for(0, (nz + kSlab - 1) / kSlab, [&](int s) {
+        const int k0 = s * kSlab, k1 = std::min(nz, k0 + kSlab);
+        const int h0 = std::max(0, k0 - reach), h1 = std::min(nz, k1 + reach);
+        std::vector<float> buf(plane * std::size_t(h1 - h0)), tmp(plane);
+        read(h0, h1, buf.data());
+        for (int k = h0; k < h1; ++k) {
+            float* p = buf.data() + plane * std::size_t(k - h0);
+            if (!wx.empty()) {
+                for (int j = 0; j < ny; ++j)
+                    smoothLine(p + std::size_t(j) * std::size_t(nx), tmp.data() + std::size_t(j) * std::size_t(nx), 1, nx, wx);
+                std::copy(tmp.begin(), tmp.end(), p);
+            }
+            if (!wy.empty()) {
+                for (int i = 0; i < nx; ++i) smoothLine(p + i, tmp.data() + i, std::size_t(nx), ny, wy);
+                std::copy(tmp.begin(), tmp.end(), p);
+            }
+        }
+        for (int k = k0; k < k1; ++k) {
+            if (wz.empty()) {
+                sink(k, buf.data() + plane * std::size_t(k - h0));
+                continue;
+            }
+            for (std::size_t n = 0; n < plane; ++n) {
+                double acc = 0;
+                for (int t = -reach; t <= reach; ++t) {
+                    const int p = std::clamp(k + t, 0, nz - 1);
+                    acc += wz[std::size_t(t + reach)] * buf[plane * std::size_t(p - h0) + n];
+                }
+                tmp[n] = float(acc);
+            }
+            sink(k, tmp.data());
+        }
+    });
+}
+
 std::vector<float> gaussianSmooth(const Lattice& lat, const std::vector<float>& values, double sigmaMm)
 {
-    std::vector<float> cur = values, next(values.size());
-    const auto strides = lat.strides();
-    for (int axis = 0; axis < 3; ++axis) {
-        const double sigma = sigmaMm / lat.spacing[axis]; // in voxels
-        if (sigma < 0.5 || lat.dims[axis] < 2) continue;
-        const int radius = int(std::ceil(3.0 * sigma));
-        std::vector<double> w(std::size_t(2 * radius + 1));
-        double sum = 0;
-        for (int t = -radius; t <= radius; ++t)
-            sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
-        for (double& x : w) x /= sum;
-        const int n = lat.dims[axis];
-        const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-        const std::size_t lines = std::size_t(lat.dims[a1]) * std::size_t(lat.dims[a2]);
-        const std::size_t step = strides[std::size_t(axis)];
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t line = r.begin(); line != r.end(); ++line) {
-                const std::size_t u = line % std::size_t(lat.dims[a1]), v = line / std::size_t(lat.dims[a1]);
-                const std::size_t base = u * strides[std::size_t(a1)] + v * strides[std::size_t(a2)];
-                for (int q = 0; q < n; ++q) {
-                    double acc = 0;
-                    for (int t = -radius; t <= radius; ++t) {
-                        const int p = std::clamp(q + t, 0, n - 1);
-                        acc += w[std::size_t(t + radius)] * cur[base + std::size_t(p) * step];
-                    }
-                    next[base + std::size_t(q) * step] = float(acc);
-                }
-            }
-        });
-        std::swap(cur, next);
-    }
-    return cur;
+    std::vector<float> out(values.size());
+    const std::size_t plane = std::size_t(lat.dims.x()) * std::size_t(lat.dims.y());
+    gaussianSmoothPlanes(
+        lat, sigmaMm,
+        [&](int k0, int k1, float* buf) {
+            std::copy(values.begin() + std::ptrdiff_t(plane * std::size_t(k0)),
+                values.begin() + std::ptrdiff_t(plane * std::size_t(k1)), buf);
+        },
+        [&](int k, const float* p) { std::copy(p, p + plane, out.begin() + std::ptrdiff_t(plane * std::size_t(k))); });
+    return out;
 }
 
 Mask maskAnd(const Mask& a, const Mask& b)

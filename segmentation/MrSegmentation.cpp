@@ -79,6 +79,7 @@ AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std
 
     const Mask body = bodyMask(lat, detail::maskWhere(lat.size(), [&](std::size_t i) { return values[i] > 0.0f; }));
     AutomaticLabels out;
+    out.lattice = lat;
     out.extent = torsoExtent(v, lat, body);
     std::vector<std::int32_t>& labels = out.labels;
     labels.assign(lat.size(), volume::kAirLabel);

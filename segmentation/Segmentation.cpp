@@ -19,16 +19,36 @@
 
 namespace voxhap::segmentation {
 
+namespace {
+
+/// @p labels over the sub-box @p lat placed in @p whole, air elsewhere.
+std::vector<std::int32_t> embedLabels(const Lattice& lat, const std::vector<std::int32_t>& labels, const Lattice& whole)
+{
+    std::vector<std::int32_t> out(whole.size(), volume::kAirLabel);
+    const Vec3i off = lat.origin - whole.origin;
+    for (int k = 0; k < lat.dims.z(); ++k) {
+        for (int j = 0; j < lat.dims.y(); ++j) {
+            std::copy_n(labels.begin() + std::ptrdiff_t(lat.index(0, j, k)), lat.dims.x(),
+                out.begin() + std::ptrdiff_t(whole.index(off.x(), off.y() + j, off.z() + k)));
+        }
+    }
+    return out;
+}
+
+} // namespace
+
 SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const SegmentOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
     const auto step = [&](const std::string& s) {
         if (o.progress) o.progress(-1.0, s); // the steps' count is not known ahead
     };
-    const Lattice lat = Lattice::of(v);
+    const Lattice whole = Lattice::of(v);
+    Lattice lat = whole; // the labels' box: automatic CT labels cover the body's box only
     SegmentReport report;
     std::vector<std::int32_t> labels;
     const auto automatic = [&](AutomaticLabels a) {
+        lat = a.lattice;
         labels = std::move(a.labels);
         report.notes = std::move(a.notes);
         report.bodyWidthMm = a.extent.widestMm();
@@ -37,7 +57,7 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
     if (o.automatic && v.has(volume::Channel::Hu)) {
         step("CT labels");
         report.method = "ct";
-        automatic(segmentCt(v, lat, toDense(lat, *volume::huGrid(v)), table));
+        automatic(segmentCt(v, lat, *volume::huGrid(v), table));
     } else if (o.automatic && v.has(volume::Channel::T1)) {
         step("MR labels");
         report.method = "mr";
@@ -64,6 +84,10 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
     }
     if (o.imported) {
         step("imported labels");
+        if (lat.dims != whole.dims) { // an imported map may label voxels anywhere in the volume
+            labels = embedLabels(lat, labels, whole);
+            lat = whole;
+        }
         const std::vector<std::int32_t> imported =
             resampleLabels(*o.imported->labels, o.imported->mapping, v, lat, o.imported->file);
         report.importedVoxels =
@@ -86,7 +110,7 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
         const volume::Tissue& t = table.at(name);
         if (!present[std::size_t(t.id)]) continue;
         step("distance field " + name);
-        v.setDerived(distanceFieldName(name), signedDistanceField(lat, labels, t.id, o.distanceBandMm));
+        v.setDerived(distanceFieldName(name), signedDistanceField(lat, labels, t.id, o.distanceBandMm, whole));
         report.distanceFields.push_back(distanceFieldName(name));
     }
     step("label grid");

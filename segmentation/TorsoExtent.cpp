@@ -19,7 +19,7 @@ TorsoExtent torsoExtent(const volume::Volume& v, const Lattice& lat, const Mask&
     const int slices = lat.dims[lat.sliceAxis];
     e.widthMm.assign(std::size_t(slices), 0.0);
     e.cut.assign(std::size_t(slices), 0);
-    const Components cc = connectedComponents(lat, body, Span::Slice);
+    const ComponentRuns cc = componentRuns(lat, body, Span::Slice);
     if (cc.list.empty()) return e;
 
     // World x is affine in the lattice position: x = x0 + g · p.
@@ -39,12 +39,17 @@ TorsoExtent torsoExtent(const volume::Volume& v, const Lattice& lat, const Mask&
 
     constexpr double inf = std::numeric_limits<double>::infinity();
     std::vector<double> lo(cc.list.size() + 1, inf), hi(cc.list.size() + 1, -inf);
-    for (std::size_t n = 0; n < body.size(); ++n) {
-        const auto c = std::size_t(cc.id[n]);
-        if (!c) continue;
-        const double x = x0 + g.dot(lat.position(n).cast<double>());
-        lo[c] = std::min(lo[c], x);
-        hi[c] = std::max(hi[c], x);
+    // x is monotone along a run (one index varies; rounding keeps the order), so
+    // a run's extremes are at its ends.
+    for (std::size_t r = 0; r < cc.runs.size(); ++r) {
+        const auto c = std::size_t(cc.of[r]);
+        const Run& run = cc.runs[r];
+        const Vec3i row(0, run.row % lat.dims.y(), run.row / lat.dims.y());
+        for (const int i : {run.begin, run.end - 1}) {
+            const double x = x0 + g.dot(Vec3i(i, row.y(), row.z()).cast<double>());
+            lo[c] = std::min(lo[c], x);
+            hi[c] = std::max(hi[c], x);
+        }
     }
     // The largest component of each slice gives the slice's width.
     std::vector<std::int64_t> largest(std::size_t(slices), 0);

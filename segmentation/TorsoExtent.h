@@ -85,7 +85,10 @@ struct TorsoExtent {
 /// @brief Labels from the automatic rules, where the torso rules applied, and
 /// what the report must tell the user.
 struct AutomaticLabels {
-    std::vector<std::int32_t> labels; ///< tissue id per lattice voxel
+    /// The box the labels cover: the volume's, or a part of it holding every
+    /// labelled voxel (air beyond it).
+    Lattice lattice;
+    std::vector<std::int32_t> labels; ///< tissue id per voxel of lattice
     TorsoExtent extent;
     std::vector<std::string> notes; ///< one line each
 };
