@@ -628,11 +628,11 @@ void printSamplerReport(std::ostream& os, const SamplerReport& r)
         os << "\npath-based fidelity: force error at " << r.options.speedMmPerS << " mm/s over "
            << r.options.fidelityPaths << " random paths x " << r.options.fidelityDepths
            << " depths per workload, against the exact reference of each reading and against exact trilinear\n";
-        std::string current;
+        std::string currentWorkload;
         for (const auto& f : r.fidelity) {
-            if (f.workload != current) {
-                current = f.workload;
-                os << "[" << current << "]\n";
+            if (f.workload != currentWorkload) {
+                currentWorkload = f.workload;
+                os << "[" << currentWorkload << "]\n";
                 os << std::left << std::setw(28) << "configuration" << std::right << std::setw(10) << "median ns"
                    << std::setw(12) << "rms N" << std::setw(12) << "p99 N" << std::setw(12) << "max N" << std::setw(14)
                    << "rms N (tri)" << std::setw(14) << "p99 N (tri)" << std::setw(14) << "max N (tri)" << '\n';

@@ -143,6 +143,48 @@ void OutputSet::addStream(const std::filesystem::path& file, std::function<void(
     });
 }
 
+struct StreamingOutput::State {
+    std::filesystem::path temporary;
+    TrackedTemporary tracked;
+    std::ofstream out;
+    explicit State(const std::filesystem::path& tmp)
+        : temporary(tmp), tracked(tmp), out(tmp, std::ios::binary | std::ios::trunc)
+    {
+    }
+};
+
+StreamingOutput::StreamingOutput(std::filesystem::path file) : mFile(std::move(file))
+{
+    mState = std::make_unique<State>(temporaryPathFor(mFile));
+    if (!mState->out) {
+        std::error_code ignored;
+        std::filesystem::remove(mState->temporary, ignored);
+        throw IoError(mFile.string() + ": cannot write (cannot create the file)");
+    }
+}
+
+StreamingOutput::~StreamingOutput()
+{
+    // Not handed over, or handed over and the commit failed: a temporary must not stay behind.
+    std::error_code ignored;
+    if (mState->out.is_open()) mState->out.close();
+    std::filesystem::remove(mState->temporary, ignored);
+}
+
+std::ostream& StreamingOutput::stream() noexcept { return mState->out; }
+
+void StreamingOutput::addTo(OutputSet& set)
+{
+    State* state = mState.get();
+    // OutputSet writes each output to temporaryPathFor(file), the path this stream has
+    // been growing under: the writer only closes it and checks that every write took.
+    set.add(mFile, [state](const std::filesystem::path& tmp) {
+        if (tmp != state->temporary) throw std::runtime_error("the streamed file is not at its temporary path");
+        state->out.close();
+        if (!state->out) throw std::runtime_error("write failed (disk full?)");
+    });
+}
+
 void OutputSet::commit()
 {
     const auto step = [&](const std::string& s) {

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -51,6 +52,31 @@ public:
 
 private:
     std::vector<std::pair<std::filesystem::path, Writer>> mOutputs;
+};
+
+/// @brief A file written over a long run (a servo session for an hour at any
+/// rate): it grows under its temporary name (temporaryPathFor), removed by a
+/// kill like every temporary, and is put in place together with the run's
+/// other outputs by an OutputSet (addTo). Until then the target is untouched;
+/// destroyed without addTo(), the temporary is removed.
+class StreamingOutput {
+public:
+    /// @throw IoError "<file>: cannot write (cannot create the file)"
+    explicit StreamingOutput(std::filesystem::path file);
+    ~StreamingOutput();
+    StreamingOutput(const StreamingOutput&) = delete;
+    StreamingOutput& operator=(const StreamingOutput&) = delete;
+    std::ostream& stream() noexcept;
+    const std::filesystem::path& file() const noexcept { return mFile; }
+    /// @brief Hand the file to @p set: its commit() closes the stream (an error
+    /// while writing, a full disk, fails the commit naming the file), flushes it
+    /// and renames it in with the others. This object must outlive the commit.
+    void addTo(OutputSet& set);
+
+private:
+    struct State;
+    std::filesystem::path mFile;
+    std::unique_ptr<State> mState;
 };
 
 /// @brief Remove every temporary this process has open; async-signal-safe

@@ -112,18 +112,14 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         }
         viewer = std::make_unique<haptic::PoseSender>(host, port);
     }
-    std::size_t sentRecords = 0;
+    long sentRecords = 0;
 
-    haptic::Session session;
+    // The session goes to disk as it runs (bounded memory at any rate and length);
+    // it replaces an earlier one in the output folder only when it is complete.
+    haptic::SessionRecorder session(o.out, model->layers(), model->path().direction);
     const bool live = stderrIsTerminal() && !o.common.json;
     const auto t0 = std::chrono::steady_clock::now();
     const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-    const auto drain = [&] {
-        haptic::ServoRecord r;
-        while (loop.popRecord(r)) session.records.push_back(r);
-        haptic::Event e;
-        while (loop.popEvent(e)) session.events.push_back(e);
-    };
     if (!InterruptGuard::interrupted()) {
         loop.start();
         if (!loop.realtimeStatus().why.empty()) std::cerr << "voxhap serve: " << loop.realtimeStatus().why << '\n';
@@ -133,27 +129,27 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     }
     while (!InterruptGuard::interrupted() && loop.running() && (duration <= 0.0 || elapsed() < duration)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(viewer ? 20 : 100));
-        drain();
-        if (viewer && session.records.size() > sentRecords) {
-            sentRecords = session.records.size();
-            viewer->send({session.records.back().tip, session.records.back().direction});
+        session.drain(loop);
+        if (viewer && session.recordCount() > sentRecords) {
+            sentRecords = session.recordCount();
+            viewer->send({session.lastRecord()->tip, session.lastRecord()->direction});
         }
         if (live) {
             std::cerr << "\r" << std::fixed << std::setprecision(1) << elapsed() << " s  " << std::setprecision(0)
                       << double(loop.ticks()) / std::max(elapsed(), 1e-9) << " Hz  tick p99 " << std::setprecision(1)
                       << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us  F " << std::setprecision(2)
                       << loop.lastForceN() << " N  " << layerName(*model, loop.lastLayer()) << "  events "
-                      << session.events.size() << "        " << std::flush;
+                      << session.eventCount() << "        " << std::flush;
         }
     }
     // The hand may still hold the device: the force ramps to zero at the watchdog's
     // rate and a zero force is sent before anything is written.
     loop.releaseAndStop();
-    drain();
+    session.drain(loop);
     if (live) std::cerr << '\n';
     const double wall = elapsed();
 
-    const haptic::TraineeMetrics m = haptic::traineeMetrics(session, model->layers(), model->path().direction);
+    const haptic::TraineeMetrics m = session.metrics();
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
     nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success_dura_intact", m.success},
         {"bone_contacts", m.boneContacts}, {"pops", m.pops}, {"insertion_angle_deg", opt(m.insertionAngleDeg)},
@@ -164,12 +160,13 @@ int run(const ServeOptions& o, const CLI::App& cmd)
             {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
                 {"max", loop.maxComputeNs()}}},
         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
-        {"dropped_records", loop.droppedRecords()}, {"pose_faults", m.poseFaults},
+        {"records", session.recordCount()}, {"dropped_records", loop.droppedRecords()},
+        {"dropped_events", loop.droppedEvents()}, {"pose_faults", m.poseFaults},
         {"interrupted", InterruptGuard::interrupted()}};
     // The session and its metrics replace an earlier run's together (OutputSet): never a new
     // session.csv beside a stale metrics.json.
     OutputSet outputs;
-    haptic::addSessionOutputs(outputs, session, model->layers(), o.out);
+    session.finish(outputs, loop.droppedRecords());
     outputs.addStream(fs::path(o.out) / "metrics.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
     outputs.commit();
     if (o.common.json) {

@@ -145,6 +145,7 @@ public:
     bool popEvent(Event& e) noexcept { return mEvents->pop(e); }
     bool popRecord(ServoRecord& r) noexcept { return mRecords->pop(r); }
     long droppedRecords() const noexcept { return mRecords->dropped(); }
+    long droppedEvents() const noexcept { return mEvents->dropped(); }
     const TickStats& stats() const noexcept { return mStats; }
     long ticks() const noexcept { return mTicks.load(); }
     long overruns() const noexcept { return mOverruns.load(); }

@@ -6,6 +6,7 @@
 
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
+#include "haptic/servo/ServoLoop.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,28 +45,54 @@ std::ostream& operator<<(std::ostream& o, TimeS t)
     return o;
 }
 
+constexpr const char* kSessionHeader =
+    "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
+    "fault,critical,plunger_fraction\n";
+constexpr const char* kEventsHeader = "t_s,depth_mm,event,layer\n";
+
+/// A reference, not a copy: a recorder writes a row per tick and must not allocate for it.
+const std::string& layerNameOf(const std::vector<Layer>& layers, int i)
+{
+    static const std::string none;
+    return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : none;
+}
+
+/// One session.csv row (the stream is at 10 significant digits).
+void writeRecordRow(std::ostream& o, const ServoRecord& r, const std::vector<Layer>& layers)
+{
+    o << TimeS{r.timeS} << ',' << r.tip.x() << ',' << r.tip.y() << ',' << r.tip.z() << ',' << r.direction.x() << ','
+      << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ',' << r.force.z()
+      << ',' << r.plungerN << ',' << r.depthMm << ',' << r.axialN << ',' << layerNameOf(layers, r.layer) << ','
+      << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ',' << int(r.critical) << ','
+      << r.plungerFraction << '\n';
+}
+
+void writeEventRow(std::ostream& o, const Event& e, const std::vector<Layer>& layers)
+{
+    o << TimeS{e.timeS} << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerNameOf(layers, e.layer) << '\n';
+}
+
+/// session.csv's closing line: a comment (readers skip lines that start with '#',
+/// as pandas does with comment='#') that states what the file holds.
+void writeSessionTrailer(std::ostream& o, long records, long dropped)
+{
+    o << "# " << records << " records written, " << dropped
+      << " dropped (the servo loop's record queue was full; the tick went on)\n";
+}
+
 } // namespace
 
 void addSessionOutputs(OutputSet& out, const Session& s, const std::vector<Layer>& layers, const fs::path& dir)
 {
     fs::create_directories(dir);
-    const auto layerName = [&layers](
-                               int i) { return i >= 0 && i < int(layers.size()) ? layers[std::size_t(i)].name : ""; };
-    out.addStream(dir / "session.csv", csv([&s, layerName](std::ostream& o) {
-        o << "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
-             "fault,critical,plunger_fraction\n";
-        for (const ServoRecord& r : s.records) {
-            o << TimeS{r.timeS} << ',' << r.tip.x() << ',' << r.tip.y() << ',' << r.tip.z() << ',' << r.direction.x()
-              << ',' << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ','
-              << r.force.z() << ',' << r.plungerN << ',' << r.depthMm << ',' << r.axialN << ',' << layerName(r.layer)
-              << ',' << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ','
-              << int(r.critical) << ',' << r.plungerFraction << '\n';
-        }
+    out.addStream(dir / "session.csv", csv([&s, &layers](std::ostream& o) {
+        o << kSessionHeader;
+        for (const ServoRecord& r : s.records) writeRecordRow(o, r, layers);
+        writeSessionTrailer(o, long(s.records.size()), 0);
     }));
-    out.addStream(dir / "events.csv", csv([&s, layerName](std::ostream& o) {
-        o << "t_s,depth_mm,event,layer\n";
-        for (const Event& e : s.events)
-            o << TimeS{e.timeS} << ',' << e.depthMm << ',' << eventName(e.type) << ',' << layerName(e.layer) << '\n';
+    out.addStream(dir / "events.csv", csv([&s, &layers](std::ostream& o) {
+        o << kEventsHeader;
+        for (const Event& e : s.events) writeEventRow(o, e, layers);
     }));
 }
 
@@ -90,6 +117,7 @@ std::vector<ServoRecord> readSessionPoses(const fs::path& file)
     std::vector<ServoRecord> out;
     int last = 1; // the last line read
     for (int n = 2; std::getline(in, line); ++n) {
+        if (line.rfind('#', 0) == 0) continue; // a comment (the closing line states the counts)
         last = n;
         std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream ls(line);
@@ -139,81 +167,169 @@ DeviceReading ReplayDevice::read(double t) noexcept
     return r;
 }
 
-TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection)
+TraineeMetricsAccumulator::TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection)
+    : mLayers(layers), mDirection(pathDirection.normalized()), mSkinT(kNoLimit)
 {
-    TraineeMetrics m;
-    double skinT = kNoLimit, skinDepth = 0.0;
-    for (const Event& e : s.events) {
-        if (e.type == EventType::DuraPuncture) m.success = false;
-        if (e.type == EventType::BoneContact) ++m.boneContacts;
-        if (e.type == EventType::Pop) ++m.pops;
-        if (e.type == EventType::SkinEntry && !std::isfinite(skinT)) skinT = e.timeS, skinDepth = e.depthMm;
+}
+
+void TraineeMetricsAccumulator::addEvent(const Event& e) noexcept
+{
+    if (e.type == EventType::DuraPuncture) mM.success = false;
+    if (e.type == EventType::BoneContact) ++mM.boneContacts;
+    if (e.type == EventType::Pop) ++mM.pops;
+    if (e.type == EventType::SkinEntry && !std::isfinite(mSkinT)) mSkinT = e.timeS, mSkinDepth = e.depthMm;
+}
+
+void TraineeMetricsAccumulator::addRecord(const ServoRecord& r) noexcept
+{
+    if (!mHaveFirst) mFirst = r, mHaveFirst = true;
+    mLast = r;
+    // syrrate's starting fraction: the first record from the skin's puncture on.
+    if (!mHaveStartFraction && r.timeS >= mSkinT) {
+        mStartFraction = std::isfinite(r.plungerFraction) ? r.plungerFraction : 0.0;
+        mHaveStartFraction = true;
     }
-    const Vec3d u = pathDirection.normalized();
-    double sum = 0, sum2 = 0, epidural = 0;
-    long n = 0;
-    bool inEpidural = false;
-    // A record is a fault when no hand on the device could have produced it; the
-    // figures then skip it, comparing the next good record with the last good one.
-    std::vector<char> good(s.records.size(), 0);
-    for (std::size_t i = 0; i < s.records.size(); ++i) {
-        const ServoRecord& r = s.records[i];
-        good[i] = r.tip.allFinite() && std::isfinite(r.depthMm) && std::isfinite(r.timeS) &&
-            (r.tip - s.records.front().tip).norm() <= kWorkspaceReachMm;
+    // A record is a fault when no hand on the device could have produced it: a
+    // non-finite tip, one beyond the workspace's reach of the first tip, or a
+    // jump faster than a hand from the last good record. The figures skip it,
+    // comparing the next good record with the last good one.
+    bool good = r.tip.allFinite() && std::isfinite(r.depthMm) && std::isfinite(r.timeS) &&
+        (r.tip - mFirst.tip).norm() <= kWorkspaceReachMm;
+    if (good && mHavePrev) {
+        const double dt = r.timeS - mPrevGood.timeS;
+        if (dt > 0.0 && (r.tip - mPrevGood.tip).norm() / dt > kMaxHandSpeedMmPerS) good = false;
     }
-    std::size_t last = s.records.size();
-    for (std::size_t i = 0; i < s.records.size(); ++i) {
-        if (!good[i]) continue;
-        if (last < s.records.size()) {
-            const double dt = s.records[i].timeS - s.records[last].timeS;
-            if (dt > 0.0 && (s.records[i].tip - s.records[last].tip).norm() / dt > kMaxHandSpeedMmPerS) {
-                good[i] = 0; // a jump: keep comparing with the last good record
-                continue;
-            }
-        }
-        last = i;
+    if (!good) {
+        ++mM.poseFaults;
+        return;
     }
-    for (const char g : good) m.poseFaults += !g;
-    std::size_t prev = s.records.size();
-    for (std::size_t i = 0; i < s.records.size(); ++i) {
-        if (!good[i]) continue;
-        if (prev == s.records.size()) {
-            prev = i;
-            continue;
-        }
-        const ServoRecord& a = s.records[prev];
-        const ServoRecord& b = s.records[i];
-        prev = i;
-        if (!m.insertionAngleDeg && b.timeS >= skinT) {
-            m.insertionAngleDeg = std::acos(std::clamp(b.direction.normalized().dot(u), -1.0, 1.0)) * 180.0 / kPi;
-        }
-        const double dt = b.timeS - a.timeS;
-        const double v = dt > 0.0 ? (b.depthMm - a.depthMm) / dt : 0.0;
-        if (b.timeS >= skinT && v > 0.0) sum += v, sum2 += v * v, ++n;
-        const bool epi =
-            b.layer >= 0 && b.layer < int(layers.size()) && layers[std::size_t(b.layer)].role == LayerRole::Epidural;
-        if (epi) epidural += std::abs(b.depthMm - a.depthMm), inEpidural = true;
+    if (!mHavePrev) {
+        mPrevGood = r;
+        mHavePrev = true;
+        return;
     }
-    if (inEpidural) m.overshootMm = epidural;
-    if (n > 0) {
-        m.speedMeanMmPerS = sum / double(n);
-        m.speedVarianceMm2PerS2 = std::max(0.0, sum2 / double(n) - m.speedMeanMmPerS * m.speedMeanMmPerS);
+    const ServoRecord& a = mPrevGood;
+    const ServoRecord& b = r;
+    if (!mM.insertionAngleDeg && b.timeS >= mSkinT) {
+        mM.insertionAngleDeg = std::acos(std::clamp(b.direction.normalized().dot(mDirection), -1.0, 1.0)) * 180.0 / kPi;
     }
-    if (!s.records.empty()) m.durationS = s.records.back().timeS - s.records.front().timeS;
+    const double dt = b.timeS - a.timeS;
+    const double v = dt > 0.0 ? (b.depthMm - a.depthMm) / dt : 0.0;
+    if (b.timeS >= mSkinT && v > 0.0) mSum += v, mSum2 += v * v, ++mN;
+    const bool epi =
+        b.layer >= 0 && b.layer < int(mLayers.size()) && mLayers[std::size_t(b.layer)].role == LayerRole::Epidural;
+    if (epi) mEpidural += std::abs(b.depthMm - a.depthMm), mInEpidural = true;
+    mPrevGood = r;
+}
+
+TraineeMetrics TraineeMetricsAccumulator::result() const
+{
+    TraineeMetrics m = mM;
+    if (mInEpidural) m.overshootMm = mEpidural;
+    if (mN > 0) {
+        m.speedMeanMmPerS = mSum / double(mN);
+        m.speedVarianceMm2PerS2 = std::max(0.0, mSum2 / double(mN) - m.speedMeanMmPerS * m.speedMeanMmPerS);
+    }
+    if (mHaveFirst) m.durationS = mLast.timeS - mFirst.timeS;
     // syrrate ([S19], §2.3): syringe fraction emptied from the derma's puncture to the
     // end, per metre travelled along the path in that time.
-    if (std::isfinite(skinT) && !s.records.empty() && std::isfinite(s.records.back().plungerFraction)) {
-        double startFraction = 0.0;
-        for (const ServoRecord& r : s.records) {
-            if (r.timeS >= skinT) {
-                startFraction = std::isfinite(r.plungerFraction) ? r.plungerFraction : 0.0;
-                break;
-            }
-        }
-        const double travelM = (s.records.back().depthMm - skinDepth) * 1e-3;
-        if (travelM > 0.0) m.syrrate = (s.records.back().plungerFraction - startFraction) / travelM;
+    if (std::isfinite(mSkinT) && mHaveFirst && std::isfinite(mLast.plungerFraction)) {
+        const double travelM = (mLast.depthMm - mSkinDepth) * 1e-3;
+        if (travelM > 0.0) m.syrrate = (mLast.plungerFraction - (mHaveStartFraction ? mStartFraction : 0.0)) / travelM;
     }
     return m;
+}
+
+TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection)
+{
+    // Events and records merged in time order: an event before the records of its tick.
+    std::vector<Event> events = s.events;
+    std::stable_sort(
+        events.begin(), events.end(), [](const Event& a, const Event& b) { return a.timeS < b.timeS; });
+    TraineeMetricsAccumulator acc(layers, pathDirection);
+    std::size_t next = 0;
+    for (const ServoRecord& r : s.records) {
+        while (next < events.size() && events[next].timeS <= r.timeS) acc.addEvent(events[next++]);
+        acc.addRecord(r);
+    }
+    while (next < events.size()) acc.addEvent(events[next++]);
+    return acc.result();
+}
+
+SessionRecorder::SessionRecorder(const fs::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection)
+    : mLayers(layers), mMetrics(layers, pathDirection)
+{
+    fs::create_directories(dir);
+    mSession = std::make_unique<StreamingOutput>(dir / "session.csv");
+    mEventFile = std::make_unique<StreamingOutput>(dir / "events.csv");
+    mSession->stream() << std::setprecision(10) << kSessionHeader;
+    mEventFile->stream() << std::setprecision(10) << kEventsHeader;
+    mPending.reserve(1024);
+}
+
+SessionRecorder::~SessionRecorder() = default;
+
+void SessionRecorder::writeEvent(const Event& e)
+{
+    mMetrics.addEvent(e);
+    writeEventRow(mEventFile->stream(), e, mLayers);
+    ++mEvents;
+}
+
+void SessionRecorder::applyEventsUpTo(double timeS)
+{
+    while (mPendingHead < mPending.size() && mPending[mPendingHead].timeS <= timeS) writeEvent(mPending[mPendingHead++]);
+    if (mPendingHead == mPending.size()) mPending.clear(), mPendingHead = 0;
+}
+
+void SessionRecorder::addEvent(const Event& e)
+{
+    // Compact before growing: the pending list holds only events ahead of the records.
+    if (mPendingHead > 0 && mPending.size() == mPending.capacity()) {
+        mPending.erase(mPending.begin(), mPending.begin() + std::ptrdiff_t(mPendingHead));
+        mPendingHead = 0;
+    }
+    mPending.push_back(e);
+}
+
+void SessionRecorder::addRecord(const ServoRecord& r)
+{
+    applyEventsUpTo(r.timeS);
+    mMetrics.addRecord(r);
+    writeRecordRow(mSession->stream(), r, mLayers);
+    mLast = r;
+    ++mRecords;
+}
+
+void SessionRecorder::drain(ServoLoop& loop)
+{
+    ServoRecord r;
+    Event e;
+    // Records first: an event taken after them belongs to a record already taken or a later one.
+    // One batch of records at a time, so that a loop faster than this drain still ends it.
+    long batch = 0;
+    while (batch < (1L << 16) && loop.popRecord(r)) {
+        // Events up to this record may still be queued: take them before the record.
+        while (loop.popEvent(e)) addEvent(e);
+        addRecord(r);
+        ++batch;
+    }
+    while (loop.popEvent(e)) addEvent(e);
+}
+
+TraineeMetrics SessionRecorder::metrics()
+{
+    TraineeMetricsAccumulator copy = mMetrics;
+    for (std::size_t i = mPendingHead; i < mPending.size(); ++i) copy.addEvent(mPending[i]);
+    return copy.result();
+}
+
+void SessionRecorder::finish(OutputSet& out, long droppedRecords)
+{
+    applyEventsUpTo(kNoLimit);
+    writeSessionTrailer(mSession->stream(), mRecords, droppedRecords);
+    mSession->addTo(out);
+    mEventFile->addTo(out);
 }
 
 } // namespace voxhap::haptic

@@ -9,6 +9,7 @@
 #include "core/AtomicFile.h"
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,6 +80,81 @@ inline constexpr double kWorkspaceReachMm = 1000.0;
 /// 2 m/s; 5 m/s leaves margin [chosen].
 inline constexpr double kMaxHandSpeedMmPerS = 5000.0;
 
+/// @brief traineeMetrics() one record and one event at a time, in time order
+/// (an event before the record of its tick), with memory that does not grow
+/// with the session: what a recorder of an hour-long session keeps.
+class TraineeMetricsAccumulator {
+public:
+    TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection);
+    void addEvent(const Event& e) noexcept;
+    void addRecord(const ServoRecord& r) noexcept;
+    TraineeMetrics result() const;
+
+private:
+    const std::vector<Layer>& mLayers;
+    Vec3d mDirection;
+    TraineeMetrics mM;
+    double mSkinT, mSkinDepth = 0.0;
+    double mSum = 0, mSum2 = 0, mEpidural = 0;
+    long mN = 0;
+    bool mInEpidural = false;
+    bool mHaveFirst = false, mHavePrev = false, mHaveStartFraction = false;
+    ServoRecord mFirst, mLast, mPrevGood;
+    double mStartFraction = 0.0;
+};
+
 TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection);
+
+class ServoLoop;
+
+/// @brief A session written while it runs (issue 20 item 7): records and
+/// events go to session.csv and events.csv as they are drained from the servo
+/// loop, and into the trainee metrics, so memory stays bounded at any rate and
+/// length. The files grow under temporary names and replace an earlier
+/// session only at finish(), together with the caller's other outputs.
+/// session.csv ends with a comment line stating how many records were written
+/// and how many the servo loop dropped (its record queue was full).
+class SessionRecorder {
+public:
+    /// @p layers must outlive the recorder. @throw IoError when a file cannot be created
+    SessionRecorder(const std::filesystem::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection);
+    ~SessionRecorder();
+    SessionRecorder(const SessionRecorder&) = delete;
+    SessionRecorder& operator=(const SessionRecorder&) = delete;
+
+    /// @brief Everything the loop has queued: records first, then events, so
+    /// that the event of every record taken is at hand (the loop queues a
+    /// tick's events before its record).
+    void drain(ServoLoop& loop);
+    /// @brief An event; applied to the metrics before the first record at or after its time.
+    void addEvent(const Event& e);
+    void addRecord(const ServoRecord& r);
+
+    long recordCount() const noexcept { return mRecords; }
+    long eventCount() const noexcept { return mEvents; }
+    /// @brief The last record (for a live view); null before the first.
+    const ServoRecord* lastRecord() const noexcept { return mRecords > 0 ? &mLast : nullptr; }
+    /// @brief The metrics of everything added so far (pending events included).
+    TraineeMetrics metrics();
+
+    /// @brief Write the pending events and session.csv's closing line with
+    /// @p droppedRecords, and hand both files to @p out (which puts them in
+    /// place at its commit; this recorder must outlive the commit).
+    void finish(OutputSet& out, long droppedRecords);
+
+private:
+    void writeEvent(const Event& e);
+    void applyEventsUpTo(double timeS);
+
+    const std::vector<Layer>& mLayers;
+    TraineeMetricsAccumulator mMetrics;
+    std::unique_ptr<StreamingOutput> mSession, mEventFile;
+    /// Events taken from the loop ahead of their records, oldest first; bounded by
+    /// the loop's event queue (what one drain can take).
+    std::vector<Event> mPending;
+    std::size_t mPendingHead = 0;
+    long mRecords = 0, mEvents = 0;
+    ServoRecord mLast;
+};
 
 } // namespace voxhap::haptic

@@ -204,6 +204,26 @@ TEST_F(Cli, SimulateScriptedMotionAndBadInput)
 
 namespace {
 
+/// session.csv's data rows (no header, no comment) and its closing comment line.
+struct SessionRows {
+    std::vector<std::string> rows;
+    std::string trailer;
+};
+SessionRows sessionRows(const fs::path& file)
+{
+    SessionRows out;
+    std::ifstream in(file);
+    std::string line;
+    std::getline(in, line); // the header
+    while (std::getline(in, line)) {
+        if (line.rfind('#', 0) == 0)
+            out.trailer = line;
+        else
+            out.rows.push_back(line);
+    }
+    return out;
+}
+
 // `voxhap serve` with a scripted device in real time: -5 to 60 mm at 50 mm/s (1.3 s) runs
 // through the dura (41.4–42.4 mm, popping at 45.5 mm): the metrics say so, and the
 // session and events files are complete.
@@ -215,11 +235,15 @@ TEST_F(Cli, ServeWritesSessionAndMetrics)
     EXPECT_FALSE(m["success_dura_intact"].get<bool>());
     // Counts that agree, not a rate (a loaded machine may lose ticks; timing is bench/'s):
     // every tick is a session row, none dropped, and the script ran to its end at 60 mm.
-    const std::string session = slurp(mDir / "served" / "session.csv");
-    const long rows = long(std::count(session.begin(), session.end(), '\n')) - 1; // minus the header
-    EXPECT_EQ(m["ticks"].get<long>(), rows);
+    const SessionRows session = sessionRows(mDir / "served" / "session.csv");
+    EXPECT_EQ(m["ticks"].get<long>(), long(session.rows.size()));
+    EXPECT_EQ(m["records"].get<long>(), long(session.rows.size()));
     EXPECT_EQ(m["dropped_records"].get<long>(), 0);
-    const std::string last = session.substr(session.rfind('\n', session.size() - 2) + 1);
+    // The closing comment states the same counts (issue 20 item 7).
+    EXPECT_EQ(session.trailer, "# " + std::to_string(session.rows.size()) +
+            " records written, 0 dropped (the servo loop's record queue was full; the tick went on)");
+    ASSERT_FALSE(session.rows.empty());
+    const std::string& last = session.rows.back();
     EXPECT_NE(last.find(",60,"), std::string::npos) << "the last row is not at 60 mm: " << last;
     const std::string events = slurp(mDir / "served" / "events.csv");
     EXPECT_NE(events.find("loss_of_resistance"), std::string::npos);
@@ -267,8 +291,9 @@ TEST_F(Cli, ServeStopsCleanlyOnInterrupt)
     EXPECT_TRUE(fs::exists(mDir / "stopped" / "session.csv"));
     EXPECT_FALSE(fs::exists(mDir / "stopped" / "session.csv.part"));
     // The force was released before the session was written: the last force sent is zero.
-    const std::string session = slurp(mDir / "stopped" / "session.csv");
-    const std::string last = session.substr(session.rfind('\n', session.size() - 2) + 1);
+    const SessionRows session = sessionRows(mDir / "stopped" / "session.csv");
+    ASSERT_FALSE(session.rows.empty());
+    const std::string& last = session.rows.back();
     std::vector<std::string> fields;
     std::stringstream row(last);
     for (std::string f; std::getline(row, f, ',');) fields.push_back(f);

@@ -2,8 +2,10 @@
 /// @file TestSession.cpp
 /// @brief Session files that readSessionPoses refuses (a bad header, a bad line,
 /// times that do not increase, fewer than two records), each with one line naming
-/// the file and the line; and the servo loop's record queue when nobody drains
-/// it: records are dropped and counted, the oldest kept, and the tick goes on.
+/// the file and the line; the servo loop's record queue when nobody drains
+/// it: records are dropped and counted, the oldest kept, and the tick goes on;
+/// and the streaming SessionRecorder: the files grow under temporary names,
+/// replace an earlier session only at the commit, and state the dropped count.
 
 #include "common/TempDirTest.h"
 
@@ -18,6 +20,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <limits>
 #include <string>
 
@@ -234,6 +237,109 @@ TEST(RecordQueue, ServoLoopDropsAndCountsRecordsNobodyDrains)
         EXPECT_NEAR(r.timeS, double(n) * 1e-3, kSimTimeTolS);
     }
     EXPECT_FALSE(loop.popRecord(r));
+}
+
+/// Lines of @p file: data rows (not the header, not comments) and the comment lines.
+struct CsvLines {
+    std::vector<std::string> rows, comments;
+};
+CsvLines readCsv(const fs::path& file)
+{
+    CsvLines out;
+    std::ifstream in(file);
+    std::string line;
+    std::getline(in, line); // header
+    while (std::getline(in, line)) (line.rfind('#', 0) == 0 ? out.comments : out.rows).push_back(line);
+    return out;
+}
+
+// A whole session through the recorder, drained the way serve drains it (every
+// 100 ticks) from a loop whose record queue overflowed once: session.csv holds
+// exactly the records the loop kept, in order, its closing line states the 1 000
+// dropped, the reader accepts it, and events.csv holds the events in time order.
+// Until the commit, an earlier session in the folder is untouched.
+TEST_F(SessionFile, RecorderStreamsTheSessionAndStatesTheDroppedCount)
+{
+    static const SceneInstance inst(loadScene("senac-average"), nullptr, volume::TissueTable::builtin());
+    auto model = inst.makeModel();
+    const Vec3d dir = (inst.target() - inst.entry()).normalized();
+    HeldStillDevice device(inst.entry() - 20.0 * dir, dir, model->device());
+    ServoLoop loop(*model, device, ServoOptions{});
+    const fs::path out = mDir / "serve";
+    fs::create_directories(out);
+    std::ofstream(out / "session.csv") << "an earlier session\n";
+
+    constexpr long kCapacity = 1L << 16, kExtra = 1000, kAfter = 500;
+    {
+        SessionRecorder rec(out, model->layers(), dir);
+        loop.runTicks(kCapacity + kExtra); // nobody drains: the last 1 000 are dropped
+        rec.drain(loop);
+        for (long i = 0; i < kAfter; i += 100) loop.runTicks(100), rec.drain(loop);
+        EXPECT_EQ(rec.recordCount(), kCapacity + kAfter);
+        std::string earlier;
+        std::getline(std::ifstream(out / "session.csv"), earlier);
+        EXPECT_EQ(earlier, "an earlier session") << "replaced before the commit";
+
+        OutputSet set;
+        rec.finish(set, loop.droppedRecords());
+        set.commit();
+    }
+    const CsvLines session = readCsv(out / "session.csv");
+    ASSERT_EQ(long(session.rows.size()), kCapacity + kAfter);
+    ASSERT_EQ(session.comments.size(), 1u);
+    EXPECT_EQ(session.comments[0].rfind("# 66036 records written, 1000 dropped", 0), 0u) << session.comments[0];
+    const std::vector<ServoRecord> poses = readSessionPoses(out / "session.csv");
+    ASSERT_EQ(long(poses.size()), kCapacity + kAfter);
+    EXPECT_NEAR(poses[kCapacity - 1].timeS, double(kCapacity - 1) * 1e-3, kSimTimeTolS);
+    // After the gap the next record is the first tick run after the drain.
+    EXPECT_NEAR(poses[kCapacity].timeS, double(kCapacity + kExtra) * 1e-3, kSimTimeTolS);
+    for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename().string().rfind(".tmp.", 0), std::string::npos) << e.path();
+}
+
+// Events are written in time order, each before the records of its tick, and the
+// metrics see them in that order even when a drain takes an event ahead of its
+// record: a skin entry at 0.5 s makes only the later advance count in the speed.
+TEST_F(SessionFile, RecorderOrdersEventsBeforeTheRecordsOfTheirTick)
+{
+    const fs::path out = mDir / "ordered";
+    SessionRecorder rec(out, {}, Vec3d(0, 0, 1));
+    // Depth 0 until 0.5 s, then 20 mm/s: the mean advancing speed after the skin is 20 mm/s.
+    rec.addEvent({EventType::SkinEntry, 0.5, 0.0, 0}); // taken ahead of its record
+    for (int i = 0; i <= 1000; ++i) {
+        ServoRecord r;
+        r.timeS = 1e-3 * i;
+        r.depthMm = i <= 500 ? 0.0 : 0.02 * (i - 500);
+        r.tip = Vec3d(0, 0, r.depthMm);
+        rec.addRecord(r);
+        if (i == 750) rec.addEvent({EventType::Pop, 0.75, 5.0, 0}); // after its record (never earlier)
+    }
+    const TraineeMetrics m = rec.metrics();
+    constexpr double kSpeedRoundOff = 1e-6; // mm/s: decimal times and depths in double
+    EXPECT_NEAR(m.speedMeanMmPerS, 20.0, kSpeedRoundOff);
+    EXPECT_EQ(m.pops, 1);
+    OutputSet set;
+    rec.finish(set, 0);
+    set.commit();
+    const CsvLines events = readCsv(out / "events.csv");
+    ASSERT_EQ(events.rows.size(), 2u);
+    EXPECT_EQ(events.rows[0].rfind("0.5,0,skin_entry", 0), 0u) << events.rows[0];
+    EXPECT_EQ(events.rows[1].rfind("0.75,5,pop", 0), 0u) << events.rows[1];
+}
+
+// A recorder dropped without a commit (an exception in serve, a failed write)
+// leaves no temporary and no session behind.
+TEST_F(SessionFile, RecorderWithoutCommitLeavesNothing)
+{
+    const fs::path out = mDir / "abandoned";
+    {
+        SessionRecorder rec(out, {}, Vec3d(0, 0, 1));
+        ServoRecord r;
+        rec.addRecord(r);
+        OutputSet unused;
+        rec.finish(unused, 0); // handed over, but the set is never committed
+    }
+    EXPECT_TRUE(fs::is_empty(out));
 }
 
 } // namespace
