@@ -21,6 +21,7 @@ struct ByteSource::Impl {
     std::uint64_t offset = 0; ///< where the compressed data starts in the file
     std::uint64_t fed = 0;    ///< compressed bytes handed to zlib so far
     bool compressed = false;
+    bool gzip = false; ///< gzip members (RFC 1952), not one zlib stream (RFC 1950): decides what may follow
     z_stream z{};
     bool zOpen = false, zEnd = false;
     std::vector<char> buf;
@@ -43,15 +44,20 @@ struct ByteSource::Impl {
 
     /// At the end of one member: start the next if a gzip member follows
     /// (concatenated members are one file, RFC 1952 §2.2); stop at the end of
-    /// the file; refuse anything else.
+    /// the file; refuse anything else. A zlib stream (RFC 1950) has no members:
+    /// nothing may follow it.
     void nextMember()
     {
         if (!refill()) {
             zEnd = true;
             return;
         }
-        // A gzip member starts 1F 8B; read the second byte if it is not in the buffer yet.
         const std::uint64_t at = position();
+        if (!gzip) {
+            throw IoError(name + ": data: bytes after the end of the zlib stream (at byte " + std::to_string(at) +
+                "): the format allows none");
+        }
+        // A gzip member starts 1F 8B; read the second byte if it is not in the buffer yet.
         unsigned char first = z.next_in[0], second = 0;
         if (z.avail_in >= 2)
             second = z.next_in[1];
@@ -70,6 +76,29 @@ struct ByteSource::Impl {
         }
         if (inflateReset(&z) != Z_OK) throw IoError(name + ": zlib reset failed");
     }
+
+    /// One line for what inflate() refused. A failed trailer check is named by
+    /// its field: zlib has just consumed the 4 bytes of that field (it reads
+    /// them whole and checks them at once), so the field starts 4 bytes back.
+    [[noreturn]] void refuse(int rc) const
+    {
+        const std::string msg = z.msg ? z.msg : "";
+        const std::uint64_t at = position();
+        if (msg == "incorrect data check") {
+            throw IoError(name + ": data: " + (gzip ? "gzip trailer CRC-32" : "zlib trailer Adler-32") + " at byte " +
+                std::to_string(at - 4) + " does not match the inflated data (corrupt stream or trailer)");
+        }
+        if (msg == "incorrect length check") {
+            throw IoError(name + ": data: gzip trailer ISIZE (stored length) at byte " + std::to_string(at - 4) +
+                " does not match the inflated length (corrupt stream or trailer)");
+        }
+        if (rc == Z_NEED_DICT) {
+            throw IoError(name + ": data: the zlib stream at byte " + std::to_string(offset) +
+                " needs a preset dictionary, which this format cannot supply");
+        }
+        throw IoError(name + ": data: corrupt compressed data near byte " + std::to_string(at) + " (" +
+            (msg.empty() ? std::string("zlib error ") + std::to_string(rc) : msg) + ")");
+    }
 };
 
 ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, bool compressed, std::uint64_t skip)
@@ -87,6 +116,13 @@ ByteSource::ByteSource(const std::filesystem::path& file, std::uint64_t offset, 
         if (inflateInit2(&mImpl->z, 15 + 32) != Z_OK) throw IoError(mImpl->name + ": zlib initialisation failed");
         mImpl->zOpen = true;
         mImpl->buf.resize(1 << 16);
+        // The wrapper decides what may follow the stream (nextMember): gzip
+        // starts 1F 8B; anything else is left to inflate to accept as zlib or refuse.
+        unsigned char magic[2] = {};
+        mImpl->in.read(reinterpret_cast<char*>(magic), 2);
+        mImpl->gzip = mImpl->in.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
+        mImpl->in.clear();
+        mImpl->in.seekg(std::streamoff(offset));
     }
     std::vector<char> discard(1 << 12);
     while (skip > 0) {
@@ -112,14 +148,17 @@ std::size_t ByteSource::read(void* out, std::size_t n)
     m.z.next_out = static_cast<Bytef*>(out);
     m.z.avail_out = uInt(n);
     while (m.z.avail_out > 0 && !m.zEnd) {
-        if (!m.refill()) break; // compressed stream ends early: the caller sees a short read (finish() refuses it)
+        // The file ends inside a member (its data or its trailer): a cut file,
+        // refused here with the offset rather than left to look like a short volume.
+        if (!m.refill()) {
+            throw IoError(m.name + ": data: the compressed stream ends at byte " + std::to_string(m.position()) +
+                " before its end and trailer (truncated file)");
+        }
         const int rc = inflate(&m.z, Z_NO_FLUSH);
         if (rc == Z_STREAM_END)
             m.nextMember();
-        else if (rc != Z_OK && rc != Z_BUF_ERROR) {
-            throw IoError(m.name + ": data: corrupt compressed data near byte " + std::to_string(m.position()) + " (" +
-                std::string(m.z.msg ? m.z.msg : "zlib error") + ")");
-        }
+        else if (rc != Z_OK && rc != Z_BUF_ERROR)
+            m.refuse(rc);
     }
     return n - m.z.avail_out;
 }
@@ -128,14 +167,10 @@ void ByteSource::finish()
 {
     Impl& m = *mImpl;
     if (!m.compressed) return;
+    // read() refuses a cut stream, a failed check and foreign trailing bytes;
+    // here the rest is only inflated and discarded.
     std::vector<char> discard(1 << 16);
-    while (!m.zEnd) {
-        const std::size_t got = read(discard.data(), discard.size());
-        if (got == 0 && !m.zEnd) {
-            throw IoError(m.name + ": data: the compressed stream ends at byte " + std::to_string(m.position()) +
-                " without its trailer (truncated file)");
-        }
-    }
+    while (!m.zEnd) (void)read(discard.data(), discard.size());
 }
 
 } // namespace voxhap::volume

@@ -213,13 +213,12 @@ NiftiRawHeader checkRawHeader(const std::filesystem::path& file, const std::stri
 
 } // namespace
 
-NiftiHeader readNiftiHeader(const std::filesystem::path& file, std::uint64_t memoryCapBytes)
+namespace {
+
+/// The header's fields, read and checked; for a .nii.gz without verifying the
+/// stream they came from (readNiftiHeader does that when they fail).
+NiftiHeader readHeaderFields(const std::filesystem::path& file, const std::string& name, std::uint64_t memoryCapBytes)
 {
-    static std::once_flag quiet;
-    std::call_once(quiet, [] { nifti_set_debug_level(0); }); // voxhap reports its own one-line errors
-    const std::string name = file.string();
-    if (!std::filesystem::exists(file)) throw IoError(name + ": no such file");
-    requireRegularFile(file, "NIfTI file"); // a FIFO or a device is refused before it is opened
     // A .hdr without a NIfTI magic is ANALYZE 7.5: niftilib recognises it and it is refused below.
     const NiftiRawHeader raw = checkRawHeader(file, name, file.extension() == ".hdr");
     std::unique_ptr<nifti_image, NiftiFree> nim(nifti_image_read(name.c_str(), 0)); // header only
@@ -298,6 +297,30 @@ NiftiHeader readNiftiHeader(const std::filesystem::path& file, std::uint64_t mem
         }
     }
     return h;
+}
+
+} // namespace
+
+NiftiHeader readNiftiHeader(const std::filesystem::path& file, std::uint64_t memoryCapBytes)
+{
+    static std::once_flag quiet;
+    std::call_once(quiet, [] { nifti_set_debug_level(0); }); // voxhap reports its own one-line errors
+    const std::string name = file.string();
+    if (!std::filesystem::exists(file)) throw IoError(name + ": no such file");
+    requireRegularFile(file, "NIfTI file"); // a FIFO or a device is refused before it is opened
+    try {
+        return readHeaderFields(file, name, memoryCapBytes);
+    } catch (const IoError&) {
+        // In a .nii.gz the header is inside the compressed stream: damage to the
+        // stream shows first as nonsense header fields. When the stream itself
+        // fails its checks, that is the error to report (it throws here);
+        // otherwise the header really is wrong.
+        if (name.size() > 3 && name.compare(name.size() - 3, 3, ".gz") == 0) {
+            ByteSource whole(file, 0, true);
+            whole.finish();
+        }
+        throw;
+    }
 }
 
 } // namespace voxhap::volume
