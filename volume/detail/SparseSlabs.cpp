@@ -12,7 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #if defined(__SSE2__)
-#include <xmmintrin.h>
+#include <emmintrin.h>
 #endif
 
 #include <algorithm>
@@ -98,14 +98,36 @@ inline unsigned notBelow(const float* v, float air)
 #endif
 }
 
+/// out[z] = in[z] where bit z of @p bits is set, else @p bg, for z = 0..7.
+inline void storeRun(float* out, const float* in, unsigned bits, float bg)
+{
+#if defined(__SSE2__)
+    const __m128i lane = _mm_set_epi32(8, 4, 2, 1);
+    const __m128 b = _mm_set1_ps(bg);
+    for (int h = 0; h < 2; ++h) {
+        const __m128i set = _mm_set1_epi32(int(bits >> (4 * h)));
+        const __m128 on = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(set, lane), lane));
+        const __m128 v = _mm_loadu_ps(in + 4 * h);
+        _mm_storeu_ps(out + 4 * h, _mm_or_ps(_mm_and_ps(on, v), _mm_andnot_ps(on, b)));
+    }
+#else
+    for (int z = 0; z < kDim; ++z) out[z] = (bits >> z) & 1u ? in[z] : bg;
+#endif
+}
+
 } // namespace
 
-void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite)
+namespace {
+
+/// The slab builder behind addSlabRows and addSlabBlocks. Per task (one row
+/// of 8 x 8 column blocks): @p Scratch holds what the task's rows need;
+/// prepare(scratch, y0, y1) runs once, row(scratch, z, y) gives image row y of
+/// slab slice z as nx floats.
+template <typename Scratch, typename Prepare, typename Row>
+void buildSlab(FloatGrid& grid, float air, float bg, Prepare prepare, Row row, int nx, int ny, int k0, int nz,
+    bool finite)
 {
-    static_assert(kSlabSlices == kDim, "a slab is one layer of leaves");
-    if (k0 % kDim != 0 || nz < 1 || nz > kDim)
-        throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
-    const float air = mImpl->airBelow, bg = mImpl->background;
+    static_assert(SparseSlabs::kSlabSlices == kDim, "a slab is one layer of leaves");
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
     const unsigned zValid = (1u << nz) - 1; // slices beyond the slab's last stay inactive background
     // One leaf per 8 x 8 column block of the slab, built straight from the
@@ -123,11 +145,15 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
     try {
         tbb::parallel_for(0, by, [&](int yb) {
             const int y0 = yb * kDim;
-            LeafT** row = leaves.data() + std::size_t(yb) * std::size_t(bx);
+            LeafT** blockLeaves = leaves.data() + std::size_t(yb) * std::size_t(bx);
             // Each leaf's buffer and mask, fetched once (every buffer access checks delayed loading).
             std::vector<float*> values(std::size_t(bx), nullptr);
             std::vector<std::uint8_t*> masks(std::size_t(bx), nullptr);
-            std::vector<float> scratch(std::size_t(nx) * kDim);
+            // Kept per thread across tasks and slabs: a fresh 128 KiB block per
+            // task would be mapped and page-faulted anew each time. Nothing a
+            // task calls runs TBB work, so no other task can take it over midway.
+            static thread_local Scratch scratch;
+            prepare(scratch, y0, std::min(y0 + kDim, ny));
             const float* in[kDim];
             const float* block[kDim];
             float edge[kDim][kDim] = {}; // the last, partial column block, padded
@@ -136,7 +162,7 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
             for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
                 const int yy = y - y0;
                 for (int z = 0; z < nz; ++z) {
-                    in[z] = rows(z, y, scratch.data() + std::size_t(z) * std::size_t(nx));
+                    in[z] = row(scratch, z, y);
                     if (finite) continue;
                     // One pass proves the row finite, so that the block loop below
                     // has only one test: air or not.
@@ -164,10 +190,10 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
                     unsigned bits[kDim], any = 0;
                     for (int xx = 0; xx < w; ++xx) any |= bits[xx] = notBelow(t + xx * kDim, air) & zValid;
                     if (!any) continue; // air: the inactive background, no leaf needed for it
-                    if (!row[b]) {
-                        row[b] = new LeafT(openvdb::Coord(x0, y0, k0), bg, false);
-                        values[std::size_t(b)] = row[b]->buffer().data();
-                        masks[std::size_t(b)] = &row[b]->getValueMask().template getWord<std::uint8_t>(0);
+                    if (!blockLeaves[b]) {
+                        blockLeaves[b] = new LeafT(openvdb::Coord(x0, y0, k0), bg, false);
+                        values[std::size_t(b)] = blockLeaves[b]->buffer().data();
+                        masks[std::size_t(b)] = &blockLeaves[b]->getValueMask().template getWord<std::uint8_t>(0);
                     }
                     float* v = values[std::size_t(b)];
                     std::uint8_t* m = masks[std::size_t(b)];
@@ -175,8 +201,7 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
                         if (!bits[xx]) continue;
                         // Offset x·64 + y·8 + z: the 8 slices of (x, y) are contiguous, and
                         // their mask bits are byte x·8 + y of the (little-endian) mask.
-                        float* out = v + (xx << 6) + (yy << 3);
-                        for (int z = 0; z < kDim; ++z) out[z] = (bits[xx] >> z) & 1u ? t[xx * kDim + z] : bg;
+                        storeRun(v + (xx << 6) + (yy << 3), t + xx * kDim, bits[xx], bg);
                         m[(xx << 3) + yy] = std::uint8_t(bits[xx]);
                     }
                 }
@@ -186,10 +211,45 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
         for (LeafT* l : leaves) delete l;
         throw;
     }
-    auto& tree = mImpl->grid->tree();
+    auto& tree = grid.tree();
     for (LeafT* l : leaves) {
         if (l) tree.addLeaf(l); // the tree takes ownership
     }
+}
+
+} // namespace
+
+void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite)
+{
+    if (k0 % kDim != 0 || nz < 1 || nz > kDim)
+        throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
+    using Scratch = std::vector<float>; // one row of each slice, for sources that convert into it
+    buildSlab<Scratch>(
+        *mImpl->grid, mImpl->airBelow, mImpl->background,
+        [nx](Scratch& s, int, int) { s.resize(std::size_t(nx) * kDim); },
+        [&rows, nx](Scratch& s, int z, int y) { return rows(z, y, s.data() + std::size_t(z) * std::size_t(nx)); }, nx,
+        ny, k0, nz, finite);
+}
+
+void SparseSlabs::addSlabBlocks(const BlockSource& blocks, int nx, int ny, int k0, int nz, bool finite)
+{
+    if (k0 % kDim != 0 || nz < 1 || nz > kDim)
+        throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
+    struct Scratch {
+        std::vector<float> rows; ///< rows y0 .. y0 + 7 of every slice: slice-major, then row
+        int y0 = 0;
+    };
+    buildSlab<Scratch>(
+        *mImpl->grid, mImpl->airBelow, mImpl->background,
+        [&blocks, nx, nz](Scratch& s, int y0, int y1) {
+            s.rows.resize(std::size_t(nx) * kDim * kDim);
+            s.y0 = y0;
+            for (int z = 0; z < nz; ++z) blocks(z, y0, y1, s.rows.data() + std::size_t(z) * kDim * std::size_t(nx));
+        },
+        [nx](Scratch& s, int z, int y) -> const float* {
+            return s.rows.data() + (std::size_t(z) * kDim + std::size_t(y - s.y0)) * std::size_t(nx);
+        },
+        nx, ny, k0, nz, finite);
 }
 
 Volume::GridPtr SparseSlabs::finish()

@@ -48,6 +48,17 @@ public:
     ///               rescale): the per-row finiteness pass is skipped
     void addSlabRows(const RowSource& rows, int nx, int ny, int k0, int nz, bool finite = false);
 
+    /// @brief Rows y0 .. y1 - 1 of slab slice @p z as floats, nx per row, row
+    /// after row, into @p out (called by any thread, once per slice and row of
+    /// leaves).
+    using BlockSource = std::function<void(int z, int y0, int y1, float* out)>;
+
+    /// @brief As addSlabRows, with the rows of one row of leaves (8 image rows
+    /// of every slice) produced together: a loader reads those rows straight
+    /// from each file and converts them while they are in the cache, and
+    /// neither the slab's stored samples nor its floats ever exist whole.
+    void addSlabBlocks(const BlockSource& blocks, int nx, int ny, int k0, int nz, bool finite = false);
+
     /// @brief The grid built so far (the builder is empty afterwards).
     Volume::GridPtr finish();
 

@@ -19,9 +19,12 @@
 #include "volume/dicom/detail/StoredPrecision.h"
 
 #include <Eigen/Geometry>
+#include <fcntl.h>
+#include <unistd.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -389,6 +392,12 @@ public:
     }
 
     const DicomHeader& header(const Slice& s) const { return mHeaders[s.file]; }
+    /// Note that file @p file could not be read (the first such file is failed()).
+    void fail(std::size_t file)
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        if (!mFailed) mFailed = file;
+    }
     /// The file whose decode failed first, if any.
     std::optional<std::size_t> failed() const { return mFailed; }
 
@@ -399,6 +408,67 @@ private:
     std::mutex mMutex;
     std::optional<std::size_t> mFailed;
 };
+
+/// The pixel data of one uncompressed file, read a few rows at a time with
+/// pread (safe from any thread; a file that shrinks under the load gives a
+/// short read and an error, where a memory map would give SIGBUS).
+struct PixelFile {
+    PixelFile(const DicomHeader& h, const DicomFrames& l, std::size_t i) : header(h), layout(l), index(i) { }
+    PixelFile(PixelFile&& o) noexcept : header(o.header), layout(o.layout), index(o.index), fd(o.fd) { o.fd = -1; }
+    PixelFile(const PixelFile&) = delete;
+    PixelFile& operator=(const PixelFile&) = delete;
+    PixelFile& operator=(PixelFile&&) = delete;
+    ~PixelFile()
+    {
+        if (fd >= 0) ::close(fd);
+    }
+    bool open()
+    {
+        fd = ::open(header.file.c_str(), O_RDONLY | O_CLOEXEC);
+        return fd >= 0;
+    }
+    /// Rows y0 .. y1 - 1 of the (only) frame into @p out.
+    /// @throw IoError naming the file and PixelData when they cannot be read
+    void readRows(int y0, int y1, std::vector<char>& out) const
+    {
+        const std::size_t rowBytes = std::size_t(layout.columns) * sampleBytes(layout.type);
+        const std::size_t want = rowBytes * std::size_t(y1 - y0);
+        out.resize(want);
+        std::uint64_t at = header.pixelOffset + std::uint64_t(y0) * rowBytes;
+        for (std::size_t got = 0; got < want;) {
+            const ssize_t n = ::pread(fd, out.data() + got, want - got, off_t(at));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) {
+                const std::uint64_t expected = std::uint64_t(rowBytes) * std::uint64_t(layout.rows);
+                throw IoError(header.file.string() + ": (7FE0,0010) PixelData: cannot read " +
+                    std::to_string(expected) + " bytes");
+            }
+            got += std::size_t(n);
+            at += std::uint64_t(n);
+        }
+    }
+    const DicomHeader& header;
+    const DicomFrames& layout;
+    std::size_t index; ///< into the series' headers
+    int fd = -1;
+};
+
+/// Slab k0 .. k0 + n - 1 holds integer samples (at most 32 bits) under a
+/// rescale below 1e28: far inside float's range (2^32 · 1e28 < 3.4e38), so
+/// there is no NaN or inf to look for.
+bool integerSamples(const Plan& plan, const std::vector<SlicePlacement>& order,
+    const std::vector<DicomFrames>& layouts, int k0, int n)
+{
+    constexpr double kFiniteRescale = 1e28;
+    bool finite = true;
+    for (int k = 0; k < n; ++k) {
+        const Slice& s = plan.slices[order[std::size_t(k0 + k)].source];
+        const SampleType type = layouts[s.file].type;
+        finite = finite && type != SampleType::Float32 && type != SampleType::Float64 &&
+            std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
+    }
+    return finite;
+}
 
 /// The resampled grid: in-plane index range that holds every source voxel of
 /// every slice (a tilted stack's slices shift in plane), planes along the normal.
@@ -663,7 +733,61 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
             FrameSource source(work.headers);
             const auto& order = plan.stack.slices;
             try {
-                if (!resample) {
+                // Single-frame uncompressed little-endian files (the shared CT, most
+                // exports) are read a row of leaves at a time: each task reads the 8
+                // image rows of each slice it converts straight from the files and
+                // converts them while they are in its cache, so reading overlaps
+                // conversion on every core and the slab's samples never exist whole.
+                std::vector<DicomFrames> layouts(work.headers.size());
+                bool direct = !resample;
+                for (std::size_t n = 0; direct && n < plan.slices.size(); ++n) {
+                    const Slice& s = plan.slices[n];
+                    const DicomHeader& h = work.headers[s.file];
+                    try {
+                        direct = h.storedFrames == 1 && h.mosaicImages == 0 && h.storedColumns == nx &&
+                            h.storedRows == ny && nativeFrameLayout(h, layouts[s.file]);
+                    } catch (const IoError&) {
+                        source.fail(s.file);
+                        throw;
+                    }
+                }
+                if (direct) {
+                    for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
+                        const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
+                        const auto t = std::chrono::steady_clock::now();
+                        std::vector<PixelFile> files;
+                        files.reserve(std::size_t(n));
+                        for (int k = 0; k < n; ++k) {
+                            const Slice& s = plan.slices[order[std::size_t(k0 + k)].source];
+                            files.emplace_back(work.headers[s.file], layouts[s.file], s.file);
+                            if (!files.back().open()) {
+                                source.fail(s.file);
+                                throw IoError(work.headers[s.file].file.string() + ": cannot open");
+                            }
+                        }
+                        sparse.addSlabBlocks(
+                            [&](int z, int y0, int y1, float* out) {
+                                const Slice& s = plan.slices[order[std::size_t(k0 + z)].source];
+                                PixelFile& f = files[std::size_t(z)];
+                                thread_local std::vector<char> raw; // one per converting thread, reused
+                                try {
+                                    f.readRows(y0, y1, raw);
+                                } catch (const IoError&) {
+                                    source.fail(f.index);
+                                    throw;
+                                }
+                                const std::size_t rowBytes = std::size_t(nx) * sampleBytes(f.layout.type);
+                                for (int y = y0; y < y1; ++y) {
+                                    rawSamplesToFloat(f.layout, raw.data() + std::size_t(y - y0) * rowBytes,
+                                        std::size_t(nx), s.slope, s.intercept, f.header.padding, background,
+                                        out + std::size_t(y - y0) * std::size_t(nx));
+                                }
+                            },
+                            nx, ny, k0, n, integerSamples(plan, order, layouts, k0, n));
+                        sparseSeconds += since(t);
+                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
+                    }
+                } else if (!resample) {
                     // The slab's stored samples are decoded, then converted to floats row by
                     // row straight into the grid's leaves: the slab never exists as floats.
                     std::vector<DicomFrames> decoded(SparseSlabs::kSlabSlices);

@@ -121,8 +121,10 @@ struct DicomLoadReport {
     std::string chosenBecause;                ///< why this series (the default rule, or the option)
     double seconds = 0;                       ///< wall time of the whole load [s]
     double scanSeconds = 0;                   ///< of which: preflight walk and header scan [s]
-    double decodeSeconds = 0;                 ///< of which: GDCM decode and rescale to float [s]
-    double sparseSeconds = 0;                 ///< of which: dense slabs into the sparse grid [s]
+    double decodeSeconds = 0;                 ///< of which: decoding whole files (GDCM, multi-frame, mosaics) [s]
+    /// of which: samples into the sparse grid [s]; for uncompressed single-frame
+    /// files this includes reading them, which overlaps the conversion
+    double sparseSeconds = 0;
     std::int64_t denseVoxels = 0;
     std::int64_t activeVoxels = 0;
     std::uint64_t memoryBytes = 0; ///< the grid's memory [bytes]

@@ -238,7 +238,7 @@ void decodeDicomFramesInProcess(const std::filesystem::path& file, DicomFrames& 
     }
 }
 
-bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
+bool nativeFrameLayout(const DicomHeader& h, DicomFrames& f)
 {
     const bool littleEndian = h.transferSyntax == "1.2.840.10008.1.2" || h.transferSyntax == "1.2.840.10008.1.2.1";
     if (!littleEndian || h.pixelLength == 0 ||
@@ -264,16 +264,23 @@ bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
     f.highBit = h.highBit;
     const std::uint64_t expected =
         std::uint64_t(f.rows) * std::uint64_t(f.columns) * std::uint64_t(f.frames) * sampleBytes(f.type);
-    const std::string name = h.file.string();
     if (h.pixelLength < expected) {
-        throw IoError(name + ": (7FE0,0010) PixelData holds " + std::to_string(h.pixelLength) + " bytes, expected " +
-            std::to_string(expected));
+        throw IoError(h.file.string() + ": (7FE0,0010) PixelData holds " + std::to_string(h.pixelLength) +
+            " bytes, expected " + std::to_string(expected));
     }
+    return true;
+}
+
+bool readNativeFrames(const DicomHeader& h, DicomFrames& f)
+{
+    if (!nativeFrameLayout(h, f)) return false;
+    const std::uint64_t expected =
+        std::uint64_t(f.rows) * std::uint64_t(f.columns) * std::uint64_t(f.frames) * sampleBytes(f.type);
     f.raw.resize(expected);
     std::ifstream in(h.file, std::ios::binary);
     in.seekg(std::streamoff(h.pixelOffset));
     if (!in.read(f.raw.data(), std::streamsize(expected))) {
-        throw IoError(name + ": (7FE0,0010) PixelData: cannot read " + std::to_string(expected) + " bytes");
+        throw IoError(h.file.string() + ": (7FE0,0010) PixelData: cannot read " + std::to_string(expected) + " bytes");
     }
     return true;
 }
@@ -288,7 +295,13 @@ void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::siz
     double intercept, std::optional<double> padding, float air, float* out)
 {
     const std::size_t framePlane = std::size_t(f.rows) * std::size_t(f.columns);
-    const char* raw = f.raw.data() + (framePlane * std::size_t(frame) + first) * sampleBytes(f.type);
+    rawSamplesToFloat(f, f.raw.data() + (framePlane * std::size_t(frame) + first) * sampleBytes(f.type), plane, slope,
+        intercept, padding, air, out);
+}
+
+void rawSamplesToFloat(const DicomFrames& f, const char* raw, std::size_t plane, double slope, double intercept,
+    std::optional<double> padding, float air, float* out)
+{
     // A HighBit outside bitsStored − 1 .. the word was refused with the header.
     const int shift = f.highBit < 0 ? 0 : std::max(0, f.highBit + 1 - f.bitsStored);
     switch (f.type) {

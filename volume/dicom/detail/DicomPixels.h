@@ -37,6 +37,12 @@ void frameToFloat(const DicomFrames& f, int frame, double slope, double intercep
 void samplesToFloat(const DicomFrames& f, int frame, std::size_t first, std::size_t count, double slope,
     double intercept, std::optional<double> padding, float air, float* out);
 
+/// @brief As samplesToFloat, for @p count samples at @p raw laid out as
+/// @p f's (type and bits; f.raw is not used): samples read from a file by
+/// some other route than DicomFrames.
+void rawSamplesToFloat(const DicomFrames& f, const char* raw, std::size_t count, double slope, double intercept,
+    std::optional<double> padding, float air, float* out);
+
 /// @brief Silence GDCM's own warnings and errors: voxhap reports its own, one line each.
 void quietGdcm();
 
@@ -55,7 +61,14 @@ DicomFrames decodeDicomFrames(const std::filesystem::path& file);
 /// @throw IoError naming the file when the value is shorter than the image
 bool readNativeFrames(const DicomHeader& h, DicomFrames& out);
 
-/// @brief As above, into @p out, reusing its buffers: a thread that decodes
+/// @brief What readNativeFrames would read, without reading it: @p out's
+/// type, bits and dimensions (its raw samples untouched), for a loader that
+/// reads the samples from h.pixelOffset itself, a few rows at a time.
+/// @return false when @p h is not such a file
+/// @throw IoError naming the file when the value is shorter than the image
+bool nativeFrameLayout(const DicomHeader& h, DicomFrames& out);
+
+/// @brief As decodeDicomFrames(file), into @p out, reusing its buffers: a thread that decodes
 /// many slices keeps one instance and avoids fresh page-faulting allocations.
 ///
 /// GDCM runs in a decoder process of its own (DicomDecodeProcess.h), started
