@@ -269,7 +269,9 @@ struct Built {
 struct Runner::Impl {
     std::map<std::string, std::unique_ptr<volume::TissueTable>> tables;
     std::vector<Prepared> cases;
-    std::map<std::string, Built> volumes;
+    std::map<std::string, Built> models;  ///< by phantom spec: the analytic models
+    std::map<std::string, Built> volumes; ///< by spec and crop box: the rasterised volumes
+    std::vector<std::string> keys;        ///< each selected case's volume
 };
 
 namespace {
@@ -298,18 +300,11 @@ std::pair<haptic::Scene, Json> resolveScene(const Suite& s, const Case& c, const
     }
 }
 
-Built buildVolume(const VolumeSpec& v, const volume::TissueTable& table)
+/// The phantom's analytic model (cheap: nothing rasterised yet); a file has none.
+Built phantomModel(const VolumeSpec& v, const volume::TissueTable& table)
 {
     Built b;
-    if (v.kind == "file") {
-        haptic::VolumeSource src;
-        src.file = v.file;
-        b.volume = haptic::makeSourceVolume(src, table);
-        return b;
-    }
-    volume::GridSpec grid;
-    grid.spacing = v.spacingMm;
-    grid.direction = rotationFromDegrees(v.rotationDeg);
+    if (v.kind == "file") return b;
     if (v.kind == "slab") {
         volume::SlabParams p;
         p.tiltDeg = v.tiltDeg;
@@ -335,8 +330,75 @@ Built buildVolume(const VolumeSpec& v, const volume::TissueTable& table)
         p.lesionRadiusMm = v.lesionRadiusMm;
         b.model = volume::torsoModel(p, table);
     }
-    b.volume = std::make_shared<const volume::Volume>(volume::makePhantom(*b.model, grid, table));
     return b;
+}
+
+/// Rasterise the model within @p crop (a box around the paths of the cases
+/// that share it, or nothing: the whole phantom), or load the file.
+void buildVolume(
+    Built& b, const VolumeSpec& v, const volume::TissueTable& table, const std::optional<volume::WorldBox>& crop)
+{
+    if (!b.model) {
+        haptic::VolumeSource src;
+        src.file = v.file;
+        b.volume = haptic::makeSourceVolume(src, table);
+        return;
+    }
+    volume::GridSpec grid;
+    grid.spacing = v.spacingMm;
+    grid.direction = rotationFromDegrees(v.rotationDeg);
+    volume::PhantomModel model = *b.model;
+    if (crop) {
+        model.bounds.min = model.bounds.min.cwiseMax(crop->min);
+        model.bounds.max = model.bounds.max.cwiseMin(crop->max);
+    }
+    b.volume = std::make_shared<const volume::Volume>(volume::makePhantom(model, grid, table));
+}
+
+/// The path of a case: its points, else landmarks (the case's, else the
+/// scene's), else the phantom's reference path (the slab and the sphere have
+/// no scene landmarks). Landmarks come from the model, or a file's metadata.
+std::pair<std::optional<Vec3d>, std::optional<Vec3d>> casePath(
+    const Suite& suite, const Case& c, const haptic::Scene& scene, const Built& b)
+{
+    const auto pick = [&](const std::optional<Vec3d>& given, const std::string& caseMark, const std::string& sceneMark,
+                          bool isEntry) -> std::optional<Vec3d> {
+        if (given) return given;
+        const std::string mark = caseMark.empty() ? sceneMark : caseMark;
+        if (!mark.empty()) {
+            if (b.model) {
+                for (const auto& [name, point] : b.model->landmarks) {
+                    if (name == mark) return point;
+                }
+            } else if (auto lm = volume::phantomLandmark(*b.volume, mark)) {
+                return lm;
+            }
+            if (!caseMark.empty())
+                caseFail(suite, c, isEntry ? "insertion.entry_landmark" : "insertion.target_landmark",
+                    "the volume has no landmark '" + mark + "'");
+        }
+        if (b.model) return isEntry ? b.model->pathEntry : b.model->pathTarget;
+        return std::nullopt;
+    };
+    return {pick(c.entry, c.entryLandmark, scene.entryLandmark, true),
+        pick(c.target, c.targetLandmark, scene.targetLandmark, false)};
+}
+
+/// The world box a constant-speed case reads: the needle's line from where the
+/// tip starts to where the scene traces its layers (entry + path length + needle
+/// length, SceneInstance), widened by a margin for the trilinear strategies'
+/// neighbours. Voxels outside it never meet the shaft, and the lattice is
+/// anchored at the world origin, so each voxel inside keeps its value.
+volume::WorldBox pathBox(
+    const Vec3d& entry, const Vec3d& target, const haptic::Scene& scene, const Case& c, const VolumeSpec& v)
+{
+    const Vec3d u = (target - entry).normalized();
+    const double length = (target - entry).norm();
+    const double depth = c.depthMm.value_or(scene.depthMm.value_or(length));
+    const double reach = std::max(depth, length) + scene.needle.lengthMm;
+    const Vec3d a = entry - (scene.approachMm + scene.needle.lengthMm) * u, b = entry + reach * u;
+    const double margin = 5.0 + 3.0 * v.spacingMm.maxCoeff(); // [mm]
+    return {a.cwiseMin(b) - Vec3d::Constant(margin), a.cwiseMax(b) + Vec3d::Constant(margin)};
 }
 
 } // namespace
@@ -395,16 +457,39 @@ std::vector<CaseRun> Runner::run()
     std::vector<CaseRun> runs(mSelected.size());
     arena.execute([&] {
         // Each distinct volume once, in a fixed order; the rasteriser itself is
-        // parallel and writes each voxel from one task only.
+        // parallel and writes each voxel from one task only. A phantom is
+        // rasterised only around the case's own path: the shaft reads nothing
+        // else, and most of a torso is far from its needle. The box is the
+        // case's alone (cases share a volume only when their boxes agree), so
+        // that --only, which changes which cases run, changes no result.
         const auto t0 = Clock::now();
+        mImpl->keys.assign(mSelected.size(), std::string());
         for (std::size_t k = 0; k < mSelected.size(); ++k) {
             const Prepared& p = mImpl->cases[k];
-            if (mImpl->volumes.count(p.volumeKey)) continue;
+            const Case& c = mSuite.cases[mSelected[k]];
             try {
-                mImpl->volumes[p.volumeKey] = buildVolume(p.volume, *p.table);
+                if (!mImpl->models.count(p.volumeKey)) mImpl->models[p.volumeKey] = phantomModel(p.volume, *p.table);
             } catch (const Error& e) {
-                caseFail(mSuite, mSuite.cases[mSelected[k]], "volume", e.what());
+                caseFail(mSuite, c, "volume", e.what());
             }
+            const Built& model = mImpl->models[p.volumeKey];
+            std::optional<volume::WorldBox> crop;
+            if (model.model && c.script.empty()) { // a scripted case may go anywhere: the whole phantom
+                const auto [entry, target] = casePath(mSuite, c, p.scene, model);
+                if (entry && target && (*target - *entry).norm() > 1e-6)
+                    crop = pathBox(*entry, *target, p.scene, c, p.volume);
+            }
+            std::string key = p.volumeKey;
+            if (crop) key += "|crop " + vecText(crop->min) + " " + vecText(crop->max);
+            mImpl->keys[k] = key;
+            if (mImpl->volumes.count(key)) continue;
+            Built b = model;
+            try {
+                buildVolume(b, p.volume, *p.table, crop);
+            } catch (const Error& e) {
+                caseFail(mSuite, c, "volume", e.what());
+            }
+            mImpl->volumes[key] = std::move(b);
         }
         mVolumeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
         // Cases in parallel: each is one thread's work from start to end, and its
@@ -429,26 +514,10 @@ CaseRun Runner::runOne(std::size_t k) const
     const auto t0 = Clock::now();
     const Case& c = mSuite.cases[mSelected[k]];
     const Prepared& p = mImpl->cases[k];
-    const Built& b = mImpl->volumes.at(p.volumeKey);
+    const Built& b = mImpl->volumes.at(mImpl->keys[k]);
     const haptic::Scene& scene = p.scene;
 
-    // The path: the case's points, else landmarks (the case's, else the scene's),
-    // else the phantom's reference path (the slab and the sphere have no scene landmarks).
-    const auto pick = [&](const std::optional<Vec3d>& given, const std::string& caseMark, const std::string& sceneMark,
-                          bool isEntry) -> std::optional<Vec3d> {
-        if (given) return given;
-        const std::string mark = caseMark.empty() ? sceneMark : caseMark;
-        if (!mark.empty()) {
-            if (auto lm = volume::phantomLandmark(*b.volume, mark)) return lm;
-            if (!caseMark.empty())
-                caseFail(mSuite, c, isEntry ? "insertion.entry_landmark" : "insertion.target_landmark",
-                    "the volume has no landmark '" + mark + "'");
-        }
-        if (b.model) return isEntry ? b.model->pathEntry : b.model->pathTarget;
-        return std::nullopt;
-    };
-    const auto entry = pick(c.entry, c.entryLandmark, scene.entryLandmark, true);
-    const auto target = pick(c.target, c.targetLandmark, scene.targetLandmark, false);
+    const auto [entry, target] = casePath(mSuite, c, scene, b);
     const haptic::SceneInstance inst(scene, b.volume, *p.table, entry, target);
 
     const double speed = c.speedMmPerS.value_or(scene.speedMmPerS);

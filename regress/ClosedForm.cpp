@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 namespace voxhap::regress {
 
@@ -68,12 +69,51 @@ bool dampingOnly(const Lookup& in)
     return damping;
 }
 
+/// physics.md §7 R2: the [LP] stack of §4, Table I reproduced from the document
+/// (not from the code's table), at constant speed v > Δv:
+/// f = k·x (x into the tip's layer) + C (the tip's layer) + Σ b_i·l_i·v.
+std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+{
+    struct Row {
+        double endMm, kNPerM, bNsPerM2, cN;
+    };
+    static const Row kTable[] = {{5, 0, 0, 0}, {7, 330, 2.1, 0.3}, {14, 0, 1.0, 0.3}, {30, 550, 3.0, 0.5},
+        {35, 980, 3.3, 0.6}, {48, 0, 1.6, 0.2}, {55, 2370, 0, 0}};
+    const auto speed = in.current.find("case.speed_mm_per_s");
+    if (!c.script.empty() || speed == in.current.end() || !speed->second.number) return std::nullopt;
+    const double v = *speed->second.number;
+    const double deltaV = in.number("scene.terms.karnopp.delta_v_mm_per_s").value_or(1.0);
+    const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
+    if (!(v > deltaV)) return std::nullopt;
+    ClosedForm cf;
+    cf.rule = "physics.md §7 R2 ([LP] stack, §4 Table I)";
+    for (const Sample& smp : samples) {
+        const double depth = smp.depthMm + 5.0; // Table I starts 5 mm out of the skin
+        double f = 0, start = 0, nearBoundary = 1e9;
+        for (const Row& r : kTable) {
+            nearBoundary = std::min(nearBoundary, std::abs(depth - r.endMm));
+            const double l = overlap(5.0, depth, start, r.endMm); // shaft length in the layer [mm]
+            f += r.bNsPerM2 * 1e-6 * l * v;                       // N·s/m² → N·s/mm²
+            if (depth > start && depth <= r.endMm) f += r.kNPerM * 1e-3 * (depth - start) + r.cN;
+            start = r.endMm;
+        }
+        if (depth <= 5.0) f = 0; // out of the skin
+        cf.modelN.push_back(f);
+        // Which side of a boundary a tick lands on is decided by rounding: a
+        // tick's travel either side of one is not compared. Elsewhere R2's 1e-6 N.
+        cf.toleranceN.push_back(nearBoundary <= 1.5 * v / rate ? std::numeric_limits<double>::infinity() : 1e-6);
+    }
+    return cf;
+}
+
 } // namespace
 
 std::optional<ClosedForm> closedForm(
     const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples)
 {
     const Lookup in{recorded, current};
+    if (in.text("scene.model") == "lumbar-puncture" && in.text("scene.layers") == "table")
+        return lumbarPunctureStack(c, in, samples);
     const std::string kind = c.volume.kind;
     if ((kind != "slab" && kind != "sphere") || !c.script.empty() || !dampingOnly(in)) return std::nullopt;
     const auto entry = vecOf(in.current.at("case.entry").text), target = vecOf(in.current.at("case.target").text);

@@ -243,6 +243,7 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
         r.reference = std::string(baseline ? "baseline + " : "") + cf->rule;
         double worst = 0;
         for (std::size_t i = 0; i < now.size(); ++i) {
+            if (!std::isfinite(cf->toleranceN[i])) continue; // a sample the rule does not compare
             const double d = std::abs(now[i].modelN - cf->modelN[i]);
             worst = std::max(worst, d);
             if (!baseline && d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;

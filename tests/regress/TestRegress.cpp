@@ -181,6 +181,28 @@ TEST(RegressClosedForm, EditedBetaInTheRecordMovesTheClosedForm)
         edited->modelN[last] - fresh->modelN[last], 10.0 * 0.03 * *run.inputs.at("fat.beta_used").number * 8.0, 1e-9);
 }
 
+/// physics.md §7 R2 against the reference values §4 lists (computed at 20 mm/s,
+/// printed to 4-5 digits): 0.6300 N at 6 mm, 3.8006 N at 20 mm, 2.5613 N at 32 mm
+/// of Table I (the skin at 5 mm).
+TEST(RegressClosedForm, LumbarPunctureStackMatchesThePhysicsReferenceValues)
+{
+    Case c;
+    c.scene = "lumbar-puncture";
+    Inputs in;
+    in["scene.model"] = InputValue{"lumbar-puncture", {}, ""};
+    in["scene.layers"] = InputValue{"table", {}, ""};
+    in["case.speed_mm_per_s"] = InputValue{"20.0", 20.0, "mm/s"};
+    const std::vector<Sample> samples{{1.0, 0, 0}, {15.0, 0, 0}, {27.0, 0, 0}};
+    const auto cf = closedForm(c, {}, in, samples);
+    ASSERT_TRUE(cf);
+    EXPECT_NE(cf->rule.find("R2"), std::string::npos);
+    const double printed = 5e-5; // the document's rounding
+    EXPECT_NEAR(cf->modelN[0], 0.6300, printed);
+    EXPECT_NEAR(cf->modelN[1], 3.8006, printed);
+    EXPECT_NEAR(cf->modelN[2], 2.5613, printed);
+    for (const double t : cf->toleranceN) EXPECT_EQ(t, 1e-6); // no sample near a boundary
+}
+
 /// Issue 29 item 7: the profiles are the same bit for bit with one thread and
 /// with all, and from one run to the next.
 TEST(RegressDeterminism, OneThreadAllThreadsAndRunToRunAgreeBitForBit)
