@@ -95,6 +95,31 @@ TEST_F(CliRegress, EditedSceneInScenesDirFailsOnlyItsCasesAndDrawsThePlot)
     EXPECT_FALSE(fs::exists(mDir / "voxhap-regress" / "senac-calcified.png")) << "a passing case was plotted";
 }
 
+/// Item 8: a case without a baseline is a regression (exit 1) and nothing is
+/// written; --update writes it and says so (exit 0); the next run passes, and a
+/// second --update with nothing changed writes nothing.
+TEST_F(CliRegress, UpdateRoundTrip)
+{
+    std::ofstream(mDir / "suite.json") << R"({"schema": "voxhap-regress/1", "cases": [
+        {"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}}]})";
+    const auto first = run("regress suite.json --no-plots");
+    EXPECT_EQ(first.exitCode, 1) << first.out << first.err;
+    EXPECT_NE(first.out.find("no baseline"), std::string::npos) << first.out;
+    EXPECT_FALSE(fs::exists(mDir / "slab.json")) << "written without --update";
+    const auto update = run("regress suite.json --update");
+    EXPECT_EQ(update.exitCode, 0) << update.err;
+    EXPECT_NE(update.out.find("slab: new baseline"), std::string::npos) << update.out;
+    ASSERT_TRUE(fs::exists(mDir / "slab.json"));
+    const auto again = run("regress suite.json");
+    EXPECT_EQ(again.exitCode, 0) << again.out << again.err;
+    const auto noop = run("regress suite.json --update");
+    EXPECT_EQ(noop.out.find("baselines written"), std::string::npos) << noop.out;
+    // No temporary left beside the baseline (written atomically).
+    for (const auto& e : fs::directory_iterator(mDir)) {
+        EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+    }
+}
+
 TEST_F(CliRegress, DamagedSuiteIsRefusedInOneLineWithExitTwo)
 {
     std::ofstream(mDir / "bad.json") << R"({"schema": "voxhap-regress/1", "cases": [
