@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <optional>
@@ -88,6 +89,26 @@ public:
         if (positive ? !(x > 0.0) : x < 0.0) fail(k, positive ? "must be positive" : "must not be negative");
         return x;
     }
+    /// @brief A number within its physical range: [lo, hi], or (lo, hi] when
+    /// @p openLow; refused as "origin: field: must be in [lo, hi] unit (got x)".
+    /// The ranges are the documented ones (docs/scenes.md for scenes).
+    double within(const std::string& k, double def, double lo, double hi, const char* unit, bool openLow = false)
+    {
+        if (!has(k)) return def;
+        const Json& v = mJ.at(k);
+        if (!v.is_number() || !std::isfinite(v.get<double>())) fail(k, "must be a finite number");
+        const double x = v.get<double>();
+        if ((openLow ? !(x > lo) : !(x >= lo)) || !(x <= hi)) {
+            fail(k, std::string("must be in ") + (openLow ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) +
+                    "]" + (*unit ? " " : "") + unit + " (got " + shortNumber(x) + ")");
+        }
+        return x;
+    }
+    std::optional<double> optWithin(const std::string& k, double lo, double hi, const char* unit, bool openLow = false)
+    {
+        if (!has(k)) return std::nullopt;
+        return within(k, 0.0, lo, hi, unit, openLow);
+    }
     std::optional<double> optNumber(const std::string& k, bool positive = false)
     {
         if (!has(k)) return std::nullopt;
@@ -130,6 +151,12 @@ public:
     bool isObject(const std::string& k) { return has(k) && mJ.at(k).is_object(); }
 
 private:
+    static std::string shortNumber(double x)
+    {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.6g", x);
+        return buf;
+    }
     const Json& mJ;
     std::string mOrigin, mPath;
     std::set<std::string> mSeen;

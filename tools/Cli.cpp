@@ -4,10 +4,13 @@
 
 #include "tools/Cli.h"
 
+#include "haptic/scene/Scene.h"
+
 #include <csignal>
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <sstream>
 #include <unistd.h> // for isatty
@@ -27,6 +30,13 @@ const volume::TissueTable& tissueTable(const CommonOptions& opts)
     static std::unique_ptr<volume::TissueTable> loaded;
     loaded = std::make_unique<volume::TissueTable>(volume::TissueTable::load(opts.tissues));
     return *loaded;
+}
+
+haptic::Scene loadSceneSayingDefaults(const std::string& nameOrPath)
+{
+    haptic::Scene scene = haptic::loadScene(nameOrPath);
+    for (const std::string& line : scene.defaulted) std::cerr << "voxhap: note: " << scene.origin << ": " << line << '\n';
+    return scene;
 }
 
 Vec3d parseVec3(const std::string& text, const std::string& option)

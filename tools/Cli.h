@@ -19,6 +19,10 @@
 #include <string>
 #include <vector>
 
+namespace voxhap::haptic {
+struct Scene;
+} // namespace voxhap::haptic
+
 namespace voxhap::planning {
 class Planner;
 struct TrajectoryReport;
@@ -46,6 +50,10 @@ void addCommonOptions(CLI::App& cmd, CommonOptions& opts);
 
 /// @brief The tissue table the options name.
 const volume::TissueTable& tissueTable(const CommonOptions& opts);
+
+/// @brief haptic::loadScene(), then one line on stderr for each block the scene
+/// left out, with the default taken (docs/scenes.md): defaults are never silent.
+haptic::Scene loadSceneSayingDefaults(const std::string& nameOrPath);
 
 /// @brief Parse "x,y,z" (three finite numbers). @throw UsageError naming @p option
 Vec3d parseVec3(const std::string& text, const std::string& option);

@@ -39,11 +39,44 @@ struct ServeOptions {
     bool reckless = false;
 };
 
-std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App& cmd,
+/// What --device names, checked before anything is loaded: a typo in it is
+/// reported at once, not after the scene's volume was built.
+struct DeviceSpec {
+    enum class Kind { Hand, Sim, Igtl, Replay } kind = Kind::Hand;
+    int port = 0; ///< igtl: 0 for the default
+    std::vector<haptic::ServoRecord> replay;
+};
+
+DeviceSpec parseDeviceSpec(const std::string& text)
+{
+    DeviceSpec d;
+    if (text == "hand") return d;
+    if (text == "sim") return d.kind = DeviceSpec::Kind::Sim, d;
+    if (text == "igtl") return d.kind = DeviceSpec::Kind::Igtl, d;
+    if (text.rfind("igtl:", 0) == 0) {
+        d.kind = DeviceSpec::Kind::Igtl;
+        const std::string port = text.substr(5);
+        // Digits only: "28945junk" or "+80" is a typo, not a port (std::stoi took its prefix).
+        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos)
+            throw UsageError("--device: '" + text + "': the port must be a number in 1..65535");
+        d.port = std::stoi(port);
+        if (d.port < 1 || d.port > 65535) throw UsageError("--device: port " + port + " outside 1..65535");
+        return d;
+    }
+    if (text.rfind("replay:", 0) == 0) {
+        d.kind = DeviceSpec::Kind::Replay;
+        d.replay = haptic::readSessionPoses(text.substr(7));
+        return d;
+    }
+    throw UsageError("--device: '" + text + "' is not hand, sim, igtl[:PORT] or replay:FILE");
+}
+
+std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, DeviceSpec spec, const CLI::App& cmd,
     const haptic::NeedleForceModel& m, const haptic::Scene& scene, double& duration)
 {
     const double speed = cmd.count("--speed") ? o.speed : scene.speedMmPerS;
-    if (o.device == "hand") {
+    switch (spec.kind) {
+    case DeviceSpec::Kind::Hand: {
         haptic::HandParams p;
         p.speedMmPerS = speed;
         p.startMm = -scene.approachMm;
@@ -51,31 +84,22 @@ std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, const CLI::App
         if (duration <= 0.0) duration = 60.0;
         return std::make_unique<haptic::HandDevice>(m.path(), p, m.device());
     }
-    if (o.device == "sim") {
+    case DeviceSpec::Kind::Sim: {
         const double depth = scene.depthMm.value_or(60.0);
         return std::make_unique<haptic::ScriptedDevice>(
             m.path(), haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed), m.device());
     }
-    if (o.device == "igtl" || o.device.rfind("igtl:", 0) == 0) {
+    case DeviceSpec::Kind::Igtl: {
         haptic::IgtlOptions io;
-        if (o.device.size() > 5) {
-            try {
-                io.port = std::stoi(o.device.substr(5));
-            } catch (const std::exception&) {
-                throw UsageError("--device: '" + o.device + "': the port must be a number");
-            }
-            if (io.port < 1 || io.port > 65535)
-                throw UsageError("--device: port " + o.device.substr(5) + " outside 1..65535");
-        }
+        if (spec.port > 0) io.port = spec.port;
         auto dev = std::make_unique<haptic::IgtlDevice>(io, m.device());
         std::cerr << "voxhap serve: OpenIGTLink server on 127.0.0.1:" << dev->port()
                   << " (TRANSFORM in: tip = translation, needle = z axis; SENSOR force out, in N)\n";
         return dev;
     }
-    if (o.device.rfind("replay:", 0) == 0) {
-        return std::make_unique<haptic::ReplayDevice>(haptic::readSessionPoses(o.device.substr(7)), m.device());
+    case DeviceSpec::Kind::Replay: return std::make_unique<haptic::ReplayDevice>(std::move(spec.replay), m.device());
     }
-    throw UsageError("--device: '" + o.device + "' is not hand, sim, igtl[:PORT] or replay:FILE");
+    throw UsageError("--device: unknown kind");
 }
 
 std::string layerName(const haptic::NeedleForceModel& m, int i)
@@ -88,13 +112,14 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     // Ctrl-C from the start, set-up included: an interrupt while the scene
     // loads still ends in a clean stop with the (empty) session written.
     const InterruptGuard guard;
+    DeviceSpec spec = parseDeviceSpec(o.device); // before any loading: a typo is said at once
     const volume::TissueTable& table = tissueTable(o.common);
-    haptic::Scene scene = haptic::loadScene(o.scene);
+    haptic::Scene scene = loadSceneSayingDefaults(o.scene);
     if (cmd.count("--rate")) scene.rateHz = o.rate;
     const haptic::SceneInstance inst(scene, nullptr, table);
     auto model = inst.makeModel();
     double duration = o.duration;
-    auto device = makeDevice(o, cmd, *model, scene, duration);
+    auto device = makeDevice(o, std::move(spec), cmd, *model, scene, duration);
     haptic::ServoOptions so;
     so.rateHz = scene.rateHz;
     so.realtime = true; // SCHED_FIFO and locked memory when allowed; one line below when not

@@ -53,7 +53,7 @@ haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSou
 int run(const SimulateOptions& o, const CLI::App& cmd)
 {
     const volume::TissueTable& table = tissueTable(o.common);
-    const haptic::Scene scene = haptic::loadScene(o.scene);
+    const haptic::Scene scene = loadSceneSayingDefaults(o.scene);
     std::optional<Vec3d> entry, target;
     if (!o.entry.empty()) entry = parseVec3(o.entry, "--entry");
     if (!o.target.empty()) target = parseVec3(o.target, "--target");

@@ -55,6 +55,24 @@ const std::vector<UnitFactor>& unitsOf(Dimension d)
     return kUnits.at(d);
 }
 
+/// The largest physical value of each kind, in its canonical unit (docs/scenes.md,
+/// "The tissue table"): beyond it a value is a typo or an attack, not a tissue.
+/// T1 of pure water at 3 T is about 4 s; no needle is longer than a metre; no
+/// haptic device renders 100 N; the stiffest and most viscous layers measured
+/// (physics.md §4, §5.4) are orders of magnitude below the others.
+double maxCanonical(Dimension d)
+{
+    switch (d) {
+    case Dimension::RelaxationMs: return 10000.0;  // ms
+    case Dimension::Length: return 1000.0;         // mm
+    case Dimension::Force: return 100.0;           // N
+    case Dimension::Stiffness: return 100.0;       // N/mm
+    case Dimension::DampingDensity: return 1.0;    // N·s/mm² (1e6 N·s/m²)
+    case Dimension::Hounsfield: return 32767.0;    // HU: the largest 16-bit signed CT number
+    }
+    return 0.0;
+}
+
 std::string unitList(Dimension d)
 {
     std::string out;
@@ -166,6 +184,10 @@ Quantity parseQuantity(const Json& obj, Dimension dim, const Context& ctx, const
     const double raw = finiteNumber(obj, "value", ctx, field);
     if (raw < 0.0) ctx.fail(field, "negative value " + std::to_string(raw));
     q.value = raw * unitFactor(obj, dim, ctx, field);
+    if (q.value > maxCanonical(dim)) {
+        ctx.fail(field, "value " + std::to_string(raw) + " is beyond the physical range (at most " +
+                std::to_string(maxCanonical(dim)) + " " + std::string(unitsOf(dim).front().unit) + ")");
+    }
     q.source = sourceOf(obj, ctx, field);
     q.chosen = chosenOf(obj, ctx, field);
     return q;
@@ -183,6 +205,11 @@ void parseHu(const Json& obj, Tissue& t, const Context& ctx)
     t.huMax = finiteNumber(obj, "max", ctx, field);
     if (!(t.huMin <= t.huTypical && t.huTypical <= t.huMax)) {
         ctx.fail(field, "expected min <= typical <= max");
+    }
+    // CT numbers are stored as 16-bit signed values (some scanners write -3024 outside
+    // the field of view): beyond that range a bound is a typo.
+    if (t.huMin < -32768.0 || t.huMax > maxCanonical(Dimension::Hounsfield)) {
+        ctx.fail(field, "expected CT numbers within [-32768, 32767] HU");
     }
     t.huSource = sourceOf(obj, ctx, field);
 }

@@ -45,11 +45,16 @@ DeviceLimits parseDevice(Fields& top)
     {
         Fields d = top.sub("device");
         l.name = d.string("name", "custom");
-        l.maxForceN = d.number("max_force_N", l.maxForceN, true);
-        l.maxContinuousForceN = d.number("max_continuous_force_N", l.maxContinuousForceN, true);
-        l.maxStiffnessNPerMm = d.number("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, true);
-        l.maxDampingNsPerMm = d.number("max_damping_Ns_per_mm", l.maxDampingNsPerMm, true);
+        // Ranges: docs/scenes.md. The largest grounded haptic devices render tens of
+        // newtons (Virtuose 6D: 31 N peak) and a few N/mm; 100 N and 20 N/mm leave margin.
+        l.maxForceN = d.within("max_force_N", l.maxForceN, 0.0, 100.0, "N", true);
+        l.maxContinuousForceN = d.within("max_continuous_force_N", l.maxContinuousForceN, 0.0, 100.0, "N", true);
+        l.maxStiffnessNPerMm = d.within("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, 0.0, 20.0, "N/mm", true);
+        l.maxDampingNsPerMm = d.within("max_damping_Ns_per_mm", l.maxDampingNsPerMm, 0.0, 1.0, "N·s/mm", true);
         d.string("source", "");
+        // The I²t limiter (physics.md §6.3) holds the continuous force below the peak.
+        if (l.maxContinuousForceN > l.maxForceN)
+            d.fail("max_continuous_force_N", "must not exceed max_force_N (" + std::to_string(l.maxForceN) + " N)");
     }
     return l;
 }
@@ -64,42 +69,45 @@ void parseTerms(Fields& top, ForceTerms& t)
     t.viscous = terms.term("viscous");
     if (terms.term("karnopp")) {
         Fields k = terms.sub("karnopp");
-        t.karnoppDeltaVMmPerS = k.number("delta_v_mm_per_s", 1.0);
-        t.keepDirectionN = k.number("keep_direction_N", 0.0);
+        t.karnoppDeltaVMmPerS = k.within("delta_v_mm_per_s", 1.0, 0.0, 100.0, "mm/s");
+        t.keepDirectionN = k.within("keep_direction_N", 0.0, 0.0, 10.0, "N");
     }
     if ((t.damping.on = terms.term("damping")) && terms.isObject("damping")) {
         Fields d = terms.sub("damping");
-        t.damping.capN = d.number("cap_N", t.damping.capN, true);
-        t.damping.referenceSpeedMmPerS = d.number("reference_speed_mm_per_s", t.damping.referenceSpeedMmPerS, true);
+        t.damping.capN = d.within("cap_N", t.damping.capN, 0.0, 100.0, "N", true);
+        t.damping.referenceSpeedMmPerS =
+            d.within("reference_speed_mm_per_s", t.damping.referenceSpeedMmPerS, 0.0, 5000.0, "mm/s", true);
     }
     if ((t.bone.on = terms.term("bone")) && terms.isObject("bone")) {
         Fields b = terms.sub("bone");
         t.bone.transient = b.boolean("transient", true);
-        t.bone.params.amplitudeNsPerM = b.number("amplitude_Ns_per_m", t.bone.params.amplitudeNsPerM);
-        t.bone.params.durationS = b.number("duration_ms", t.bone.params.durationS * 1e3, true) * 1e-3;
-        t.bone.params.frequencyHz = b.number("frequency_Hz", t.bone.params.frequencyHz, true);
-        t.bone.params.peakClampN = b.number("peak_clamp_N", t.bone.params.peakClampN);
+        t.bone.params.amplitudeNsPerM = b.within("amplitude_Ns_per_m", t.bone.params.amplitudeNsPerM, 0.0, 1e4, "N·s/m");
+        t.bone.params.durationS = b.within("duration_ms", t.bone.params.durationS * 1e3, 0.0, 1000.0, "ms", true) * 1e-3;
+        t.bone.params.frequencyHz = b.within("frequency_Hz", t.bone.params.frequencyHz, 0.0, 1e4, "Hz", true);
+        t.bone.params.peakClampN = b.within("peak_clamp_N", t.bone.params.peakClampN, 0.0, 100.0, "N");
     }
     if ((t.pivot.on = terms.term("pivot")) && terms.isObject("pivot")) {
         Fields p = terms.sub("pivot");
         PivotParams& q = t.pivot.params;
-        q.kappa1NPerMm2 = p.number("kappa1_N_per_mm2", q.kappa1NPerMm2);
-        q.kappa2NPerMm2 = p.number("kappa2_N_per_mm2", q.kappa2NPerMm2, true);
-        q.tauS = p.number("tau_ms", q.tauS * 1e3, true) * 1e-3;
-        q.hubDistanceMm = p.number("hub_distance_mm", q.hubDistanceMm, true);
-        q.layerThicknessMm = p.number("layer_thickness_mm", q.layerThicknessMm, true);
-        q.maxForceN = p.number("cap_N", q.maxForceN);
+        q.kappa1NPerMm2 = p.within("kappa1_N_per_mm2", q.kappa1NPerMm2, 0.0, 1.0, "N/mm²");
+        q.kappa2NPerMm2 = p.within("kappa2_N_per_mm2", q.kappa2NPerMm2, 0.0, 1.0, "N/mm²", true);
+        q.tauS = p.within("tau_ms", q.tauS * 1e3, 0.0, 10000.0, "ms", true) * 1e-3;
+        q.hubDistanceMm = p.within("hub_distance_mm", q.hubDistanceMm, 0.0, 500.0, "mm", true);
+        q.layerThicknessMm = p.within("layer_thickness_mm", q.layerThicknessMm, 0.0, 100.0, "mm", true);
+        q.maxForceN = p.within("cap_N", q.maxForceN, 0.0, 100.0, "N");
     }
     if ((t.lock.on = terms.term("lock")) && terms.isObject("lock")) {
-        t.lock.stiffnessNPerMm = terms.sub("lock").number("stiffness_N_per_mm", 0.0);
+        t.lock.stiffnessNPerMm = terms.sub("lock").within("stiffness_N_per_mm", 0.0, 0.0, 20.0, "N/mm");
     }
     if ((t.lor.on = terms.term("lor")) && terms.isObject("lor")) {
         Fields l = terms.sub("lor");
-        t.lor.params.timeConstantS = l.number("time_constant_ms", t.lor.params.timeConstantS * 1e3, true) * 1e-3;
-        t.lor.params.blockedForceN = l.number("blocked_force_N", t.lor.params.blockedForceN);
+        t.lor.params.timeConstantS =
+            l.within("time_constant_ms", t.lor.params.timeConstantS * 1e3, 0.0, 10000.0, "ms", true) * 1e-3;
+        t.lor.params.blockedForceN = l.within("blocked_force_N", t.lor.params.blockedForceN, 0.0, 100.0, "N");
     }
     t.critical = terms.term("critical");
-    if (terms.has("coupling_N_per_mm")) t.couplingNPerMm = terms.number("coupling_N_per_mm", 0.0, true);
+    if (terms.has("coupling_N_per_mm"))
+        t.couplingNPerMm = terms.within("coupling_N_per_mm", 0.0, 0.0, 20.0, "N/mm", true);
 }
 
 void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
@@ -110,10 +118,10 @@ void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
     for (const auto& [name, v] : all.items()) {
         Fields f(v, origin, "overrides." + name);
         TissueOverride to;
-        to.punctureForceN = f.optNumber("puncture_force_N");
-        to.cuttingForceN = f.optNumber("cutting_force_N");
-        to.tentDepthMm = f.optNumber("tent_depth_mm", true);
-        to.elasticityNPerMm = f.optNumber("elasticity_N_per_mm");
+        to.punctureForceN = f.optWithin("puncture_force_N", 0.0, 100.0, "N");
+        to.cuttingForceN = f.optWithin("cutting_force_N", 0.0, 100.0, "N");
+        to.tentDepthMm = f.optWithin("tent_depth_mm", 0.0, 100.0, "mm", true);
+        to.elasticityNPerMm = f.optWithin("elasticity_N_per_mm", 0.0, 100.0, "N/mm");
         f.string("source", "");
         r.overrides[name] = to;
     }
@@ -154,8 +162,8 @@ Scene readScene(const std::string& text, const std::string& origin)
         s.volume.phantom = v.string("phantom", "");
         s.volume.file = v.string("file", "");
         s.volume.preset = v.string("preset", s.volume.preset);
-        s.volume.bmi = v.optNumber("bmi", true);
-        s.volume.spacingMm = v.number("spacing_mm", s.volume.spacingMm, true);
+        s.volume.bmi = v.optWithin("bmi", 10.0, 80.0, "kg/m²");
+        s.volume.spacingMm = v.within("spacing_mm", s.volume.spacingMm, 0.0, 10.0, "mm", true);
         if (s.volume.phantom.empty() == s.volume.file.empty()) v.fail("", "name exactly one of phantom and file");
     }
     if (top.has("path")) {
@@ -193,7 +201,7 @@ Scene readScene(const std::string& text, const std::string& origin)
         };
         s.needle.gauge = gauge("gauge", s.needle.gauge);
         s.needle.referenceGauge = gauge("reference_gauge", s.needle.referenceGauge);
-        s.needle.lengthMm = n.number("length_mm", s.needle.lengthMm, true);
+        s.needle.lengthMm = n.within("length_mm", s.needle.lengthMm, 0.0, 500.0, "mm", true);
         try {
             s.needle.tip = parseTipType(n.string("tip", tipTypeName(s.needle.tip)));
             (void)s.needle.forceScale(); // validates both gauges
@@ -203,13 +211,20 @@ Scene readScene(const std::string& text, const std::string& origin)
     }
     s.recipe.tip = s.needle.tip;
     s.recipe.forceScale = s.needle.forceScale();
+    if (!top.has("device")) {
+        s.defaulted.push_back("no \"device\" given: the \"touch\" preset (3.3 N peak, 0.88 N continuous)");
+    }
     s.device = parseDevice(top);
     if (top.has("insertion")) {
         Fields i = top.sub("insertion");
-        s.speedMmPerS = i.number("speed_mm_per_s", s.speedMmPerS, true);
-        s.rateHz = i.number("rate_Hz", s.rateHz, true);
-        s.approachMm = i.number("approach_mm", s.approachMm);
-        s.depthMm = i.optNumber("depth_mm", true);
+        // A hand moves a needle at most a few m/s (Session.h kMaxHandSpeedMmPerS); the
+        // servo rate's range is the CLI's --rate.
+        s.speedMmPerS = i.within("speed_mm_per_s", s.speedMmPerS, 0.0, 5000.0, "mm/s", true);
+        s.rateHz = i.within("rate_Hz", s.rateHz, 1.0, 1e6, "Hz");
+        s.approachMm = i.within("approach_mm", s.approachMm, 0.0, 500.0, "mm");
+        s.depthMm = i.optWithin("depth_mm", 0.0, 1000.0, "mm", true);
+    } else {
+        s.defaulted.push_back("no \"insertion\" given: 10 mm/s at 1000 Hz from 5 mm outside the entry, to the target");
     }
     if (s.recipe.model == LayerModel::Kyung && s.fixedTable)
         top.fail("layers", "the kyung model reads voxels: use \"labels\"");

@@ -44,6 +44,9 @@ struct Scene {
     double rateHz = 1000.0;        ///< servo rate of the simulation
     double approachMm = 5.0;       ///< the tip starts this far outside the entry point
     std::optional<double> depthMm; ///< insertion depth past the entry; else to the target
+    /// Blocks the file left out and the defaults taken for them, one line each,
+    /// for a command to print (docs/scenes.md lists every default).
+    std::vector<std::string> defaulted;
 };
 
 /// @brief Parse a scene; errors name @p origin and the field. @throw ValueError

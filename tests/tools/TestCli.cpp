@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -252,6 +253,43 @@ TEST_F(Cli, ServeWritesSessionAndMetrics)
     EXPECT_TRUE(fs::exists(mDir / "served" / "metrics.json"));
     expectUsageError(run("serve --scene senac-average --device bogus"), "--device");
     expectFailure(run("serve --scene senac-average --device replay:none.csv"), "none.csv");
+}
+
+// --device is parsed before anything loads (issue 20 item 10): a port with trailing
+// junk is refused, and it is the first thing said even when the scene does not exist.
+TEST_F(Cli, ServeDeviceIsCheckedBeforeTheScene)
+{
+    expectUsageError(run("serve --scene senac-average --device igtl:28945junk"), "the port must be a number");
+    expectUsageError(run("serve --scene senac-average --device igtl:+80"), "the port must be a number");
+    expectUsageError(run("serve --scene senac-average --device igtl:70000"), "outside 1..65535");
+    expectUsageError(run("serve --scene no-such-scene --device igtl:1x"), "--device: 'igtl:1x'");
+}
+
+// A scene that leaves out device and insertion runs on the documented defaults and
+// says so, one line each (docs/scenes.md); a bad number names the file and the field.
+TEST_F(Cli, SceneDefaultsAreSaidAndRangesNamed)
+{
+    std::string text = slurp(std::string(VOXHAP_SOURCE_DIR) + "/data/scenes/senac-average.json");
+    const auto cut = [&text](const std::string& key) {
+        const auto at = text.find("\"" + key + "\"");
+        const auto end = text.find('}', at);
+        text.erase(at, end - at + 2); // the block and its comma
+    };
+    cut("insertion");
+    cut("device");
+    // The comma after "needle" now ends the object: drop it.
+    const auto last = text.rfind(',');
+    text.erase(last, 1);
+    std::ofstream(mDir / "bare.json") << text;
+    const Result r = run("simulate --scene bare.json --out bare");
+    ASSERT_EQ(r.exitCode, 0) << r.err << "\n" << text;
+    EXPECT_NE(r.err.find("voxhap: note: bare.json: no \"device\" given: the \"touch\" preset"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("voxhap: note: bare.json: no \"insertion\" given"), std::string::npos) << r.err;
+
+    std::ofstream(mDir / "fast.json") << std::regex_replace(
+        slurp(std::string(VOXHAP_SOURCE_DIR) + "/data/scenes/senac-average.json"), std::regex("\"rate_Hz\": 1000"),
+        "\"rate_Hz\": 1e-9");
+    expectFailure(run("simulate --scene fast.json --out fast"), "fast.json: insertion.rate_Hz: must be in [1, 1e+06] Hz");
 }
 
 } // namespace

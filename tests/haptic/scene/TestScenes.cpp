@@ -199,7 +199,7 @@ TEST(Scenes, BadScenesNameFileAndField)
     EXPECT_NE(message(head + R"("terms": {"tip": true}, "colour": 1})").find("bad.json: colour: unknown field"),
         std::string::npos);
     EXPECT_NE(message(head + R"("terms": {"lor": {"time_constant_ms": -1}}})")
-                  .find("terms.lor.time_constant_ms: must be positive"),
+                  .find("terms.lor.time_constant_ms: must be in (0, 10000] ms (got -1)"),
         std::string::npos);
     EXPECT_NE(
         message(head + R"("terms": {}, "needle": {"gauge": 40}})").find("needle: needle: gauge 40 outside 14..27"),
