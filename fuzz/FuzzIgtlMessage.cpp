@@ -5,11 +5,14 @@
 /// The input is a stream of messages, handed over through a local socket pair
 /// and read message by message as the servers do, until one drops the link.
 /// Each outcome is checked against the header and body decoded here
-/// independently: a pose comes only from a version 1 TRANSFORM of 48 bytes
-/// that arrived whole and whose CRC-64 matches, and it is the
-/// translation and the z column as sent (big-endian float32, finite, z column
-/// non-zero); bad versions, sizes and CRCs are refused as such; another
-/// message type is skipped whole, and the next message is read after it.
+/// independently: a pose comes only from a TRANSFORM that arrived whole and
+/// whose CRC-64 matches, of 48 bytes (header version 1) or with a 48-byte
+/// content between a consistent extended header and metadata (header version
+/// 2, protocol 3), and it is the translation and the z column as sent
+/// (big-endian float32, finite, z column non-zero); bad versions, sizes,
+/// section layouts and CRCs are refused as such; another message type is
+/// skipped whole (for version 2 once its CRC and sections check), and the
+/// next message is read after it.
 
 #include "FuzzInput.h"
 
@@ -83,6 +86,34 @@ struct Expected {
     Vec3d tip{0, 0, 0}, direction{0, 0, 0};
 };
 
+/// Header version 2's body: extended header (its size >= 12, then metadata header
+/// size, metadata size), content, metadata header (count, then 8 bytes per entry),
+/// metadata (ASCII key, value per entry). @return the content offset, or -1.
+long version2Content(const std::uint8_t* b, std::uint64_t body, std::uint64_t& contentSize)
+{
+    if (body < 12) return -1;
+    const std::uint64_t ext = bigEndian(b, 2), mh = bigEndian(b + 2, 2), ms = bigEndian(b + 4, 4);
+    if (ext < 12 || ext + mh + ms > body) return -1;
+    contentSize = body - ext - mh - ms;
+    if (mh == 0) return ms == 0 ? long(ext) : -1;
+    const std::uint8_t* h = b + ext + contentSize;
+    if (mh < 2) return -1;
+    const std::uint64_t n = bigEndian(h, 2);
+    if (mh != 2 + 8 * n) return -1;
+    std::uint64_t total = 0;
+    for (std::uint64_t i = 0; i < n; ++i) total += bigEndian(h + 2 + 8 * i, 2) + bigEndian(h + 2 + 8 * i + 4, 4);
+    if (total != ms) return -1;
+    const std::uint8_t* at = h + mh;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const std::uint64_t k = bigEndian(h + 2 + 8 * i, 2), v = bigEndian(h + 2 + 8 * i + 4, 4);
+        for (std::uint64_t j = 0; j < k; ++j) {
+            if (at[j] > 0x7f) return -1;
+        }
+        at += k + v;
+    }
+    return long(ext);
+}
+
 Expected expect(const std::uint8_t* m, std::size_t left)
 {
     Expected e;
@@ -94,18 +125,31 @@ Expected expect(const std::uint8_t* m, std::size_t left)
     const bool transform = type == "TRANSFORM";
     e.read = WireRead::BadHeader;
     if (version < 1 || version > 2 || body > kMaxBody) return e;
-    if (transform && (version != 1 || body != kTransformBody)) return e; // the library reads version 1 only
+    if (transform && version == 1 && body != kTransformBody) return e;
     e.bytes = kHeader + std::size_t(body);
     if (left < e.bytes) {
         e.read = WireRead::Broken; // the stream ends inside the body
         return e;
     }
-    if (!transform) {
-        e.read = WireRead::Skipped;
-        return e;
-    }
     const std::uint8_t* b = m + kHeader;
-    if (crc64(b, std::size_t(body)) != crc) return e; // BadHeader
+    if (version == 2) {
+        if (crc64(b, std::size_t(body)) != crc) return e; // BadHeader
+        std::uint64_t contentSize = 0;
+        const long content = version2Content(b, body, contentSize);
+        if (content < 0) return e; // BadHeader
+        if (!transform) {
+            e.read = WireRead::Skipped;
+            return e;
+        }
+        if (contentSize != kTransformBody) return e;
+        b += content;
+    } else {
+        if (!transform) {
+            e.read = WireRead::Skipped;
+            return e;
+        }
+        if (crc64(b, std::size_t(body)) != crc) return e; // BadHeader
+    }
     // Column-major rotation, then the translation: z column at 6..8, translation at 9..11.
     for (int i = 0; i < 3; ++i) {
         e.direction[i] = float32(b + 4 * (6 + i));

@@ -8,6 +8,7 @@
 #include "core/Errors.h"
 
 #include <igtlTransformMessage.h>
+#include <igtl_util.h>
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -26,6 +27,96 @@ namespace voxhap::haptic::detail {
 namespace {
 constexpr std::size_t kHeaderBytes = 58;          // OpenIGTLink v1/v2 header
 constexpr std::uint64_t kTransformBodyBytes = 48; // 12 float32
+constexpr std::size_t kExtendedHeaderBytes = 12;  // header version 2: the smallest extended header
+
+std::uint64_t bigEndian(const unsigned char* p, int bytes)
+{
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+    return v;
+}
+
+float bigEndianFloat(const unsigned char* p)
+{
+    const auto bits = std::uint32_t(bigEndian(p, 4));
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/// The body of a header-version-2 message (OpenIGTLink protocol 3, "Overview of
+/// Version 3 Protocol" and the library's igtl_extended_header; big endian):
+///
+///   extended header: EXT_HEADER_SIZE u16 (>= 12), METADATA_HEADER_SIZE u16,
+///                    METADATA_SIZE u32, MSG_ID u32, then EXT_HEADER_SIZE - 12
+///                    bytes a later revision may add (skipped)
+///   content:         BODY_SIZE - EXT_HEADER_SIZE - METADATA_HEADER_SIZE - METADATA_SIZE
+///   metadata header: INDEX_COUNT u16, then per entry KEY_SIZE u16,
+///                    VALUE_ENCODING u16, VALUE_SIZE u32 (2 + 8·INDEX_COUNT bytes)
+///   metadata:        per entry the key (ASCII), then the value
+///
+/// Every size is checked against the body before it is used; the CRC-64 of the
+/// header covers the whole body. Metadata is validated and ignored (voxhap reads
+/// no key). @return the content's offset and size, or false when inconsistent.
+bool splitVersion2Body(const std::vector<unsigned char>& body, std::size_t& contentAt, std::size_t& contentSize)
+{
+    if (body.size() < kExtendedHeaderBytes) return false;
+    const std::uint64_t extSize = bigEndian(&body[0], 2), metaHeaderSize = bigEndian(&body[2], 2),
+                        metaSize = bigEndian(&body[4], 4);
+    if (extSize < kExtendedHeaderBytes || extSize + metaHeaderSize + metaSize > body.size()) return false;
+    contentAt = std::size_t(extSize);
+    contentSize = std::size_t(body.size() - extSize - metaHeaderSize - metaSize);
+    if (metaHeaderSize == 0) return metaSize == 0;
+    const std::size_t metaHeaderAt = contentAt + contentSize;
+    if (metaHeaderSize < 2) return false;
+    const std::uint64_t count = bigEndian(&body[metaHeaderAt], 2);
+    if (metaHeaderSize != 2 + 8 * count) return false;
+    std::uint64_t entries = 0;
+    for (std::uint64_t i = 0; i < count; ++i) {
+        const unsigned char* e = &body[metaHeaderAt + 2 + 8 * i];
+        const std::uint64_t keySize = bigEndian(e, 2), valueSize = bigEndian(e + 4, 4);
+        entries += keySize + valueSize;
+    }
+    if (entries != metaSize) return false;
+    // Keys are ASCII (the protocol's rule); values may be in any encoding.
+    std::size_t at = metaHeaderAt + std::size_t(metaHeaderSize);
+    for (std::uint64_t i = 0; i < count; ++i) {
+        const unsigned char* e = &body[metaHeaderAt + 2 + 8 * i];
+        const std::size_t keySize = std::size_t(bigEndian(e, 2)), valueSize = std::size_t(bigEndian(e + 4, 4));
+        for (std::size_t k = 0; k < keySize; ++k) {
+            if (body[at + k] > 0x7f) return false;
+        }
+        at += keySize + valueSize;
+    }
+    return true;
+}
+
+/// A TRANSFORM content (protocol "TRANSFORM": R11 R21 R31 R12 R22 R32 R13 R23 R33 TX TY TZ,
+/// float32 big endian): the translation and the third column.
+WireRead poseFromTransformContent(const unsigned char* c, Vec3d& tip, Vec3d& direction)
+{
+    direction = Vec3d(bigEndianFloat(c + 24), bigEndianFloat(c + 28), bigEndianFloat(c + 32));
+    tip = Vec3d(bigEndianFloat(c + 36), bigEndianFloat(c + 40), bigEndianFloat(c + 44));
+    if (!tip.allFinite() || !direction.allFinite() || !(direction.norm() > 1e-6)) return WireRead::BadPose;
+    return WireRead::Pose;
+}
+
+/// A header-version-2 message, whatever its type: the body read whole (bounded
+/// by the caller's maxBodyBytes), its CRC-64 checked (the library's crc64,
+/// ECMA-182), its sections split; a TRANSFORM's content is the 48-byte matrix.
+WireRead readVersion2(int fd, const unsigned char* header, std::uint64_t bodySize, bool transform, double timeoutS,
+    Vec3d& tip, Vec3d& direction)
+{
+    std::vector<unsigned char> body(bodySize);
+    if (bodySize > 0 && !readExactly(fd, body.data(), body.size(), timeoutS)) return WireRead::Broken;
+    if (crc64(body.data(), bodySize, 0) != bigEndian(header + 50, 8)) return WireRead::BadHeader;
+    std::size_t contentAt = 0, contentSize = 0;
+    if (!splitVersion2Body(body, contentAt, contentSize)) return WireRead::BadHeader;
+    if (!transform) return WireRead::Skipped;
+    if (contentSize != kTransformBodyBytes) return WireRead::BadHeader;
+    return poseFromTransformContent(&body[contentAt], tip, direction);
+}
+
 } // namespace
 
 int listenTcp(const std::string& bindAddress, int port, const std::string& what, int& boundPort)
@@ -87,10 +178,12 @@ WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3
     for (int i = 0; i < 8; ++i) bodySize = (bodySize << 8) | header[42 + i];
     if (version < 1 || version > 2 || bodySize > maxBodyBytes) return WireRead::BadHeader;
     const bool transform = std::strncmp(type, "TRANSFORM", 12) == 0;
-    // OpenIGTLink 1.11 reads header version 1 only: on a version 2 header (protocol 3, an
-    // extended header before the matrix) its unpacking depends on uninitialised memory.
-    if (transform && (version != 1 || bodySize != kTransformBodyBytes)) return WireRead::BadHeader;
     try {
+        // OpenIGTLink 1.11 (Debian's) reads header version 1 only: on a version 2 header
+        // (protocol 3: an extended header before the content, metadata after it) its
+        // unpacking depends on uninitialised memory, so version 2 is read here.
+        if (version == 2) return readVersion2(fd, header, bodySize, transform, timeoutS, tip, direction);
+        if (transform && bodySize != kTransformBodyBytes) return WireRead::BadHeader;
         if (!transform) { // read and discard, bounded by maxBodyBytes
             std::vector<unsigned char> body(bodySize);
             return bodySize == 0 || readExactly(fd, body.data(), body.size(), timeoutS) ? WireRead::Skipped

@@ -36,8 +36,10 @@ enum class WireRead {
 
 /// @brief Read one message from @p fd. The raw header is checked before
 /// anything is allocated (the library trusts headers; toolchain.md): version
-/// 1 or 2, body at most @p maxBodyBytes; a TRANSFORM of version 1 (the one the
-/// library reads) and of the right size.
+/// 1 or 2, body at most @p maxBodyBytes. Header version 1 goes through the
+/// library (a TRANSFORM of 48 bytes); header version 2 (protocol 3: extended
+/// header, content, metadata) is parsed here from the published layout, its
+/// CRC and every section size checked.
 /// @param tip, direction for Pose: the translation and the z column as sent (not normalised)
 WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction) noexcept;
 

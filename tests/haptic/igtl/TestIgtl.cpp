@@ -11,6 +11,7 @@
 
 #include <igtlSensorMessage.h>
 #include <igtlTransformMessage.h>
+#include <igtl_util.h>
 
 #include <arpa/inet.h>
 #include <csignal>
@@ -26,6 +27,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <functional>
 #include <thread>
 #include <vector>
 
@@ -293,6 +295,119 @@ TEST(IgtlPolicy, NewcomerIsRefusedByALiveClientAndReplacesASilentOne)
     third.sendPose(Vec3d(4, 5, 6));
     ASSERT_TRUE(waitFor([&] { return dev.counters().poses.load() == 2; }));
     EXPECT_EQ(dev.read(0.0).tip, Vec3d(4, 5, 6)); // the newcomer controls the device
+}
+
+} // namespace
+} // namespace voxhap::haptic
+
+namespace voxhap::haptic {
+namespace {
+
+void putBigEndian(std::vector<unsigned char>& out, std::uint64_t v, int bytes)
+{
+    for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+}
+
+void putFloat(std::vector<unsigned char>& out, float f)
+{
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    putBigEndian(out, bits, 4);
+}
+
+/// A header-version-2 TRANSFORM (OpenIGTLink protocol 3) built byte for byte from
+/// the published layout ("Overview of Version 3 Protocol"; igtl_extended_header):
+/// 58-byte header, a 12-byte extended header, the 48-byte matrix, and a metadata
+/// header and body with @p metadata's key/value pairs. The CRC-64 (the library's
+/// crc64, ECMA-182) covers the whole body. @p mutate may damage the body after the
+/// CRC is computed (a bit flip) or before (an inconsistent size with a valid CRC).
+std::vector<unsigned char> version2Transform(const Vec3d& tip,
+    const std::vector<std::pair<std::string, std::string>>& metadata,
+    const std::function<void(std::vector<unsigned char>&)>& beforeCrc = {})
+{
+    std::vector<unsigned char> content;
+    const float r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}; // R11 R21 R31 R12 R22 R32 R13 R23 R33: the needle along z
+    for (const float x : r) putFloat(content, x);
+    for (int i = 0; i < 3; ++i) putFloat(content, float(tip[i]));
+    std::vector<unsigned char> metaHeader, metaBody;
+    putBigEndian(metaHeader, metadata.size(), 2);
+    for (const auto& [k, v] : metadata) {
+        putBigEndian(metaHeader, k.size(), 2);
+        putBigEndian(metaHeader, 3, 2); // VALUE_ENCODING: US-ASCII (IANA MIBenum 3)
+        putBigEndian(metaHeader, v.size(), 4);
+        metaBody.insert(metaBody.end(), k.begin(), k.end());
+        metaBody.insert(metaBody.end(), v.begin(), v.end());
+    }
+    std::vector<unsigned char> body;
+    putBigEndian(body, 12, 2);                                           // EXT_HEADER_SIZE
+    putBigEndian(body, metadata.empty() ? 0 : metaHeader.size(), 2);     // METADATA_HEADER_SIZE
+    putBigEndian(body, metaBody.size(), 4);                              // METADATA_SIZE
+    putBigEndian(body, 42, 4);                                           // MSG_ID
+    body.insert(body.end(), content.begin(), content.end());
+    if (!metadata.empty()) {
+        body.insert(body.end(), metaHeader.begin(), metaHeader.end());
+        body.insert(body.end(), metaBody.begin(), metaBody.end());
+    }
+    if (beforeCrc) beforeCrc(body);
+    std::vector<unsigned char> msg;
+    putBigEndian(msg, 2, 2); // header version 2
+    const char type[12] = "TRANSFORM";
+    msg.insert(msg.end(), type, type + 12);
+    const char device[20] = "Needle";
+    msg.insert(msg.end(), device, device + 20);
+    putBigEndian(msg, 0, 8); // TIME_STAMP unused
+    putBigEndian(msg, body.size(), 8);
+    putBigEndian(msg, crc64(body.data(), body.size(), 0), 8);
+    msg.insert(msg.end(), body.begin(), body.end());
+    return msg;
+}
+
+// Issue 20 item 6: OpenIGTLink 3 clients send header version 2. Its pose is read
+// with and without metadata; a flipped bit (bad CRC) and section sizes that do not
+// add up (with a valid CRC) are refused, the server staying alive for the next client.
+TEST(IgtlVersion2, ExtendedHeaderAndMetadataAreRead)
+{
+    IgtlDevice dev(anyPort(), DeviceLimits{});
+    {
+        RawClient c(dev.port());
+        const auto m = version2Transform(Vec3d(1.5, -2.0, 30.0), {});
+        c.send(m.data(), m.size());
+        double f[3];
+        ASSERT_TRUE(c.readForce(f)) << "no reply to a version 2 TRANSFORM";
+        EXPECT_EQ(dev.read(0.0).tip, Vec3d(1.5, -2.0, 30.0));
+        const auto withMeta =
+            version2Transform(Vec3d(4.0, 5.0, 6.0), {{"Source", "tracker"}, {"Status", "OK"}, {"Empty", ""}});
+        c.send(withMeta.data(), withMeta.size());
+        ASSERT_TRUE(c.readForce(f)) << "no reply to a version 2 TRANSFORM with metadata";
+        EXPECT_EQ(dev.read(0.0).tip, Vec3d(4.0, 5.0, 6.0));
+        EXPECT_EQ(dev.read(0.0).direction, Vec3d(0.0, 0.0, 1.0));
+    }
+    ASSERT_TRUE(waitFor([&] { return !dev.connected(); }));
+    const std::vector<std::function<std::vector<unsigned char>()>> damaged{
+        [] { // a bit flipped in the matrix after the CRC
+            auto m = version2Transform(Vec3d(9, 9, 9), {{"k", "v"}});
+            m[58 + 12 + 40] ^= 0x10;
+            return m;
+        },
+        [] { // METADATA_SIZE one larger than the metadata (valid CRC)
+            return version2Transform(Vec3d(9, 9, 9), {{"k", "v"}}, [](auto& b) { b[7] += 1; });
+        },
+        [] { // EXT_HEADER_SIZE below the 12 bytes of its own fields (valid CRC)
+            return version2Transform(Vec3d(9, 9, 9), {}, [](auto& b) { b[1] = 8; });
+        },
+        [] { // INDEX_COUNT that disagrees with METADATA_HEADER_SIZE (valid CRC)
+            return version2Transform(Vec3d(9, 9, 9), {{"k", "v"}}, [](auto& b) { b[12 + 48 + 1] = 5; });
+        },
+    };
+    for (std::size_t i = 0; i < damaged.size(); ++i) {
+        const long rejected = dev.counters().rejected.load();
+        RawClient c(dev.port());
+        const auto m = damaged[i]();
+        c.send(m.data(), m.size());
+        EXPECT_TRUE(waitFor([&] { return dev.counters().rejected.load() == rejected + 1; })) << "case " << i;
+        EXPECT_TRUE(waitFor([&] { return !dev.connected(); })) << "case " << i;
+        EXPECT_EQ(dev.read(0.0).tip, Vec3d(4.0, 5.0, 6.0)) << "case " << i << ": a damaged pose got through";
+    }
 }
 
 } // namespace
