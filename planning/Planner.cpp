@@ -46,6 +46,31 @@ std::string fmt(double x, int digits = 1)
 
 } // namespace
 
+std::uint64_t plannerWorkingBytes(const volume::Volume& v)
+{
+    // Two float grids over at most the labelled voxels: 4 bytes a value and about
+    // 5 % for leaf masks and nodes (as segmentation counts its grids).
+    const auto labels = volume::labelGrid(v);
+    const double labelled = labels ? double(labels->activeVoxelCount()) : 0.0;
+    return std::uint64_t(2.0 * 4.2 * labelled);
+}
+
+void checkMemoryCap(const volume::Volume& v, std::uint64_t capBytes)
+{
+    if (!capBytes) return;
+    std::uint64_t input = 0;
+    for (const volume::Channel c :
+        {volume::Channel::Hu, volume::Channel::T1, volume::Channel::Intensity, volume::Channel::Label}) {
+        if (v.has(c)) input += v.grid(c)->memUsage();
+    }
+    const std::uint64_t need = plannerWorkingBytes(v);
+    if (input + need <= capBytes) return;
+    const auto mib = [](std::uint64_t b) { return std::to_string(std::llround(double(b) / double(1 << 20))); };
+    throw ValueError(v.metadata().source + ": planning needs about " + mib(need) +
+        " MiB of working memory beside the volume's " + mib(input) + " MiB, over the memory cap of " + mib(capBytes) +
+        " MiB");
+}
+
 Planner::Planner(std::shared_ptr<const volume::Volume> v, const volume::TissueTable& table, const haptic::Scene& scene,
     const PlanOptions& options)
     : mVolume(std::move(v)), mTable(table), mScene(scene), mOptions(options), mImpl(std::make_unique<Impl>())

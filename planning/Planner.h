@@ -13,6 +13,7 @@
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,6 +30,15 @@ struct PlanOptions {
     /// Clearance is found to within this [mm]; 0: half the finest voxel (the field's own accuracy, DistanceField.h).
     double clearanceToleranceMm = 0;
 };
+
+/// @brief The memory a Planner adds to @p v [bytes]: the material field's grids
+/// (damping and bone stiffness, at most one value per labelled voxel each), estimated
+/// from the label grid's active voxels before they are built.
+std::uint64_t plannerWorkingBytes(const volume::Volume& v);
+
+/// @brief Refuse, in one line naming both figures, when @p v's grids plus
+/// plannerWorkingBytes() exceed @p capBytes (0: no cap). @throw ValueError
+void checkMemoryCap(const volume::Volume& v, std::uint64_t capBytes);
 
 class Planner {
 public:

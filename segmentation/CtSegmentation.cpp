@@ -523,14 +523,20 @@ AutomaticLabels segmentCt(
 
     // Step 6: the spinal canal.
     {
-        const Mask bone =
+        // Each mask is dropped once read for the last time: this step holds the most at once.
+        Mask bone =
             maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == cortical || labels[i] == cancellous; });
-        const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
-        Mask filled = ring;
-        fillHolesPerSlice(lat, filled);
-        Mask hole = filterSliceIslands(lat, maskAndNot(filled, ring), kCanalMinAreaMm2, kCanalMaxAreaMm2);
-        filled = {};
+        Mask hole;
+        {
+            const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
+            Mask filled = ring;
+            fillHolesPerSlice(lat, filled);
+            filled = maskAndNot(filled, ring);
+            hole = filterSliceIslands(lat, filled, kCanalMinAreaMm2, kCanalMaxAreaMm2);
+        }
         const Mask soft3 = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && !bone[i] && !lungMask[i]; });
+        bone = {};
+        lungMask = {};
         bridgeAlongSliceAxis(lat, hole, soft3, kCanalBridgeMm);
         // The canal is the soft tissue of those holes, the closing's ring excluded: the
         // ring's inner edge follows the bone except across the gaps it bridged.

@@ -21,11 +21,10 @@ namespace voxhap::segmentation {
 
 std::string distanceFieldName(const std::string& tissue) { return "sdf." + tissue; }
 
-volume::Volume::GridPtr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels,
-    std::int32_t id, double bandMm, const std::optional<Lattice>& bounds)
+Lattice distanceFieldBox(const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm,
+    const std::optional<Lattice>& bounds)
 {
     const Lattice& outer = bounds ? *bounds : lat;
-    // The structure's box in lat.
     struct Box {
         Vec3i lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
         Vec3i hi{-1, -1, -1};
@@ -47,16 +46,26 @@ volume::Volume::GridPtr signedDistanceField(const Lattice& lat, const std::vecto
         found.lo = found.lo.cwiseMin(b.lo);
         found.hi = found.hi.cwiseMax(b.hi);
     }
-    Lattice box = outer; // no voxel of the structure: the whole field reads as the band
-    if ((found.hi.array() >= found.lo.array()).all()) {
-        for (int a = 0; a < 3; ++a) {
-            const int m = int(std::ceil(bandMm / lat.spacing[a])) + 1;
-            const int lo = std::max(outer.origin[a], lat.origin[a] + found.lo[a] - m);
-            const int hi = std::min(outer.origin[a] + outer.dims[a] - 1, lat.origin[a] + found.hi[a] + m);
-            box.origin[a] = lo;
-            box.dims[a] = hi - lo + 1;
-        }
+    Lattice box = outer;
+    if ((found.hi.array() < found.lo.array()).any()) {
+        box.dims = Vec3i::Zero();
+        return box;
     }
+    for (int a = 0; a < 3; ++a) {
+        const int m = int(std::ceil(bandMm / lat.spacing[a])) + 1;
+        const int lo = std::max(outer.origin[a], lat.origin[a] + found.lo[a] - m);
+        const int hi = std::min(outer.origin[a] + outer.dims[a] - 1, lat.origin[a] + found.hi[a] + m);
+        box.origin[a] = lo;
+        box.dims[a] = hi - lo + 1;
+    }
+    return box;
+}
+
+volume::Volume::GridPtr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels,
+    std::int32_t id, double bandMm, const std::optional<Lattice>& bounds)
+{
+    Lattice box = distanceFieldBox(lat, labels, id, bandMm, bounds);
+    if (box.size() == 0) box = bounds ? *bounds : lat; // no voxel of the structure: the whole field reads as the band
     // The structure over the box (labels beyond lat are air).
     Mask inside(box.size(), 0);
     const Vec3i off = box.origin - lat.origin;

@@ -34,6 +34,12 @@ std::string distanceFieldName(const std::string& tissue);
 /// and the widened box's outer layer is outside the structure, so its distances
 /// are those of the whole lattice.
 /// @param bounds the lattice the field may cover; @p lat must lie within it
+/// @brief The box signedDistanceField() computes over: the voxels where @p labels == @p id,
+/// widened by the band and a voxel, clamped to @p bounds (default @p lat); empty
+/// dims if there is no such voxel.
+Lattice distanceFieldBox(const Lattice& lat, const std::vector<std::int32_t>& labels, std::int32_t id, double bandMm,
+    const std::optional<Lattice>& bounds = std::nullopt);
+
 volume::Volume::GridPtr signedDistanceField(const Lattice& lat, const std::vector<std::int32_t>& labels,
     std::int32_t id, double bandMm, const std::optional<Lattice>& bounds = std::nullopt);
 

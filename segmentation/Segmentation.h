@@ -37,6 +37,9 @@ struct SegmentOptions {
     /// clearance beyond it reads as the band [chosen: past the 5–20 mm margins a planner asks for].
     double distanceBandMm = 30.0;
     Progress progress; ///< called as each step starts (fraction -1: not known), with its name; may be empty
+    /// Refuse (ValueError, one line naming both) when the volume's grids plus the
+    /// estimated working memory (workingBytes) exceed this [bytes]; 0: no cap.
+    std::uint64_t memoryCapBytes = 0;
 };
 
 /// @brief One label's figures.
@@ -66,7 +69,17 @@ struct SegmentReport {
     double bodyWidthMm = 0;
     double torsoFraction = 0;
     double seconds = 0;
+    std::uint64_t inputBytes = 0;   ///< the volume's grids before segmentation (OpenVDB memUsage)
+    std::uint64_t workingBytes = 0; ///< the estimate checked against the cap (workingBytes)
 };
+
+/// @brief segment()'s estimate of the memory it needs beside the volume's own
+/// grids [bytes], before it allocates: its largest set of working arrays at any
+/// step (the CT rules on the box that the body can occupy, from the HU grid's
+/// active box) and the label grid it adds, plus a fixed 32 MiB for threads and buffers. The distance fields' boxes are known
+/// only once the labels are: segment() checks them again then, and the report's
+/// figure is the larger of the two.
+std::uint64_t workingBytes(const volume::Volume& v, const SegmentOptions& options = {});
 
 /// @brief Label @p v from its hu (preferred), t1 or intensity grid, apply the
 /// imported map, store the label grid, and add "sdf.<tissue>" derived grids for

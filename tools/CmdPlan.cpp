@@ -63,7 +63,7 @@ planning::Box parseBox(const std::string& text)
 }
 
 /// Labels and distance fields: what the volume lacks is computed (segment()).
-void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool progress)
+void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool progress, std::uint64_t capBytes)
 {
     bool anyField = false;
     for (const auto& t : table.tissues())
@@ -72,6 +72,7 @@ void ensureSegmented(volume::Volume& v, const volume::TissueTable& table, bool p
     segmentation::SegmentOptions so;
     so.automatic = !v.has(volume::Channel::Label); // keep given labels; only add their distance fields
     if (progress) so.progress = [](double, std::string_view step) { std::cerr << "plan: " << step << "...\n"; };
+    so.memoryCapBytes = capBytes;
     segmentation::segment(v, table, so);
 }
 
@@ -176,7 +177,9 @@ int run(const PlanCliOptions& o)
             throw UsageError("--target lies outside the volume's bounds");
         }
     }
-    ensureSegmented(*v, table, terminal);
+    const auto capBytes = std::uint64_t(o.reader.memoryCapMb * double(1 << 20));
+    ensureSegmented(*v, table, terminal, capBytes);
+    planning::checkMemoryCap(*v, capBytes);
     planning::PlanOptions po;
     po.speedMmPerS = o.speed;
     po.minClearanceMm = o.minClearance;

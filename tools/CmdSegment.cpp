@@ -70,6 +70,8 @@ int run(const SegmentCliOptions& o)
     so.critical = splitList(o.critical);
     for (const auto& name : so.critical) table.at(name); // unknown names fail before the long work
     so.distanceBandMm = o.bandMm;
+    // The cap covers the work too: the volume's grids plus segmentation's estimate.
+    so.memoryCapBytes = std::uint64_t(o.reader.memoryCapMb * double(1 << 20));
     if (terminal) so.progress = [](double, std::string_view step) { std::cerr << "segment: " << step << "...\n"; };
 
     std::unique_ptr<volume::Volume> imported;
@@ -103,6 +105,8 @@ int run(const SegmentCliOptions& o)
         if (!o.exportNrrd.empty()) j["export"] = o.exportNrrd;
         j["method"] = r.method;
         j["seconds"] = r.seconds;
+        j["memory_mib"] = {{"input", double(r.inputBytes) / double(1 << 20)},
+            {"working_estimate", double(r.workingBytes) / double(1 << 20)}, {"cap", o.reader.memoryCapMb}};
         j["imported_voxels"] = r.importedVoxels;
         j["distance_fields"] = r.distanceFields;
         j["distance_band_mm"] = o.bandMm;
