@@ -228,6 +228,15 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
                 }
             }
         }
+        // Where the insertion ends is part of what the trainee feels (a moved
+        // target landmark changes nothing else): compared like an event.
+        if (!baseline->profile.samples.empty() && !now.empty()) {
+            const double a = baseline->profile.samples.back().depthMm, b = now.back().depthMm;
+            if (std::abs(a - b) > tol.eventDepthMm) {
+                r.eventDiffs.push_back("insertion ends at " + fixed(a, 3) + " → " + fixed(b, 3) + " mm");
+                note(std::min(a, b), 0.0, 0.0, "baseline (the insertion's end moved)");
+            }
+        }
         const auto peak = [&](const char* what, double a, double b) {
             if (std::abs(a - b) > tol.peakN)
                 r.peakDiffs.push_back(std::string(what) + " " + fixed(a, 4) + " → " + fixed(b, 4) + " N");
