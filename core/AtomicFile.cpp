@@ -217,6 +217,9 @@ void OutputSet::commit()
             std::filesystem::remove(file);
             flushToDisk(folderOf(file), true);
         }
+        for (const auto& file : mStale) {
+            if (std::filesystem::remove(file)) flushToDisk(folderOf(file), true);
+        }
         step("removed the earlier outputs");
         for (std::size_t i = 0; i < mOutputs.size(); ++i) {
             std::filesystem::rename(temporaries[i], mOutputs[i].first);

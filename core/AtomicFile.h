@@ -43,6 +43,10 @@ public:
     using Writer = std::function<void(const std::filesystem::path& temporary)>;
     void add(const std::filesystem::path& file, Writer write);
     void addStream(const std::filesystem::path& file, std::function<void(std::ostream&)> fill);
+    /// @brief An output an earlier run may have left that this run does not
+    /// produce (a plot that could not be drawn this time): removed together with
+    /// the outputs being replaced, so that it cannot stand beside the new ones.
+    void remove(const std::filesystem::path& file) { mStale.push_back(file); }
     /// @brief Write, flush and put in place every output added.
     /// @throw IoError naming the file that failed
     void commit();
@@ -52,6 +56,7 @@ public:
 
 private:
     std::vector<std::pair<std::filesystem::path, Writer>> mOutputs;
+    std::vector<std::filesystem::path> mStale;
 };
 
 /// @brief A file written over a long run (a servo session for an hour at any

@@ -44,13 +44,33 @@ SimulationFiles writeSimulation(
     f.csv = (fs::path(outDir) / "insertion.csv").string();
     f.json = (fs::path(outDir) / "summary.json").string();
     const std::string png = (fs::path(outDir) / "force-depth.png").string();
-    haptic::writeInsertionCsv(r, inst.layers(), f.csv);
+    // The three outputs replace an earlier run's together (OutputSet): never a new
+    // insertion.csv beside a stale summary.json or plot. The plot is drawn first, under
+    // the name the set puts in place, since gnuplot may be missing; without it an
+    // earlier plot is removed, not left beside the new table.
+    OutputSet out;
+    out.add(f.csv, [&](const fs::path& tmp) { haptic::writeInsertionCsv(r, inst.layers(), tmp); });
+    const fs::path pngTemporary = temporaryPathFor(png);
     f.plotted = plot &&
-        render::plotForceDepth(
-            render::forceTrace(r, inst.layers(), scene.name + ": " + scene.description), png, f.plotWhy);
-    if (f.plotted) f.png = png;
+        render::plotForceDepth(render::forceTrace(r, inst.layers(), scene.name + ": " + scene.description),
+            pngTemporary.string(), f.plotWhy);
+    if (f.plotted) {
+        f.png = png;
+        out.add(png, [](const fs::path&) { }); // already written at its temporary path
+    } else {
+        std::error_code ignored;
+        fs::remove(pngTemporary, ignored);
+        out.remove(png);
+    }
     f.summary = summaryJson(r, scene, f.csv, f.png);
-    writeStreamAtomically(f.json, [&](std::ostream& out) { out << f.summary.dump(2) << '\n'; });
+    out.addStream(f.json, [&](std::ostream& o) { o << f.summary.dump(2) << '\n'; });
+    try {
+        out.commit();
+    } catch (...) {
+        std::error_code ignored;
+        fs::remove(pngTemporary, ignored);
+        throw;
+    }
     return f;
 }
 

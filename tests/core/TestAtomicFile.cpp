@@ -140,6 +140,31 @@ TEST_F(AtomicFile, OutputSetWhoseWriterFailsKeepsEveryEarlierOutput)
 
 // A SIGTERM while a write is under way: the process dies of SIGTERM (the
 // handler re-raises it) and its temporary is gone.
+// A file the set is told to remove goes with the replaced ones (after every new
+// output is written, before any is renamed in), and only on commit.
+TEST_F(AtomicFile, OutputSetRemovesAStaleOutputItDoesNotReplace)
+{
+    const fs::path table = mDir / "table.csv", plot = mDir / "plot.png";
+    std::ofstream(table) << "old\n";
+    std::ofstream(plot) << "old picture\n";
+    OutputSet set;
+    set.addStream(table, [](std::ostream& o) { o << "new\n"; });
+    set.remove(plot);
+    std::vector<std::string> steps;
+    set.afterStep = [&](const std::string& step) {
+        steps.push_back(step);
+        if (step.rfind("written", 0) == 0) EXPECT_TRUE(fs::exists(plot)) << "removed before the new outputs were written";
+    };
+    set.commit();
+    EXPECT_FALSE(fs::exists(plot));
+    std::string line;
+    std::getline(std::ifstream(table), line);
+    EXPECT_EQ(line, "new");
+    OutputSet nothingThere;
+    nothingThere.remove(mDir / "never-written.png"); // an absent stale file is no error
+    EXPECT_NO_THROW(nothingThere.commit());
+}
+
 TEST_F(AtomicFile, SigtermDuringAWriteRemovesTheTemporary)
 {
     const fs::path target = mDir / "big.vdb";

@@ -175,6 +175,17 @@ TEST_F(Cli, SimulateWritesCsvPlotAndSummary)
     EXPECT_NEAR(s["dura_puncture_mm"].get<double>(), 30.0, 0.02);
     EXPECT_EQ(s["pops"].get<int>(), 3);
     for (const auto& e : fs::directory_iterator(mDir / "sim")) EXPECT_NE(e.path().extension(), ".part") << e.path();
+
+    // A second run into the same folder without a plot (issue 20 item 9): the outputs
+    // replace the first run's together, and the first run's plot does not stay
+    // beside the new table as if it were its picture.
+    const Result again = run("simulate --scene senac-average --out sim --no-plot");
+    ASSERT_EQ(again.exitCode, 0) << again.err;
+    EXPECT_FALSE(fs::exists(mDir / "sim" / "force-depth.png"));
+    const nlohmann::json s2 = nlohmann::json::parse(slurp(mDir / "sim" / "summary.json"));
+    EXPECT_EQ(s2["scene"].get<std::string>(), "senac-average");
+    for (const auto& e : fs::directory_iterator(mDir / "sim"))
+        EXPECT_EQ(e.path().filename().string().rfind(".tmp.", 0), std::string::npos) << e.path();
 }
 
 TEST_F(Cli, SimulateScriptedMotionAndBadInput)
