@@ -224,7 +224,7 @@ Profile profileOf(const haptic::InsertionResult& r, double stepMm)
     double travelled = 0, sinceLast = stepMm; // the first tick is kept
     for (std::size_t i = 0; i < r.rows.size(); ++i) {
         const haptic::InsertionRow& row = r.rows[i];
-        const double bits[5] = {row.depthMm, row.axialN, row.force.x(), row.force.y(), row.force.z()};
+        const double bits[6] = {row.depthMm, row.axialN, row.force.x(), row.force.y(), row.force.z(), row.plungerN};
         h = fnv1a(bits, sizeof bits, h);
         if (i > 0) {
             const double step = std::abs(row.depthMm - r.rows[i - 1].depthMm);
@@ -232,7 +232,7 @@ Profile profileOf(const haptic::InsertionResult& r, double stepMm)
             sinceLast += step;
         }
         if (sinceLast >= stepMm * (1 - 1e-9) || i + 1 == r.rows.size()) {
-            p.samples.push_back({row.depthMm, row.axialN, row.force.norm()});
+            p.samples.push_back({row.depthMm, row.axialN, row.force.norm(), row.plungerN});
             sinceLast = 0;
         }
     }

@@ -23,6 +23,7 @@ struct Sample {
     double depthMm = 0;   ///< tip depth along the path [mm]
     double modelN = 0;    ///< the model's axial resistance [N], + pushes out
     double renderedN = 0; ///< |F| sent to the device [N]
+    double plungerN = 0;  ///< the loss-of-resistance syringe's plunger force [N] (§2.3), 0 without one
 };
 
 struct EventRecord {

@@ -38,7 +38,8 @@ Sample sampleAt(const std::vector<Sample>& ref, double depth)
     const Sample& b = *it;
     const Sample& a = *(it - 1);
     const double w = b.depthMm > a.depthMm ? (depth - a.depthMm) / (b.depthMm - a.depthMm) : 0.0;
-    return {depth, a.modelN + w * (b.modelN - a.modelN), a.renderedN + w * (b.renderedN - a.renderedN)};
+    return {depth, a.modelN + w * (b.modelN - a.modelN), a.renderedN + w * (b.renderedN - a.renderedN),
+        a.plungerN + w * (b.plungerN - a.plungerN)};
 }
 
 std::vector<double> numbers(const JsonFields::Json& j, JsonFields& f, const std::string& key)
@@ -69,11 +70,12 @@ nlohmann::json baselineJson(const Case& c, const CaseRun& run)
         else
             inputs[k] = v.text;
     }
-    Json depth = Json::array(), model = Json::array(), rendered = Json::array();
+    Json depth = Json::array(), model = Json::array(), rendered = Json::array(), plunger = Json::array();
     for (const Sample& s : run.profile.samples) {
         depth.push_back(s.depthMm);
         model.push_back(s.modelN);
         rendered.push_back(s.renderedN);
+        plunger.push_back(s.plungerN);
     }
     Json events = Json::array();
     for (const EventRecord& e : run.profile.events) events.push_back({{"event", e.event}, {"depth_mm", e.depthMm}});
@@ -81,7 +83,7 @@ nlohmann::json baselineJson(const Case& c, const CaseRun& run)
         {"note", "reference output of `voxhap regress`; regenerate with `voxhap regress --update`"}, {"inputs", inputs},
         {"digest", run.profile.digest}, {"peak_model_N", run.profile.peakModelN},
         {"peak_rendered_N", run.profile.peakRenderedN}, {"events", events},
-        {"profile", {{"depth_mm", depth}, {"model_N", model}, {"rendered_N", rendered}}}};
+        {"profile", {{"depth_mm", depth}, {"model_N", model}, {"rendered_N", rendered}, {"plunger_N", plunger}}}};
 }
 
 std::string baselineText(const nlohmann::json& doc)
@@ -152,9 +154,12 @@ std::optional<Baseline> readBaseline(const std::filesystem::path& file)
         const auto depth = numbers(p.raw("depth_mm"), p, "depth_mm");
         const auto model = numbers(p.raw("model_N"), p, "model_N");
         const auto rendered = numbers(p.raw("rendered_N"), p, "rendered_N");
-        if (depth.empty() || model.size() != depth.size() || rendered.size() != depth.size())
-            p.fail("", "depth_mm, model_N and rendered_N must be non-empty lists of one length");
-        for (std::size_t i = 0; i < depth.size(); ++i) b.profile.samples.push_back({depth[i], model[i], rendered[i]});
+        const auto plunger = numbers(p.raw("plunger_N"), p, "plunger_N");
+        if (depth.empty() || model.size() != depth.size() || rendered.size() != depth.size() ||
+            plunger.size() != depth.size())
+            p.fail("", "depth_mm, model_N, rendered_N and plunger_N must be non-empty lists of one length");
+        for (std::size_t i = 0; i < depth.size(); ++i)
+            b.profile.samples.push_back({depth[i], model[i], rendered[i], plunger[i]});
         return b;
     });
 }
@@ -198,15 +203,14 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
         for (std::size_t i = 0; i < now.size(); ++i) {
             const Sample ref =
                 sameGrid ? baseline->profile.samples[i] : sampleAt(baseline->profile.samples, now[i].depthMm);
-            const double dm = std::abs(now[i].modelN - ref.modelN), dr = std::abs(now[i].renderedN - ref.renderedN);
-            const double d = std::max(dm, dr);
-            if (d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;
-            const double am = tol.absN + tol.rel * std::abs(ref.modelN),
-                         ar = tol.absN + tol.rel * std::abs(ref.renderedN);
-            if (dm > am)
-                note(now[i].depthMm, dm, am, "baseline");
-            else if (dr > ar)
-                note(now[i].depthMm, dr, ar, "baseline");
+            // Model, rendered and plunger force, each within its own tolerance.
+            const std::pair<double, double> pairs[3] = {
+                {now[i].modelN, ref.modelN}, {now[i].renderedN, ref.renderedN}, {now[i].plungerN, ref.plungerN}};
+            for (const auto& [is, was] : pairs) {
+                const double d = std::abs(is - was), allowed = tol.absN + tol.rel * std::abs(was);
+                if (d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;
+                if (d > allowed) note(now[i].depthMm, d, allowed, "baseline");
+            }
         }
         // Events: the count of each kind exactly, and the depth of each.
         std::map<std::string, std::vector<double>> was, is;

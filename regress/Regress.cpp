@@ -148,7 +148,7 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
             } else if (auto cf = closedForm(c, {}, runs[k].inputs, runs[k].profile.samples)) {
                 refName = cf->rule;
                 for (std::size_t i = 0; i < cf->modelN.size(); ++i)
-                    ref.push_back({runs[k].profile.samples[i].depthMm, cf->modelN[i], cf->modelN[i]});
+                    ref.push_back({runs[k].profile.samples[i].depthMm, cf->modelN[i], cf->modelN[i], 0.0});
             }
             if (!ref.empty()) {
                 fs::create_directories(o.plotDir);
