@@ -5,6 +5,7 @@
 /// 3D Slicer markups, slice views with the paths and the predicted force–depth plot.
 /// Also the plan outputs `voxhap demo` writes (writePlanOutputs).
 
+#include "core/AtomicFile.h"
 #include "core/Format.h"
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
@@ -98,36 +99,59 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
     PlanFiles f;
     fs::create_directories(outDir);
     const fs::path dir(outDir);
+    // Every output replaces an earlier plan's together (OutputSet, issue 20 item 9):
+    // never a new report beside stale views; an output this plan does not make
+    // (no path found, --no-views, no gnuplot) removes the earlier one.
+    OutputSet out;
     f.report = (dir / "report.json").string();
-    planning::writeReport(report, f.report);
+    out.add(f.report, [&report](const fs::path& tmp) { planning::writeReport(report, tmp); });
 
     std::vector<planning::MarkupLine> lines;
     for (std::size_t i = 0; i < paths.size(); ++i)
         lines.push_back({"path " + std::to_string(i + 1), paths[i].entry, paths[i].target});
     f.markups = (dir / "paths.mrk.json").string();
-    planning::writeMarkups(lines, f.markups);
-    if (paths.empty()) return f;
+    out.add(f.markups, [&lines](const fs::path& tmp) { planning::writeMarkups(lines, tmp); });
 
-    // The predicted force–depth profile of the first path, with its tissue bands.
-    render::ForceTrace trace;
-    const auto& best = paths.front();
-    trace.title = "path 1: predicted at " + fixed(best.speedMmPerS, 0) + " mm/s (" + planner.scene().name + ")";
-    for (const auto& s : best.force) trace.samples.push_back({s.depthMm, s.forceN, s.forceN, 0.0});
-    for (const auto& s : best.segments) trace.layers.push_back({s.tissue, s.startMm, s.endMm});
-    if (std::isfinite(best.contactMm)) trace.addEvent(best.contactMm, "bone contact");
     const std::string png = (dir / "force-depth.png").string();
-    if (render::plotForceDepth(trace, png, f.why)) f.plot = png;
-
-    if (views) { // slices through the first target, every path drawn (no display needed)
+    const fs::path pngTemporary = temporaryPathFor(png);
+    const std::string viewsFile = (dir / "views.png").string();
+    if (!paths.empty()) {
+        // The predicted force–depth profile of the first path, with its tissue bands,
+        // drawn first (gnuplot may be missing) under the name the set puts in place.
+        render::ForceTrace trace;
+        const auto& best = paths.front();
+        trace.title = "path 1: predicted at " + fixed(best.speedMmPerS, 0) + " mm/s (" + planner.scene().name + ")";
+        for (const auto& s : best.force) trace.samples.push_back({s.depthMm, s.forceN, s.forceN, 0.0});
+        for (const auto& s : best.segments) trace.layers.push_back({s.tissue, s.startMm, s.endMm});
+        if (std::isfinite(best.contactMm)) trace.addEvent(best.contactMm, "bone contact");
+        if (render::plotForceDepth(trace, pngTemporary.string(), f.why)) f.plot = png;
+    }
+    if (!f.plot.empty()) {
+        out.add(png, [](const fs::path&) { }); // already at its temporary path
+    } else {
+        std::error_code ignored;
+        fs::remove(pngTemporary, ignored);
+        out.remove(png);
+    }
+    if (views && !paths.empty()) { // slices through the first target, every path drawn (no display needed)
         render::RenderRequest req;
         req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
-        req.point = best.target;
+        req.point = paths.front().target;
         for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
         render::Snapshot snap(planner.volume(), req, planner.table());
         std::vector<render::Image> images;
         for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
-        f.views = (dir / "views.png").string();
-        render::writePng(render::contactSheet(images), f.views);
+        f.views = viewsFile;
+        out.add(viewsFile, [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
+    } else {
+        out.remove(viewsFile);
+    }
+    try {
+        out.commit();
+    } catch (...) {
+        std::error_code ignored;
+        fs::remove(pngTemporary, ignored);
+        throw;
     }
     return f;
 }

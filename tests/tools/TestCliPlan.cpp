@@ -44,6 +44,24 @@ TEST_F(CliPlan, SearchWritesReportAndMarkupsThatReadBackAsInput)
     EXPECT_TRUE(fs::exists(mDir / "out/force-depth.png"))
         << r.err; // gnuplot is one of the packages tools/setup.sh installs
 
+    // Planned again into the same folder with views, then with a path that finds
+    // nothing (issue 20 item 9): each run's outputs replace the last run's together;
+    // a plot or views the run does not make are removed, not left beside its report.
+    ASSERT_EQ(run("plan torso.vdb --target 5,-78,0 --top 1 --step 5 --max-angle 60 --out out").exitCode, 0);
+    EXPECT_TRUE(fs::exists(mDir / "out/views.png"));
+    const Result none = run("plan torso.vdb --target 5,-78,0 --max-angle 1 --min-clearance 500 --out out --no-views");
+    // No path satisfies a 500 mm clearance: exit 1, with the report of the rejections written.
+    if (none.exitCode == 1 && readJson("out/report.json")["paths"].empty()) {
+        EXPECT_FALSE(fs::exists(mDir / "out/views.png"));
+        EXPECT_FALSE(fs::exists(mDir / "out/force-depth.png"));
+    } else {
+        ADD_FAILURE() << "a search with a 500 mm clearance should find no path: " << none.err;
+    }
+    for (const auto& e : fs::directory_iterator(mDir / "out"))
+        EXPECT_EQ(e.path().filename().string().rfind(".tmp.", 0), std::string::npos) << e.path();
+    // The search above left out/ as the first run wrote it: the markups read back below.
+    ASSERT_EQ(run("plan torso.vdb --target 5,-78,0 --top 3 --step 5 --max-angle 60 --out out --no-views").exitCode, 0);
+
     // The markups go back in: the same paths, analysed again, give the same lengths.
     const Result again = run("plan torso.vdb --entries out/paths.mrk.json --out again --no-views --json");
     ASSERT_EQ(again.exitCode, 0) << again.err;
