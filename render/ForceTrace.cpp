@@ -2,6 +2,8 @@
 /// @file ForceTrace.cpp
 #include "render/ForceTrace.h"
 
+#include "core/BoundedRead.h"
+
 #include "core/Errors.h"
 
 #include <algorithm>
@@ -20,11 +22,13 @@ namespace {
 /// A plain comma-separated file with a header line; columns found by name.
 class Csv {
 public:
-    explicit Csv(const fs::path& file) : mFile(file), mIn(file)
+    explicit Csv(const fs::path& file) : mFile(file)
     {
+        requireRegularFile(file, "recording"); // a FIFO or /dev/zero would never end
+        mIn.open(file);
         if (!mIn) throw IoError(file.string() + ": cannot open the recording");
         std::string header;
-        if (!std::getline(mIn, header)) throw ValueError(file.string() + ": line 1: empty file");
+        if (!readLine(header)) throw ValueError(file.string() + ": line 1: empty file");
         mHeader = split(header);
     }
     bool hasColumn(const std::string& name) const
@@ -41,8 +45,10 @@ public:
     bool next()
     {
         std::string line;
-        if (!std::getline(mIn, line)) return false;
-        ++mLine;
+        do {
+            ++mLine;
+            if (!readLine(line)) return false;
+        } while (line.rfind('#', 0) == 0); // a comment: session.csv's closing line states its counts
         mRow = split(line);
         if (mRow.size() < mHeader.size()) {
             throw ValueError(mFile.string() + ": line " + std::to_string(mLine) + ": " + std::to_string(mRow.size()) +
@@ -64,6 +70,22 @@ public:
     }
 
 private:
+    /// A line of at most kMaxLineBytes: a file without line breaks is refused, not
+    /// read whole into one string. A recording's rows are about 150 bytes.
+    static constexpr std::size_t kMaxLineBytes = 65536;
+    bool readLine(std::string& line)
+    {
+        line.clear();
+        for (int c; (c = mIn.get()) != std::char_traits<char>::eof();) {
+            if (c == '\n') return true;
+            if (line.size() == kMaxLineBytes) {
+                throw ValueError(mFile.string() + ": line " + std::to_string(mLine) + ": longer than " +
+                    std::to_string(kMaxLineBytes) + " bytes");
+            }
+            line.push_back(char(c));
+        }
+        return !line.empty();
+    }
     static std::vector<std::string> split(const std::string& line)
     {
         std::vector<std::string> out;

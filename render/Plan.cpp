@@ -2,6 +2,8 @@
 /// @file Plan.cpp
 #include "render/Plan.h"
 
+#include "core/BoundedRead.h"
+
 #include "planning/Markups.h"
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
@@ -88,11 +90,8 @@ Plan parsePlan(std::string_view json, const std::string& origin)
 
 Plan loadPlan(const std::filesystem::path& file)
 {
-    std::ifstream in(file);
-    if (!in) throw IoError(file.string() + ": cannot open the plan");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parsePlan(text.str(), file.string());
+    // A regular file within the 16 MiB limit of text inputs: not a FIFO, /dev/zero or a huge file.
+    return parsePlan(readBoundedFile(file, "plan"), file.string());
 }
 
 std::string planJson(const Plan& plan)

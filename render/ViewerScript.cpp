@@ -2,6 +2,8 @@
 /// @file ViewerScript.cpp
 #include "render/ViewerScript.h"
 
+#include "core/BoundedRead.h"
+
 #include "core/Errors.h"
 
 #include <cmath>
@@ -102,11 +104,8 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
 
 std::vector<ScriptStep> loadViewerScript(const std::filesystem::path& file)
 {
-    std::ifstream in(file);
-    if (!in) throw IoError(file.string() + ": cannot read the script");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return parseViewerScript(s.str(), file.string());
+    // A regular file within the 16 MiB limit of text inputs: not a FIFO, /dev/zero or a huge file.
+    return parseViewerScript(readBoundedFile(file, "viewer script"), file.string());
 }
 
 } // namespace voxhap::render

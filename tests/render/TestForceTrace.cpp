@@ -31,7 +31,8 @@ TEST_F(Recordings, SessionWithEventsBeside)
         "0.3,0,-5,0,0,-1,0,0,0,0,0,5,1,fat,punctured,0,0,nan\n"
         "0.4,0,-4,0,0,-1,0,0,0,0,0,4,1,fat,punctured,0,0,nan\n"
         "0.5,0,-7,0,0,-1,0,0,0,0,0,7,1,fat,punctured,0,0,nan\n"
-        "0.6,0,-9,0,0,-1,0,0,0,0,0,9,1,muscle,punctured,0,0,nan\n");
+        "0.6,0,-9,0,0,-1,0,0,0,0,0,9,1,muscle,punctured,0,0,nan\n"
+        "# 7 records written, 0 dropped (the servo loop's record queue was full; the tick went on)\n");
     write("events.csv",
         "t_s,depth_mm,event,layer\n0.05,0,skin_contact,skin\n0.1,1,pop,skin\n0.1,1,skin_entry,skin\n"
         "0.6,9,pop,muscle\n");
@@ -77,6 +78,11 @@ TEST_F(Recordings, RefusedWithFileLineAndColumn)
         "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n0,1\n");
     test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "c.csv", "line 2: 2 fields");
     test::expectRefused<IoError>([](const auto& p) { readForceTrace(p); }, mDir / "absent.csv", "cannot open");
+    // A FIFO or a device never ends: refused from the path; a line without end is refused at 64 KiB.
+    test::expectRefused<IoError>([](const auto& p) { readForceTrace(p); }, std::filesystem::path("/dev/zero"), "file type");
+    write("d.csv", "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n" +
+            std::string(100000, '1'));
+    test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "d.csv", "line 2: longer than 65536");
 }
 
 } // namespace
