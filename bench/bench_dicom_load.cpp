@@ -198,9 +198,10 @@ int main(int argc, char** argv)
                 {"bare_decode_parallel_s", parallel}, {"load_s", load}, {"load_scan_s", median(tScan)},
                 {"load_decode_s", median(tDecode)}, {"load_sparse_s", median(tSparse)},
                 {"load_vs_parallel_decode", load / parallel}, {"load_vs_serial_decode", load / serial},
-                {"load_vs_serial_decode_target", 1.2}, {"load_peak_vs_dense_target", 0.6}, {"grid_bytes", report.memoryBytes},
-                {"load_peak_bytes", peak}, {"load_peak_warm_bytes", peakWarm}, {"dense_float_bytes", dense},
-                {"hardware_threads", std::thread::hardware_concurrency()}, {"cpu", cpuModel()}};
+                {"load_vs_serial_decode_target", 1.2}, {"load_peak_vs_dense_target", 0.6},
+                {"grid_bytes", report.memoryBytes}, {"load_peak_bytes", peak}, {"load_peak_warm_bytes", peakWarm},
+                {"dense_float_bytes", dense}, {"hardware_threads", std::thread::hardware_concurrency()},
+                {"cpu", cpuModel()}};
             std::ofstream(json) << j.dump(2) << '\n';
         }
     } catch (const std::exception& e) {

@@ -42,7 +42,7 @@ std::string niftiFile()
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     using namespace voxhap::fuzz;
-    static CompressedTarget target(
-        ".nii.gz", "", deflated(niftiFile(), 15 + 16), [](const std::filesystem::path& p) { return voxhap::volume::loadNifti(p); });
+    static CompressedTarget target(".nii.gz", "", deflated(niftiFile(), 15 + 16),
+        [](const std::filesystem::path& p) { return voxhap::volume::loadNifti(p); });
     return target.run(data, size);
 }

@@ -124,8 +124,8 @@ namespace {
 /// prepare(scratch, y0, y1) runs once, row(scratch, z, y) gives image row y of
 /// slab slice z as nx floats.
 template <typename Scratch, typename Prepare, typename Row>
-void buildSlab(FloatGrid& grid, float air, float bg, Prepare prepare, Row row, int nx, int ny, int k0, int nz,
-    bool finite)
+void buildSlab(
+    FloatGrid& grid, float air, float bg, Prepare prepare, Row row, int nx, int ny, int k0, int nz, bool finite)
 {
     static_assert(SparseSlabs::kSlabSlices == kDim, "a slab is one layer of leaves");
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
@@ -156,7 +156,7 @@ void buildSlab(FloatGrid& grid, float air, float bg, Prepare prepare, Row row, i
             prepare(scratch, y0, std::min(y0 + kDim, ny));
             const float* in[kDim];
             const float* block[kDim];
-            float edge[kDim][kDim] = {}; // the last, partial column block, padded
+            float edge[kDim][kDim] = {};           // the last, partial column block, padded
             static const float kUnused[kDim] = {}; // slices past the slab's end: read, then masked out
             alignas(16) float t[kDim * kDim];
             for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {

@@ -456,8 +456,8 @@ struct PixelFile {
 /// Slab k0 .. k0 + n - 1 holds integer samples (at most 32 bits) under a
 /// rescale below 1e28: far inside float's range (2^32 · 1e28 < 3.4e38), so
 /// there is no NaN or inf to look for.
-bool integerSamples(const Plan& plan, const std::vector<SlicePlacement>& order,
-    const std::vector<DicomFrames>& layouts, int k0, int n)
+bool integerSamples(
+    const Plan& plan, const std::vector<SlicePlacement>& order, const std::vector<DicomFrames>& layouts, int k0, int n)
 {
     constexpr double kFiniteRescale = 1e28;
     bool finite = true;

@@ -40,11 +40,13 @@ std::string bits(float f)
 {
     std::uint32_t u;
     std::memcpy(&u, &f, 4);
-    return std::to_string(f) + " (0x" + [&] {
-        char b[9];
-        std::snprintf(b, sizeof b, "%08x", u);
-        return std::string(b);
-    }() + ")";
+    return std::to_string(f) + " (0x" +
+        [&] {
+            char b[9];
+            std::snprintf(b, sizeof b, "%08x", u);
+            return std::string(b);
+        }() +
+        ")";
 }
 
 TEST(SampleConversion, SixteenBitSamplesFollowTheRuleBitForBit)

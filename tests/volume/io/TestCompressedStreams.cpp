@@ -107,8 +107,9 @@ std::string metaImageHeader(std::size_t streamBytes)
 {
     return "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n"
            "CompressedData = True\nCompressedDataSize = " +
-        std::to_string(streamBytes) + "\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = -20 -30 10\n"
-                                      "ElementSpacing = 0.75 0.8 2.5\nDimSize = " +
+        std::to_string(streamBytes) +
+        "\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = -20 -30 10\n"
+        "ElementSpacing = 0.75 0.8 2.5\nDimSize = " +
         std::to_string(kNx) + " " + std::to_string(kNy) + " " + std::to_string(kNz) +
         "\nElementType = MET_SHORT\nElementDataFile = LOCAL\n";
 }
@@ -222,7 +223,8 @@ protected:
             const std::string m = e.what();
             EXPECT_EQ(m.rfind(mPath.string() + ": data: ", 0), 0u) << what << ": " << m;
             EXPECT_EQ(m.find('\n'), std::string::npos) << what << ": " << m;
-            for (const auto& p : parts) EXPECT_NE(m.find(p), std::string::npos) << what << ": no '" << p << "' in " << m;
+            for (const auto& p : parts)
+                EXPECT_NE(m.find(p), std::string::npos) << what << ": no '" << p << "' in " << m;
         }
     }
     /// "at byte N" / "byte N" for the file offset of stream byte @p at.
@@ -270,8 +272,8 @@ TEST_P(CompressedStreams, CutStreamIsRefusedAsTruncatedAtTheFileEnd)
 {
     const std::size_t trailer = GetParam().gzip ? 8 : 4;
     // In the body, just before the trailer, inside the checksum, one byte short.
-    for (std::size_t keep : {mStream.size() / 2, mStream.size() - trailer, mStream.size() - trailer + 2,
-             mStream.size() - 1}) {
+    for (std::size_t keep :
+        {mStream.size() / 2, mStream.size() - trailer, mStream.size() - trailer + 2, mStream.size() - 1}) {
         expectRefused(mStream.substr(0, keep), {"truncated", byte(keep)}, "cut to " + std::to_string(keep) + " bytes");
     }
 }
@@ -279,8 +281,8 @@ TEST_P(CompressedStreams, CutStreamIsRefusedAsTruncatedAtTheFileEnd)
 TEST_P(CompressedStreams, BytesAfterTheStreamAreRefused)
 {
     // Text, a lone zero, a lone first magic byte, and an incomplete member header.
-    for (const std::string& extra : {std::string("garbage"), std::string(1, '\0'), std::string("\x1f"),
-             std::string("\x1f\x8b\x08", 3)}) {
+    for (const std::string& extra :
+        {std::string("garbage"), std::string(1, '\0'), std::string("\x1f"), std::string("\x1f\x8b\x08", 3)}) {
         expectRefused(mStream + extra, {"byte "}, "followed by " + std::to_string(extra.size()) + " bytes");
     }
     // The reported offset is where the foreign bytes start.
@@ -293,8 +295,8 @@ TEST_P(CompressedStreams, SecondGzipMemberIsDecodedAsPartOfTheStream)
         // A zlib stream has no members: a second stream, or a gzip member, after it is refused.
         const std::string half = mPayload.substr(0, mPayload.size() / 2);
         const std::string first = zlibStream(half);
-        expectRefused(first + zlibStream(mPayload.substr(half.size())), {"zlib", "at " + byte(first.size())},
-            "zlib + zlib");
+        expectRefused(
+            first + zlibStream(mPayload.substr(half.size())), {"zlib", "at " + byte(first.size())}, "zlib + zlib");
         expectRefused(mStream + gzipMember("x"), {"zlib"}, "zlib + gzip member");
         return;
     }
@@ -347,8 +349,8 @@ TEST_P(CompressedStreams, EveryByteFlippedIsRefusedOrLoadsTheSameVoxels)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, CompressedStreams, testing::ValuesIn(formats()),
-    [](const testing::TestParamInfo<Format>& p) {
+INSTANTIATE_TEST_SUITE_P(
+    Formats, CompressedStreams, testing::ValuesIn(formats()), [](const testing::TestParamInfo<Format>& p) {
         std::string n = p.param.name.substr(0, p.param.name.find('.'));
         for (char& c : n) c = c == '-' ? '_' : c;
         return n;

@@ -102,8 +102,8 @@ void shortsToFloat(const char* raw, std::size_t count, int bitsStored, int shift
             f = _mm_cvtepi32_ps(_mm_add_epi32(v, interceptInt));
         } else {
             const __m128 lo = _mm_cvtpd_ps(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(v), slopeD), interceptD));
-            const __m128 hi = _mm_cvtpd_ps(
-                _mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(_mm_shuffle_epi32(v, 0x4E)), slopeD), interceptD));
+            const __m128 hi =
+                _mm_cvtpd_ps(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(_mm_shuffle_epi32(v, 0x4E)), slopeD), interceptD));
             f = _mm_movelh_ps(lo, hi);
         }
         if (padded) {
@@ -121,13 +121,14 @@ void shortsToFloat(const char* raw, std::size_t count, int bitsStored, int shift
         }
         // Widen to int32: zero-extended, or sign-extended (each word into the
         // high half of a lane, then shifted down arithmetically).
-        const __m128i lo = Signed ? _mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16) : _mm_unpacklo_epi16(v, _mm_setzero_si128());
-        const __m128i hi = Signed ? _mm_srai_epi32(_mm_unpackhi_epi16(v, v), 16) : _mm_unpackhi_epi16(v, _mm_setzero_si128());
+        const __m128i lo =
+            Signed ? _mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16) : _mm_unpacklo_epi16(v, _mm_setzero_si128());
+        const __m128i hi =
+            Signed ? _mm_srai_epi32(_mm_unpackhi_epi16(v, v), 16) : _mm_unpackhi_epi16(v, _mm_setzero_si128());
         finish(lo, out + n);
         finish(hi, out + n + 4);
     }
-    if (n < count)
-        toFloat<T>(raw + 2 * n, count - n, bitsStored, shift, slope, intercept, padding, air, out + n);
+    if (n < count) toFloat<T>(raw + 2 * n, count - n, bitsStored, shift, slope, intercept, padding, air, out + n);
 }
 #endif
 

@@ -353,7 +353,7 @@ private:
     std::uint64_t mSize;
     DicomPreflightNotes& mNotes;
     static constexpr std::uint64_t kWindowBytes = 16384; ///< a typical header whole, little of the pixel data
-    std::vector<char> mWindow;  ///< bytes mWindowAt .. + size() of the file (read())
+    std::vector<char> mWindow;                           ///< bytes mWindowAt .. + size() of the file (read())
     std::uint64_t mWindowAt = 0;
     std::uint64_t mAt = 0;           ///< offset of the element being read, for messages
     std::uint64_t mDataSetStart = 0; ///< first byte after the meta header
