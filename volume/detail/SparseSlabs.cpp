@@ -119,17 +119,20 @@ inline void storeRun(float* out, const float* in, unsigned bits, float bg)
 
 namespace {
 
-/// The slab builder behind addSlabRows and addSlabBlocks. Per task (one row
-/// of 8 x 8 column blocks): @p Scratch holds what the task's rows need;
-/// prepare(scratch, y0, y1) runs once, row(scratch, z, y) gives image row y of
-/// slab slice z as nx floats.
+/// The slab builder behind addSlabRows and addSlabBlocks: slices k0 .. k0 +
+/// nz - 1, one slab (8 slices, a layer of leaves) after another. Per task (one
+/// row of 8 x 8 column blocks of one slab): @p Scratch holds what the task's
+/// rows need; prepare(scratch, slab, y0, y1) runs once, row(scratch, z, y)
+/// gives image row y of slice z of that slab as nx floats. All slabs' tasks
+/// form one parallel loop: no core waits for the others at each slab's end,
+/// which on busy cores (a worker descheduled mid-task) costs a whole time slice.
 template <typename Scratch, typename Prepare, typename Row>
 void buildSlab(
     FloatGrid& grid, float air, float bg, Prepare prepare, Row row, int nx, int ny, int k0, int nz, bool finite)
 {
     static_assert(SparseSlabs::kSlabSlices == kDim, "a slab is one layer of leaves");
     const int bx = (nx + kDim - 1) / kDim, by = (ny + kDim - 1) / kDim;
-    const unsigned zValid = (1u << nz) - 1; // slices beyond the slab's last stay inactive background
+    const int slabs = (nz + kDim - 1) / kDim;
     // One leaf per 8 x 8 column block of the slab, built straight from the
     // dense values (exact, no tolerance); all-air blocks make no leaf. This
     // avoids copyFromDense's probing of the growing tree and its whole-tree
@@ -137,15 +140,18 @@ void buildSlab(
     // its 8 image rows it takes that row of every slice, and each 8 x 8
     // (slice x column) block of those becomes 8 runs of a leaf's values
     // (transpose8) and one byte of its mask per column.
-    std::vector<LeafT*> leaves(std::size_t(bx) * std::size_t(by), nullptr);
-    const auto fail = [&](int x, int y, int z) {
-        throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(k0 + z) +
-            ") is not a finite number");
-    };
+    std::vector<LeafT*> leaves(std::size_t(slabs) * std::size_t(bx) * std::size_t(by), nullptr);
     try {
-        tbb::parallel_for(0, by, [&](int yb) {
+        tbb::parallel_for(0, slabs * by, [&](int task) {
+            const int slab = task / by, yb = task % by;
             const int y0 = yb * kDim;
-            LeafT** blockLeaves = leaves.data() + std::size_t(yb) * std::size_t(bx);
+            const int k0s = k0 + slab * kDim, nzs = std::min(kDim, nz - slab * kDim);
+            const unsigned zValid = (1u << nzs) - 1; // slices beyond the last stay inactive background
+            const auto fail = [&](int x, int y, int z) {
+                throw ValueError("voxel (" + std::to_string(x) + ", " + std::to_string(y) + ", " +
+                    std::to_string(k0s + z) + ") is not a finite number");
+            };
+            LeafT** blockLeaves = leaves.data() + std::size_t(task) * std::size_t(bx);
             // Each leaf's buffer and mask, fetched once (every buffer access checks delayed loading).
             std::vector<float*> values(std::size_t(bx), nullptr);
             std::vector<std::uint8_t*> masks(std::size_t(bx), nullptr);
@@ -153,7 +159,7 @@ void buildSlab(
             // task would be mapped and page-faulted anew each time. Nothing a
             // task calls runs TBB work, so no other task can take it over midway.
             static thread_local Scratch scratch;
-            prepare(scratch, y0, std::min(y0 + kDim, ny));
+            prepare(scratch, slab, y0, std::min(y0 + kDim, ny));
             const float* in[kDim];
             const float* block[kDim];
             float edge[kDim][kDim] = {};           // the last, partial column block, padded
@@ -161,7 +167,7 @@ void buildSlab(
             alignas(16) float t[kDim * kDim];
             for (int y = y0; y < std::min(y0 + kDim, ny); ++y) {
                 const int yy = y - y0;
-                for (int z = 0; z < nz; ++z) {
+                for (int z = 0; z < nzs; ++z) {
                     in[z] = row(scratch, z, y);
                     if (finite) continue;
                     // One pass proves the row finite, so that the block loop below
@@ -177,7 +183,7 @@ void buildSlab(
                 for (int b = 0; b < bx; ++b) {
                     const int x0 = b * kDim, w = std::min(kDim, nx - x0);
                     for (int z = 0; z < kDim; ++z) {
-                        if (z >= nz) {
+                        if (z >= nzs) {
                             block[z] = kUnused;
                         } else if (w == kDim) {
                             block[z] = in[z] + x0;
@@ -191,7 +197,7 @@ void buildSlab(
                     for (int xx = 0; xx < w; ++xx) any |= bits[xx] = notBelow(t + xx * kDim, air) & zValid;
                     if (!any) continue; // air: the inactive background, no leaf needed for it
                     if (!blockLeaves[b]) {
-                        blockLeaves[b] = new LeafT(openvdb::Coord(x0, y0, k0), bg, false);
+                        blockLeaves[b] = new LeafT(openvdb::Coord(x0, y0, k0s), bg, false);
                         values[std::size_t(b)] = blockLeaves[b]->buffer().data();
                         masks[std::size_t(b)] = &blockLeaves[b]->getValueMask().template getWord<std::uint8_t>(0);
                     }
@@ -226,25 +232,27 @@ void SparseSlabs::addSlabRows(const RowSource& rows, int nx, int ny, int k0, int
     using Scratch = std::vector<float>; // one row of each slice, for sources that convert into it
     buildSlab<Scratch>(
         *mImpl->grid, mImpl->airBelow, mImpl->background,
-        [nx](Scratch& s, int, int) { s.resize(std::size_t(nx) * kDim); },
+        [nx](Scratch& s, int, int, int) { s.resize(std::size_t(nx) * kDim); },
         [&rows, nx](Scratch& s, int z, int y) { return rows(z, y, s.data() + std::size_t(z) * std::size_t(nx)); }, nx,
         ny, k0, nz, finite);
 }
 
 void SparseSlabs::addSlabBlocks(const BlockSource& blocks, int nx, int ny, int k0, int nz, bool finite)
 {
-    if (k0 % kDim != 0 || nz < 1 || nz > kDim)
-        throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
+    if (k0 % kDim != 0 || nz < 1) throw ValueError("slab at k = " + std::to_string(k0) + " is not leaf-aligned");
     struct Scratch {
         std::vector<float> rows; ///< rows y0 .. y0 + 7 of every slice: slice-major, then row
         int y0 = 0;
     };
     buildSlab<Scratch>(
         *mImpl->grid, mImpl->airBelow, mImpl->background,
-        [&blocks, nx, nz](Scratch& s, int y0, int y1) {
+        [&blocks, nx, nz](Scratch& s, int slab, int y0, int y1) {
             s.rows.resize(std::size_t(nx) * kDim * kDim);
             s.y0 = y0;
-            for (int z = 0; z < nz; ++z) blocks(z, y0, y1, s.rows.data() + std::size_t(z) * kDim * std::size_t(nx));
+            const int z0 = slab * kDim, n = std::min(kDim, nz - z0);
+            for (int z = 0; z < n; ++z) {
+                blocks(z0 + z, y0, y1, s.rows.data() + std::size_t(z) * kDim * std::size_t(nx));
+            }
         },
         [nx](Scratch& s, int z, int y) -> const float* {
             return s.rows.data() + (std::size_t(z) * kDim + std::size_t(y - s.y0)) * std::size_t(nx);

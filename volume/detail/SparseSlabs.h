@@ -54,9 +54,11 @@ public:
     using BlockSource = std::function<void(int z, int y0, int y1, float* out)>;
 
     /// @brief As addSlabRows, with the rows of one row of leaves (8 image rows
-    /// of every slice) produced together: a loader reads those rows straight
-    /// from each file and converts them while they are in the cache, and
-    /// neither the slab's stored samples nor its floats ever exist whole.
+    /// of every slice of a slab) produced together: a loader reads those rows
+    /// straight from each file and converts them while they are in the cache,
+    /// and neither a slab's stored samples nor its floats ever exist whole.
+    /// Slices k0 .. k0 + nz - 1, any number of slabs (nz may exceed
+    /// kSlabSlices; @p blocks then sees z from 0 to nz - 1), in one parallel loop.
     void addSlabBlocks(const BlockSource& blocks, int nx, int ny, int k0, int nz, bool finite = false);
 
     /// @brief The grid built so far (the builder is empty afterwards).

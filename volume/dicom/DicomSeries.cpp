@@ -752,8 +752,12 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                     }
                 }
                 if (direct) {
-                    for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
-                        const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
+                    // Eight slabs (64 slices, as many files open) per parallel loop:
+                    // few joins of the two cores, a bounded number of open files,
+                    // and progress reported between batches.
+                    constexpr int kBatch = 8 * SparseSlabs::kSlabSlices;
+                    for (int k0 = 0; k0 < rg.nz; k0 += kBatch) {
+                        const int n = std::min(kBatch, rg.nz - k0);
                         const auto t = std::chrono::steady_clock::now();
                         std::vector<PixelFile> files;
                         files.reserve(std::size_t(n));
