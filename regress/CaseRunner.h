@@ -106,7 +106,8 @@ private:
 
 /// @brief The closed form for a case, if physics.md §7 has one for it (the
 /// damping slab R1, tilted or not, and the sphere in a slab R5, under a model
-/// whose only axial term is voxel damping), evaluated at @p depths with the
+/// whose only axial term is voxel damping; the [LP] stack R2 and the Conci
+/// profile R3 for their scenes' fixed tables), evaluated at @p samples with the
 /// tissue and scene values in @p recorded (the baseline's record, so that an
 /// edited value fails here too) — missing keys fall back to @p current.
 std::optional<ClosedForm> closedForm(

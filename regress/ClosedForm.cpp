@@ -2,7 +2,8 @@
 /// @file ClosedForm.cpp
 /// @brief The analytic regression phantoms of physics.md §7 as references of a
 /// regression case: R1 (layered damping slab, tilted or not) and R5 (sphere in a
-/// slab), for a model whose only axial term is Kyung's voxel damping (§1.2 Eq. 5).
+/// slab), for a model whose only axial term is Kyung's voxel damping (§1.2 Eq. 5);
+/// R2 (the [LP] stack) and R3 (the Conci profile) for their scenes' fixed tables.
 
 #include "regress/CaseRunner.h"
 
@@ -13,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
+#include <iterator>
 #include <limits>
 
 namespace voxhap::regress {
@@ -106,6 +109,83 @@ std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, c
     return cf;
 }
 
+/// physics.md §7 R3: the Conci profile of §3, fitted from the [C-ui] seed data
+/// of §3.2 (reproduced from the document, not from the code's table) by §3.2's
+/// steps 1–4, the thicknesses scaled for the BMI (§3.3, the epidural space and
+/// dura not) and the elastic slopes multiplied by the tip's factor (§3.3).
+/// Within each layer (u from its start): Ce0 + Ce1·u + Ce2·u² up to the puncture
+/// at u_p, then the plateau Cp0, a drop of exactly T_f.
+std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+{
+    struct Seed {
+        double punctureN, thicknessMm;
+        bool depthTriggered, scales;
+    };
+    static const Seed kSeeds[] = {{6.0372, 10.8, false, true}, {1.974, 2.8, false, true}, {4.354, 1.9, false, true},
+        {7.467, 18.0, false, true}, {12.133, 7.4, true, true}, {2.437, 8.6, true, false}};
+    constexpr double kBonePunctureN = 8.0265; // §3.2, the bone row: P_{i+1} of the last plateau
+    const auto speed = in.current.find("case.speed_mm_per_s");
+    if (!c.script.empty() || speed == in.current.end() || !speed->second.number || !(*speed->second.number > 0))
+        return std::nullopt;
+    const double v = *speed->second.number;
+    const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
+    std::optional<double> bmi = in.number("phantom.bmi"); // a run records it as text ("none" without)
+    if (!bmi) {
+        const std::string text = in.text("phantom.bmi");
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (!text.empty() && end == text.c_str() + text.size()) bmi = x;
+    }
+    const double scale = bmi ? 10.0 * (2.52 + 0.11 * *bmi) / 40.9 : 1.0; // §3.3: s = SED/40.9 mm
+    const std::string tip = in.text("scene.needle.tip");
+    const double slope = tip == "bevel" ? 0.85 : tip == "triangular" ? 0.70 : 1.0; // §3.3
+
+    struct Fit {
+        double start, thickness, up, ce0, ce1, ce2, cp0;
+    };
+    std::vector<Fit> fit;
+    double z = 0, entry = 0; // §3.2 step 1: R_in, 0 for the skin
+    for (std::size_t i = 0; i < std::size(kSeeds); ++i) {
+        const Seed& s = kSeeds[i];
+        Fit f{};
+        f.start = z;
+        f.thickness = s.thicknessMm * (s.scales ? scale : 1.0);
+        f.up = s.depthTriggered ? f.thickness : 0.6 * f.thickness; // step 2
+        f.ce0 = entry;                                             // step 3
+        f.ce1 = slope * (s.punctureN - entry) / (2 * f.up);
+        f.ce2 = slope * (s.punctureN - entry) / (2 * f.up * f.up);
+        const double next = i + 1 < std::size(kSeeds) ? kSeeds[i + 1].punctureN : kBonePunctureN;
+        f.cp0 = 0.5 * std::min(s.punctureN, next); // step 4
+        fit.push_back(f);
+        entry = f.cp0;
+        z += f.thickness;
+    }
+    const double tableEnd = z;
+    // R3 states the profile exactly: only float rounding separates it from the
+    // model (R4's 1e-12 relative, with a 1e-12 N floor for zero force).
+    constexpr double kRounding = 1e-12;
+    // Which side of a puncture a tick lands on is decided by rounding: a tick's
+    // travel either side of a drop is not compared (as for R2).
+    const double tick = 1.5 * v / rate;
+    ClosedForm cf;
+    cf.rule = "physics.md §7 R3 (Conci profile, §3.2 fitted table" + std::string(bmi ? ", BMI-scaled" : "") + ")";
+    for (const Sample& smp : samples) {
+        const double d = smp.depthMm;
+        double f = 0;
+        bool compared = d < tableEnd - tick; // past the table §3 has no row (the bone row is contact)
+        for (const Fit& l : fit) {
+            if (std::abs(d - (l.start + l.up)) <= tick) compared = false;
+            if (d < l.start || d >= l.start + l.thickness) continue;
+            const double u = d - l.start;
+            f = u < l.up ? l.ce0 + l.ce1 * u + l.ce2 * u * u : l.cp0;
+        }
+        cf.modelN.push_back(f);
+        cf.toleranceN.push_back(
+            compared ? kRounding * std::abs(f) + kRounding : std::numeric_limits<double>::infinity());
+    }
+    return cf;
+}
+
 } // namespace
 
 std::optional<ClosedForm> closedForm(
@@ -114,6 +194,7 @@ std::optional<ClosedForm> closedForm(
     const Lookup in{recorded, current};
     if (in.text("scene.model") == "lumbar-puncture" && in.text("scene.layers") == "table")
         return lumbarPunctureStack(c, in, samples);
+    if (in.text("scene.model") == "conci" && in.text("scene.layers") == "table") return conciProfile(c, in, samples);
     const std::string kind = c.volume.kind;
     if ((kind != "slab" && kind != "sphere") || !c.script.empty() || !dampingOnly(in)) return std::nullopt;
     const auto entry = vecOf(in.current.at("case.entry").text), target = vecOf(in.current.at("case.target").text);

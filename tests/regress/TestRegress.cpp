@@ -203,6 +203,68 @@ TEST(RegressClosedForm, LumbarPunctureStackMatchesThePhysicsReferenceValues)
     for (const double t : cf->toleranceN) EXPECT_EQ(t, 1e-6); // no sample near a boundary
 }
 
+/// physics.md §7 R3 against §3.2's fitted table, evaluated by hand from its
+/// printed coefficients (unscaled: no BMI recorded, coned tip).
+TEST(RegressClosedForm, ConciProfileMatchesTheFittedTable)
+{
+    Case c;
+    c.scene = "conci";
+    Inputs in;
+    in["scene.model"] = InputValue{"conci", {}, ""};
+    in["scene.layers"] = InputValue{"table", {}, ""};
+    in["case.speed_mm_per_s"] = InputValue{"5.0", 5.0, "mm/s"};
+    const std::vector<Sample> samples{{3.0, 0, 0}, {8.0, 0, 0}, {40.8, 0, 0}, {40.905, 0, 0}, {41.0, 0, 0}};
+    const auto cf = closedForm(c, {}, in, samples);
+    ASSERT_TRUE(cf);
+    EXPECT_NE(cf->rule.find("R3"), std::string::npos);
+    const double printed = 1e-3; // coefficients printed to 4 digits, times u and u² up to 7.3 mm
+    EXPECT_NEAR(cf->modelN[0], 0.4658 * 3.0 + 0.07189 * 9.0, printed);                     // skin, elastic
+    EXPECT_NEAR(cf->modelN[1], 0.987, printed);                                            // skin plateau Cp0
+    EXPECT_NEAR(cf->modelN[2], 3.733 + 0.5675 * 7.3 + 0.07669 * 7.3 * 7.3, printed);       // flavum, elastic
+    EXPECT_NEAR(cf->modelN[3], 1.218 + 0.0708 * 0.005 + 0.00824 * 0.005 * 0.005, printed); // just past 40.9 mm
+    EXPECT_NEAR(cf->modelN[4], 1.218 + 0.0708 * 0.1 + 0.00824 * 0.1 * 0.1, printed);
+    EXPECT_TRUE(std::isfinite(cf->toleranceN[0]));
+    EXPECT_FALSE(std::isfinite(cf->toleranceN[3])) << "a tick's travel from the flavum's drop is not compared";
+}
+
+/// The shipped Conci case (BMI 30) passes R3; with BMI 31 in the baseline's
+/// record the closed form moves (§3.3 scaling, evaluated here by hand) and the
+/// skin's elastic stage fails it.
+TEST(RegressClosedForm, EditedBmiInTheRecordFailsTheConciCase)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"conci"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const auto fresh = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
+    ASSERT_TRUE(fresh);
+    int compared = 0;
+    for (std::size_t i = 0; i < run.profile.samples.size(); ++i) {
+        if (!std::isfinite(fresh->toleranceN[i])) continue;
+        EXPECT_NEAR(run.profile.samples[i].modelN, fresh->modelN[i], fresh->toleranceN[i])
+            << "at " << run.profile.samples[i].depthMm << " mm";
+        ++compared;
+    }
+    EXPECT_GT(compared, 300);
+
+    Inputs recorded = run.inputs;
+    recorded["phantom.bmi"] = InputValue{"31", 31.0, ""};
+    const auto edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
+    ASSERT_TRUE(edited);
+    const double scale = 10.0 * (2.52 + 0.11 * 31.0) / 40.9; // SED/40.9 mm
+    const double up = 0.6 * 10.8 * scale;                    // the skin's puncture depth
+    bool found = false;
+    for (std::size_t i = 0; i < run.profile.samples.size(); ++i) {
+        const double z = run.profile.samples[i].depthMm;
+        if (std::abs(z - 5.0) > 1e-6) continue;
+        found = true;
+        const double expected = 6.0372 / (2 * up) * z + 6.0372 / (2 * up * up) * z * z;
+        EXPECT_NEAR(edited->modelN[i], expected, 1e-9);
+        EXPECT_GT(std::abs(run.profile.samples[i].modelN - edited->modelN[i]), edited->toleranceN[i]);
+    }
+    EXPECT_TRUE(found) << "no sample at 5 mm";
+}
+
 /// Issue 29 item 7: the profiles are the same bit for bit with one thread and
 /// with all, and from one run to the next.
 TEST(RegressDeterminism, OneThreadAllThreadsAndRunToRunAgreeBitForBit)
