@@ -108,13 +108,10 @@ std::string baselineText(const nlohmann::json& doc)
     return out + "\n}\n";
 }
 
-std::optional<Baseline> readBaseline(const std::filesystem::path& file)
+namespace {
+
+Baseline baselineFromJson(const Json& doc, const std::string& origin)
 {
-    std::error_code ec;
-    if (!std::filesystem::exists(file, ec)) return std::nullopt;
-    const std::string origin = file.string();
-    // A truncated file is not valid JSON: parse() names the file.
-    const Json doc = JsonFields::readFile(file, "baseline");
     return JsonFields::guarded(origin, [&] {
         JsonFields top(doc, origin, "");
         if (top.string("schema", "") != "voxhap-regress-baseline/1")
@@ -162,6 +159,21 @@ std::optional<Baseline> readBaseline(const std::filesystem::path& file)
             b.profile.samples.push_back({depth[i], model[i], rendered[i], plunger[i]});
         return b;
     });
+}
+
+} // namespace
+
+std::optional<Baseline> readBaseline(const std::filesystem::path& file)
+{
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec)) return std::nullopt;
+    // A truncated file is not valid JSON: parse() names the file.
+    return baselineFromJson(JsonFields::readFile(file, "baseline"), file.string());
+}
+
+Baseline parseBaseline(const std::string& text, const std::string& origin)
+{
+    return baselineFromJson(JsonFields::parse(text, origin), origin);
 }
 
 std::vector<std::string> inputDifferences(const Inputs& before, const Inputs& now)

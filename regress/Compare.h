@@ -27,6 +27,9 @@ std::filesystem::path baselinePath(const std::filesystem::path& dir, const std::
 /// @brief Read a baseline; nothing when the file does not exist.
 /// @throw ValueError "file: field: why" when it is unreadable, truncated or malformed
 std::optional<Baseline> readBaseline(const std::filesystem::path& file);
+/// @brief Parse a baseline's text (the built-in ones compiled into the binary);
+/// errors name @p origin. @throw ValueError
+Baseline parseBaseline(const std::string& text, const std::string& origin);
 /// @brief The JSON a baseline file holds.
 nlohmann::json baselineJson(const Case& c, const CaseRun& run);
 /// @brief A baseline as its file holds it: one input per line (they are what a

@@ -17,6 +17,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace voxhap::regress {
 
 namespace {
@@ -103,11 +105,33 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
 
     // Baselines are read before anything runs: a damaged one stops the run (exit 2)
     // unless --update is about to replace it.
+    if (o.update) {
+        // Where --update writes, refused in one line before anything runs.
+        if (suite.compiledIn)
+            throw IoError("--update: the built-in suite's baselines are compiled into this voxhap and its source "
+                          "folder " +
+                builtinSuiteDir().string() +
+                " is not here; nothing written (run a copy of "
+                "the suite as a file to keep baselines of your own)");
+        std::error_code ec;
+        const fs::path dir = fs::exists(suite.baselinesDir, ec) ? suite.baselinesDir : suite.baselinesDir.parent_path();
+        if (::access((dir.empty() ? fs::path(".") : dir).c_str(), W_OK) != 0)
+            throw IoError(
+                "--update: " + fs::absolute(suite.baselinesDir, ec).string() + " is not writable; nothing written");
+        result.updateDir = fs::absolute(suite.baselinesDir, ec).lexically_normal().string();
+    }
     std::vector<std::optional<Baseline>> baselines;
     for (const std::size_t i : selected) {
-        const fs::path file = baselinePath(suite.baselinesDir, suite.cases[i].name);
+        const std::string& name = suite.cases[i].name;
         try {
-            baselines.push_back(readBaseline(file));
+            if (suite.compiledIn) {
+                const std::string* text = builtinRegressFile(name + ".json");
+                baselines.push_back(text
+                        ? std::optional<Baseline>(parseBaseline(*text, "builtin baseline " + name + ".json"))
+                        : std::nullopt);
+            } else {
+                baselines.push_back(readBaseline(baselinePath(suite.baselinesDir, name)));
+            }
         } catch (const Error&) {
             if (!o.update) throw;
             baselines.emplace_back(std::nullopt);
@@ -194,8 +218,9 @@ void printReport(std::ostream& os, const RegressResult& r)
         }
         for (const auto& l : explanation(c)) os << "  " << l << '\n';
     }
+    if (!r.updateDir.empty() && r.updated.empty()) os << "\nbaselines in " << r.updateDir << ": none changed\n";
     if (!r.updated.empty()) {
-        os << "\nbaselines written:\n";
+        os << "\nbaselines written to " << r.updateDir << ":\n";
         for (const auto& u : r.updated) os << "  " << u << '\n';
     }
     os << '\n'
@@ -224,7 +249,7 @@ nlohmann::json reportJson(const RegressResult& r)
     }
     return {{"suite", r.suite}, {"cases", cases}, {"passed", r.cases.size() - r.failed()}, {"failed", r.failed()},
         {"seconds", r.seconds}, {"volume_seconds", r.volumeSeconds}, {"volumes", r.volumes}, {"threads", r.threads},
-        {"updated", r.updated}};
+        {"updated", r.updated}, {"update_dir", r.updateDir.empty() ? Json(nullptr) : Json(r.updateDir)}};
 }
 
 std::string junitXml(const RegressResult& r)

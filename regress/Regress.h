@@ -28,6 +28,7 @@ struct RegressResult {
     std::string suite;
     std::vector<CaseReport> cases;
     std::vector<std::string> updated; ///< with --update: "name: new", "name: inputs changed (…)", ...
+    std::string updateDir;            ///< with --update: the folder the baselines are written to
     double seconds = 0;               ///< wall time of the run (volumes, cases, comparison)
     double volumeSeconds = 0;         ///< of which building the shared volumes
     std::size_t volumes = 0;          ///< distinct volumes built

@@ -16,6 +16,9 @@
 
 namespace voxhap::regress {
 
+/// data/regress/*.json by file name, generated from the source tree (RegressBuiltin.cpp.in).
+const std::vector<std::pair<std::string, std::string>>& builtinRegressFiles();
+
 namespace {
 
 using Json = nlohmann::json;
@@ -194,10 +197,27 @@ Suite loadSuite(const std::filesystem::path& file)
 
 std::filesystem::path builtinSuiteDir() { return std::filesystem::path(VOXHAP_REGRESS_DIR); }
 
+const std::string* builtinRegressFile(const std::string& file)
+{
+    for (const auto& [name, text] : builtinRegressFiles()) {
+        if (name == file) return &text;
+    }
+    return nullptr;
+}
+
 Suite builtinSuite()
 {
-    Suite s = loadSuite(builtinSuiteDir() / "suite.json");
-    s.origin = "builtin suite (" + s.origin + ")";
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(builtinSuiteDir() / "suite.json", ec)) {
+        Suite s = loadSuite(builtinSuiteDir() / "suite.json");
+        s.origin = "builtin suite (" + s.origin + ")";
+        return s;
+    }
+    const std::string* text = builtinRegressFile("suite.json");
+    if (!text) throw IoError("builtin suite: not compiled into this voxhap");
+    Suite s = parseSuite(*text, "builtin suite (compiled in)", ".");
+    s.baselinesDir.clear();
+    s.compiledIn = true;
     return s;
 }
 

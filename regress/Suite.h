@@ -70,6 +70,10 @@ struct Suite {
     std::string origin;                 ///< the file, or "builtin"
     std::filesystem::path dir;          ///< relative paths in the suite are relative to this
     std::filesystem::path baselinesDir; ///< where the baselines are
+    /// The built-in suite read from the copy compiled into the binary (its source
+    /// folder is not on this machine): its baselines are compiled in too, and
+    /// `--update` has nowhere to write them.
+    bool compiledIn = false;
     std::string description;
     std::vector<Case> cases;
 };
@@ -79,10 +83,14 @@ struct Suite {
 Suite parseSuite(const std::string& text, const std::string& origin, const std::filesystem::path& dir);
 /// @brief Read and parse a suite file. @throw IoError, ValueError
 Suite loadSuite(const std::filesystem::path& file);
-/// @brief The built-in suite: data/regress/suite.json of the source tree, with its baselines beside it.
+/// @brief The built-in suite: data/regress/suite.json of the source tree, with its
+/// baselines beside it, where that folder exists (a build tree: `--update` writes
+/// there); else the copy compiled into the binary (an installed voxhap).
 Suite builtinSuite();
-/// @brief The folder of the built-in suite and its baselines.
+/// @brief The folder of the built-in suite and its baselines in the source tree.
 std::filesystem::path builtinSuiteDir();
+/// @brief The text of data/regress/@p file as compiled into the binary; nullptr if absent.
+const std::string* builtinRegressFile(const std::string& file);
 
 /// @brief True when @p name matches @p pattern: a shell glob (*, ?, [..]) or, without
 /// glob characters, a substring; several patterns separated by commas.

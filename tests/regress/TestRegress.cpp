@@ -4,6 +4,7 @@
 /// against a hand evaluation of physics.md §7 R1, determinism across thread
 /// counts and runs, baselines written and read back, stale baselines.
 
+#include "regress/Compare.h"
 #include "regress/Regress.h"
 
 #include "common/TempDirTest.h"
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <set>
 
 namespace {
@@ -263,6 +265,26 @@ TEST(RegressClosedForm, EditedBmiInTheRecordFailsTheConciCase)
         EXPECT_GT(std::abs(run.profile.samples[i].modelN - edited->modelN[i]), edited->toleranceN[i]);
     }
     EXPECT_TRUE(found) << "no sample at 5 mm";
+}
+
+/// An installed voxhap runs the built-in suite from the copy compiled in: it
+/// is the source tree's, byte for byte, and its baselines read the same.
+TEST(RegressBuiltin, CompiledInSuiteAndBaselinesAreTheSourceTrees)
+{
+    for (const std::string name : {"suite.json", "kyung.json", "conci.json"}) {
+        std::ifstream in(builtinSuiteDir() / name, std::ios::binary);
+        ASSERT_TRUE(in) << name;
+        const std::string onDisk((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string* compiled = builtinRegressFile(name);
+        ASSERT_NE(compiled, nullptr) << name;
+        EXPECT_EQ(*compiled, onDisk) << name;
+    }
+    const Baseline fromText = parseBaseline(*builtinRegressFile("kyung.json"), "kyung.json");
+    const auto fromFile = readBaseline(builtinSuiteDir() / "kyung.json");
+    ASSERT_TRUE(fromFile);
+    EXPECT_EQ(fromText.profile.digest, fromFile->profile.digest);
+    EXPECT_EQ(fromText.profile.samples.size(), fromFile->profile.samples.size());
+    EXPECT_EQ(builtinRegressFile("no-such-case.json"), nullptr);
 }
 
 /// Issue 29 item 7: the profiles are the same bit for bit with one thread and
