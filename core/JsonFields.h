@@ -99,8 +99,9 @@ public:
         if (!v.is_number() || !std::isfinite(v.get<double>())) fail(k, "must be a finite number");
         const double x = v.get<double>();
         if ((openLow ? !(x > lo) : !(x >= lo)) || !(x <= hi)) {
-            fail(k, std::string("must be in ") + (openLow ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) +
-                    "]" + (*unit ? " " : "") + unit + " (got " + shortNumber(x) + ")");
+            fail(k,
+                std::string("must be in ") + (openLow ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) + "]" +
+                    (*unit ? " " : "") + unit + " (got " + shortNumber(x) + ")");
         }
         return x;
     }

@@ -24,9 +24,10 @@ struct MinRootSets {
     std::vector<std::uint32_t> parent;
     explicit MinRootSets(std::size_t n) : parent(n)
     {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) parent[i] = std::uint32_t(i);
-        });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t i = r.begin(); i != r.end(); ++i) parent[i] = std::uint32_t(i);
+            });
     }
     std::uint32_t find(std::uint32_t x)
     {

@@ -281,8 +281,8 @@ template <class T> std::vector<T> cropArray(const Lattice& lat, const Lattice& c
     tbb::parallel_for(0, crop.dims.z(), [&](int k) {
         for (int j = 0; j < crop.dims.y(); ++j) {
             const std::size_t src = lat.index(off.x(), off.y() + j, off.z() + k);
-            std::copy_n(full.begin() + std::ptrdiff_t(src), crop.dims.x(),
-                out.begin() + std::ptrdiff_t(crop.index(0, j, k)));
+            std::copy_n(
+                full.begin() + std::ptrdiff_t(src), crop.dims.x(), out.begin() + std::ptrdiff_t(crop.index(0, j, k)));
         }
     });
     return out;
@@ -364,7 +364,8 @@ AutomaticLabels segmentCt(
                 }
             });
     }
-    Mask body = bodyMask(full, maskWhere(full.size(), [&](std::size_t i) { return (smoothClass[i] & kSmoothBody) != 0; }));
+    Mask body =
+        bodyMask(full, maskWhere(full.size(), [&](std::size_t i) { return (smoothClass[i] & kSmoothBody) != 0; }));
     out.extent = torsoExtent(v, full, body);
 
     // The rest on the body's box only (bodyBox says why the labels do not change).
@@ -404,9 +405,8 @@ AutomaticLabels segmentCt(
     }
 
     // Step 3: enhanced structures, split by erosion, grown back, classified.
-    const Mask enhanced = maskWhere(lat.size(), [&](std::size_t i) {
-        return body[i] && !lungMask[i] && (smoothAt(i, kSmoothEnhanced) || hu[i] >= kBoneHu);
-    });
+    const Mask enhanced = maskWhere(lat.size(),
+        [&](std::size_t i) { return body[i] && !lungMask[i] && (smoothAt(i, kSmoothEnhanced) || hu[i] >= kBoneHu); });
     // The region ids become the labels in place (step 3–4), so one 32-bit array serves both.
     std::vector<std::int32_t> region(lat.size(), 0);
     int regions = 0;
@@ -414,8 +414,7 @@ AutomaticLabels segmentCt(
         // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
         // planes between organs, and the erosion would no longer split them.
         const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
-        const ComponentRuns cores =
-            componentRuns(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
+        const ComponentRuns cores = componentRuns(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
         cores.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
             std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), c);
         });
@@ -549,7 +548,8 @@ AutomaticLabels segmentCt(
             keep[c + 1] = length >= kCanalMinLengthMm;
         }
         cc.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
-            if (keep[std::size_t(c)]) std::fill(labels.begin() + std::ptrdiff_t(b), labels.begin() + std::ptrdiff_t(e), canal);
+            if (keep[std::size_t(c)])
+                std::fill(labels.begin() + std::ptrdiff_t(b), labels.begin() + std::ptrdiff_t(e), canal);
         });
     }
 

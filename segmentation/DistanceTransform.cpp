@@ -73,8 +73,7 @@ void passAlong(const Lattice& lat, std::vector<float>& dist, int axis)
 
 } // namespace
 
-LineTransform::LineTransform(int n)
-    : mF(std::size_t(n)), mD(std::size_t(n)), mZ(std::size_t(n) + 1), mV(std::size_t(n))
+LineTransform::LineTransform(int n) : mF(std::size_t(n)), mD(std::size_t(n)), mZ(std::size_t(n) + 1), mV(std::size_t(n))
 {
 }
 

@@ -50,11 +50,12 @@ struct SliceAxes {
 
 /// In-plane squared distances of a slice buffer holding 0 at features and +inf
 /// elsewhere: the passes of squaredDistance(Span::Slice), in its axis order.
-void sliceDistance(const Lattice& lat, const SliceAxes& g, std::vector<float>& buf, LineTransform& t0,
-    LineTransform& t1)
+void sliceDistance(
+    const Lattice& lat, const SliceAxes& g, std::vector<float>& buf, LineTransform& t0, LineTransform& t1)
 {
     if (lat.dims[g.a0] > 1)
-        for (int w = 0; w < g.n1; ++w) t0.apply(buf.data() + std::size_t(w) * std::size_t(g.n0), 1, g.n0, lat.spacing[g.a0]);
+        for (int w = 0; w < g.n1; ++w)
+            t0.apply(buf.data() + std::size_t(w) * std::size_t(g.n0), 1, g.n0, lat.spacing[g.a0]);
     if (lat.dims[g.a1] > 1)
         for (int u = 0; u < g.n0; ++u) t1.apply(buf.data() + u, std::size_t(g.n0), g.n1, lat.spacing[g.a1]);
 }
@@ -74,7 +75,8 @@ Mask perSlice(const Lattice& lat, const Mask& m, Feature feature, Keep keep, boo
         std::vector<std::uint8_t> cur(plane);
         LineTransform t0(g.n0), t1(g.n1);
         for (int w = 0; w < g.n1; ++w)
-            for (int u = 0; u < g.n0; ++u) cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)] = m[g.element(k, u, w)];
+            for (int u = 0; u < g.n0; ++u)
+                cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)] = m[g.element(k, u, w)];
         for (std::size_t n = 0; n < plane; ++n) buf[n] = feature(cur[n] != 0) ? 0.0f : kInfF;
         sliceDistance(lat, g, buf, t0, t1);
         for (std::size_t n = 0; n < plane; ++n) cur[n] = keep(cur[n] != 0, buf[n]) ? 1 : 0;
@@ -84,7 +86,8 @@ Mask perSlice(const Lattice& lat, const Mask& m, Feature feature, Keep keep, boo
             for (std::size_t n = 0; n < plane; ++n) cur[n] = keep2(cur[n] != 0, buf[n]) ? 1 : 0;
         }
         for (int w = 0; w < g.n1; ++w)
-            for (int u = 0; u < g.n0; ++u) out[g.element(k, u, w)] = cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)];
+            for (int u = 0; u < g.n0; ++u)
+                out[g.element(k, u, w)] = cur[std::size_t(u) + std::size_t(g.n0) * std::size_t(w)];
     });
     return out;
 }
@@ -155,7 +158,8 @@ Mask dilate(const Lattice& lat, const Mask& m, double radiusMm, Span span)
 Mask innerShell(const Lattice& lat, const Mask& m, double radiusMm)
 {
     const float r2 = float(radiusMm * radiusMm);
-    return perSlice(lat, m, [](bool in) { return !in; }, [r2](bool in, float d2) { return in && d2 < r2; });
+    return perSlice(
+        lat, m, [](bool in) { return !in; }, [r2](bool in, float d2) { return in && d2 < r2; });
 }
 
 Mask close(const Lattice& lat, const Mask& m, double radiusMm, Span span)
@@ -221,7 +225,8 @@ std::vector<double> kernel(const Lattice& lat, double sigmaMm, int axis)
     const int radius = int(std::ceil(3.0 * sigma));
     std::vector<double> w(std::size_t(2 * radius + 1));
     double sum = 0;
-    for (int t = -radius; t <= radius; ++t) sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
+    for (int t = -radius; t <= radius; ++t)
+        sum += w[std::size_t(t + radius)] = std::exp(-0.5 * t * t / (sigma * sigma));
     for (double& x : w) x /= sum;
     return w;
 }
@@ -242,7 +247,8 @@ void smoothLine(const float* src, float* dst, std::size_t step, int n, const std
 
 } // namespace
 
-void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm, const std::function<void(int k0, int k1, float* out)>& read,
+void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm,
+    const std::function<void(int k0, int k1, float* out)>& read,
     const std::function<void(int k, const float* plane)>& sink)
 {
     const int nx = lat.dims.x(), ny = lat.dims.y(), nz = lat.dims.z();
@@ -262,7 +268,8 @@ void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm, const std::functio
             float* p = buf.data() + plane * std::size_t(k - h0);
             if (!wx.empty()) {
                 for (int j = 0; j < ny; ++j)
-                    smoothLine(p + std::size_t(j) * std::size_t(nx), tmp.data() + std::size_t(j) * std::size_t(nx), 1, nx, wx);
+                    smoothLine(
+                        p + std::size_t(j) * std::size_t(nx), tmp.data() + std::size_t(j) * std::size_t(nx), 1, nx, wx);
                 std::copy(tmp.begin(), tmp.end(), p);
             }
             if (!wy.empty()) {

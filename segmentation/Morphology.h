@@ -40,7 +40,8 @@ std::vector<float> gaussianSmooth(const Lattice& lat, const std::vector<float>& 
 /// [k0, k1) of the input (i fastest, then j, then k) into its buffer, and @p sink
 /// receives each smoothed k plane (dims.x · dims.y values), from parallel tasks.
 /// The values are those of gaussianSmooth(), bit for bit.
-void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm, const std::function<void(int k0, int k1, float* out)>& read,
+void gaussianSmoothPlanes(const Lattice& lat, double sigmaMm,
+    const std::function<void(int k0, int k1, float* out)>& read,
     const std::function<void(int k, const float* plane)>& sink);
 
 /// @brief Elementwise a AND b, a AND NOT b, a OR b.

@@ -84,8 +84,8 @@ std::uint64_t gridBytes(const volume::Volume& v)
 }
 
 /// Refuse, in one line, a need over the cap.
-void checkCap(const volume::Volume& v, const SegmentOptions& o, std::uint64_t input, std::uint64_t need,
-    const std::string& what)
+void checkCap(
+    const volume::Volume& v, const SegmentOptions& o, std::uint64_t input, std::uint64_t need, const std::string& what)
 {
     if (!o.memoryCapBytes || input + need <= o.memoryCapBytes) return;
     char buf[512];

@@ -76,9 +76,8 @@ struct SegmentReport {
 /// @brief segment()'s estimate of the memory it needs beside the volume's own
 /// grids [bytes], before it allocates: its largest set of working arrays at any
 /// step (the CT rules on the box that the body can occupy, from the HU grid's
-/// active box) and the label grid it adds, plus a fixed 32 MiB for threads and buffers. The distance fields' boxes are known
-/// only once the labels are: segment() checks them again then, and the report's
-/// figure is the larger of the two.
+/// active box) and the label grid it adds, plus a fixed 32 MiB for threads and buffers. The distance fields' boxes are
+/// known only once the labels are: segment() checks them again then, and the report's figure is the larger of the two.
 std::uint64_t workingBytes(const volume::Volume& v, const SegmentOptions& options = {});
 
 /// @brief Label @p v from its hu (preferred), t1 or intensity grid, apply the

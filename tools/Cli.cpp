@@ -35,7 +35,8 @@ const volume::TissueTable& tissueTable(const CommonOptions& opts)
 haptic::Scene loadSceneSayingDefaults(const std::string& nameOrPath)
 {
     haptic::Scene scene = haptic::loadScene(nameOrPath);
-    for (const std::string& line : scene.defaulted) std::cerr << "voxhap: note: " << scene.origin << ": " << line << '\n';
+    for (const std::string& line : scene.defaulted)
+        std::cerr << "voxhap: note: " << scene.origin << ": " << line << '\n';
     return scene;
 }
 

@@ -127,7 +127,7 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
         if (render::plotForceDepth(trace, pngTemporary.string(), f.why)) f.plot = png;
     }
     if (!f.plot.empty()) {
-        out.add(png, [](const fs::path&) { }); // already at its temporary path
+        out.add(png, [](const fs::path&) {}); // already at its temporary path
     } else {
         std::error_code ignored;
         fs::remove(pngTemporary, ignored);
@@ -142,7 +142,8 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
         std::vector<render::Image> images;
         for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
         f.views = viewsFile;
-        out.add(viewsFile, [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
+        out.add(
+            viewsFile, [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
     } else {
         out.remove(viewsFile);
     }

@@ -42,7 +42,12 @@ struct ServeOptions {
 /// What --device names, checked before anything is loaded: a typo in it is
 /// reported at once, not after the scene's volume was built.
 struct DeviceSpec {
-    enum class Kind { Hand, Sim, Igtl, Replay } kind = Kind::Hand;
+    enum class Kind {
+        Hand,
+        Sim,
+        Igtl,
+        Replay
+    } kind = Kind::Hand;
     int port = 0; ///< igtl: 0 for the default
     std::vector<haptic::ServoRecord> replay;
 };
@@ -97,7 +102,8 @@ std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, DeviceSpec spe
                   << " (TRANSFORM in: tip = translation, needle = z axis; SENSOR force out, in N)\n";
         return dev;
     }
-    case DeviceSpec::Kind::Replay: return std::make_unique<haptic::ReplayDevice>(std::move(spec.replay), m.device());
+    case DeviceSpec::Kind::Replay:
+        return std::make_unique<haptic::ReplayDevice>(std::move(spec.replay), m.device());
     }
     throw UsageError("--device: unknown kind");
 }

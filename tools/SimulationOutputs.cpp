@@ -56,7 +56,7 @@ SimulationFiles writeSimulation(
             pngTemporary.string(), f.plotWhy);
     if (f.plotted) {
         f.png = png;
-        out.add(png, [](const fs::path&) { }); // already written at its temporary path
+        out.add(png, [](const fs::path&) {}); // already written at its temporary path
     } else {
         std::error_code ignored;
         fs::remove(pngTemporary, ignored);

@@ -63,12 +63,18 @@ const std::vector<UnitFactor>& unitsOf(Dimension d)
 double maxCanonical(Dimension d)
 {
     switch (d) {
-    case Dimension::RelaxationMs: return 10000.0;  // ms
-    case Dimension::Length: return 1000.0;         // mm
-    case Dimension::Force: return 100.0;           // N
-    case Dimension::Stiffness: return 100.0;       // N/mm
-    case Dimension::DampingDensity: return 1.0;    // N·s/mm² (1e6 N·s/m²)
-    case Dimension::Hounsfield: return 32767.0;    // HU: the largest 16-bit signed CT number
+    case Dimension::RelaxationMs:
+        return 10000.0; // ms
+    case Dimension::Length:
+        return 1000.0; // mm
+    case Dimension::Force:
+        return 100.0; // N
+    case Dimension::Stiffness:
+        return 100.0; // N/mm
+    case Dimension::DampingDensity:
+        return 1.0; // N·s/mm² (1e6 N·s/m²)
+    case Dimension::Hounsfield:
+        return 32767.0; // HU: the largest 16-bit signed CT number
     }
     return 0.0;
 }
@@ -185,7 +191,8 @@ Quantity parseQuantity(const Json& obj, Dimension dim, const Context& ctx, const
     if (raw < 0.0) ctx.fail(field, "negative value " + std::to_string(raw));
     q.value = raw * unitFactor(obj, dim, ctx, field);
     if (q.value > maxCanonical(dim)) {
-        ctx.fail(field, "value " + std::to_string(raw) + " is beyond the physical range (at most " +
+        ctx.fail(field,
+            "value " + std::to_string(raw) + " is beyond the physical range (at most " +
                 std::to_string(maxCanonical(dim)) + " " + std::string(unitsOf(dim).front().unit) + ")");
     }
     q.source = sourceOf(obj, ctx, field);

@@ -81,8 +81,10 @@ void parseTerms(Fields& top, ForceTerms& t)
     if ((t.bone.on = terms.term("bone")) && terms.isObject("bone")) {
         Fields b = terms.sub("bone");
         t.bone.transient = b.boolean("transient", true);
-        t.bone.params.amplitudeNsPerM = b.within("amplitude_Ns_per_m", t.bone.params.amplitudeNsPerM, 0.0, 1e4, "N·s/m");
-        t.bone.params.durationS = b.within("duration_ms", t.bone.params.durationS * 1e3, 0.0, 1000.0, "ms", true) * 1e-3;
+        t.bone.params.amplitudeNsPerM =
+            b.within("amplitude_Ns_per_m", t.bone.params.amplitudeNsPerM, 0.0, 1e4, "N·s/m");
+        t.bone.params.durationS =
+            b.within("duration_ms", t.bone.params.durationS * 1e3, 0.0, 1000.0, "ms", true) * 1e-3;
         t.bone.params.frequencyHz = b.within("frequency_Hz", t.bone.params.frequencyHz, 0.0, 1e4, "Hz", true);
         t.bone.params.peakClampN = b.within("peak_clamp_N", t.bone.params.peakClampN, 0.0, 100.0, "N");
     }

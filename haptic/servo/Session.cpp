@@ -244,8 +244,7 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
 {
     // Events and records merged in time order: an event before the records of its tick.
     std::vector<Event> events = s.events;
-    std::stable_sort(
-        events.begin(), events.end(), [](const Event& a, const Event& b) { return a.timeS < b.timeS; });
+    std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.timeS < b.timeS; });
     TraineeMetricsAccumulator acc(layers, pathDirection);
     std::size_t next = 0;
     for (const ServoRecord& r : s.records) {
@@ -278,7 +277,8 @@ void SessionRecorder::writeEvent(const Event& e)
 
 void SessionRecorder::applyEventsUpTo(double timeS)
 {
-    while (mPendingHead < mPending.size() && mPending[mPendingHead].timeS <= timeS) writeEvent(mPending[mPendingHead++]);
+    while (mPendingHead < mPending.size() && mPending[mPendingHead].timeS <= timeS)
+        writeEvent(mPending[mPendingHead++]);
     if (mPendingHead == mPending.size()) mPending.clear(), mPendingHead = 0;
 }
 

@@ -153,7 +153,8 @@ TEST_F(AtomicFile, OutputSetRemovesAStaleOutputItDoesNotReplace)
     std::vector<std::string> steps;
     set.afterStep = [&](const std::string& step) {
         steps.push_back(step);
-        if (step.rfind("written", 0) == 0) EXPECT_TRUE(fs::exists(plot)) << "removed before the new outputs were written";
+        if (step.rfind("written", 0) == 0)
+            EXPECT_TRUE(fs::exists(plot)) << "removed before the new outputs were written";
     };
     set.commit();
     EXPECT_FALSE(fs::exists(plot));

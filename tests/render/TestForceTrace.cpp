@@ -79,10 +79,13 @@ TEST_F(Recordings, RefusedWithFileLineAndColumn)
     test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "c.csv", "line 2: 2 fields");
     test::expectRefused<IoError>([](const auto& p) { readForceTrace(p); }, mDir / "absent.csv", "cannot open");
     // A FIFO or a device never ends: refused from the path; a line without end is refused at 64 KiB.
-    test::expectRefused<IoError>([](const auto& p) { readForceTrace(p); }, std::filesystem::path("/dev/zero"), "file type");
-    write("d.csv", "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n" +
+    test::expectRefused<IoError>(
+        [](const auto& p) { readForceTrace(p); }, std::filesystem::path("/dev/zero"), "file type");
+    write("d.csv",
+        "t_s,depth_mm,speed_mm_per_s,fx_N,fy_N,fz_N,force_N,axial_model_N,plunger_N,state,layer,events\n" +
             std::string(100000, '1'));
-    test::expectRefused<ValueError>([](const auto& p) { readForceTrace(p); }, mDir / "d.csv", "line 2: longer than 65536");
+    test::expectRefused<ValueError>(
+        [](const auto& p) { readForceTrace(p); }, mDir / "d.csv", "line 2: longer than 65536");
 }
 
 } // namespace

@@ -252,7 +252,8 @@ TEST_F(Cli, ServeWritesSessionAndMetrics)
     EXPECT_EQ(m["records"].get<long>(), long(session.rows.size()));
     EXPECT_EQ(m["dropped_records"].get<long>(), 0);
     // The closing comment states the same counts (issue 20 item 7).
-    EXPECT_EQ(session.trailer, "# " + std::to_string(session.rows.size()) +
+    EXPECT_EQ(session.trailer,
+        "# " + std::to_string(session.rows.size()) +
             " records written, 0 dropped (the servo loop's record queue was full; the tick went on)");
     ASSERT_FALSE(session.rows.empty());
     const std::string& last = session.rows.back();
@@ -294,13 +295,15 @@ TEST_F(Cli, SceneDefaultsAreSaidAndRangesNamed)
     std::ofstream(mDir / "bare.json") << text;
     const Result r = run("simulate --scene bare.json --out bare");
     ASSERT_EQ(r.exitCode, 0) << r.err << "\n" << text;
-    EXPECT_NE(r.err.find("voxhap: note: bare.json: no \"device\" given: the \"touch\" preset"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("voxhap: note: bare.json: no \"device\" given: the \"touch\" preset"), std::string::npos)
+        << r.err;
     EXPECT_NE(r.err.find("voxhap: note: bare.json: no \"insertion\" given"), std::string::npos) << r.err;
 
     std::ofstream(mDir / "fast.json") << std::regex_replace(
         slurp(std::string(VOXHAP_SOURCE_DIR) + "/data/scenes/senac-average.json"), std::regex("\"rate_Hz\": 1000"),
         "\"rate_Hz\": 1e-9");
-    expectFailure(run("simulate --scene fast.json --out fast"), "fast.json: insertion.rate_Hz: must be in [1, 1e+06] Hz");
+    expectFailure(
+        run("simulate --scene fast.json --out fast"), "fast.json: insertion.rate_Hz: must be in [1, 1e+06] Hz");
 }
 
 } // namespace

@@ -339,10 +339,10 @@ std::vector<unsigned char> version2Transform(const Vec3d& tip,
         metaBody.insert(metaBody.end(), v.begin(), v.end());
     }
     std::vector<unsigned char> body;
-    putBigEndian(body, 12, 2);                                           // EXT_HEADER_SIZE
-    putBigEndian(body, metadata.empty() ? 0 : metaHeader.size(), 2);     // METADATA_HEADER_SIZE
-    putBigEndian(body, metaBody.size(), 4);                              // METADATA_SIZE
-    putBigEndian(body, 42, 4);                                           // MSG_ID
+    putBigEndian(body, 12, 2);                                       // EXT_HEADER_SIZE
+    putBigEndian(body, metadata.empty() ? 0 : metaHeader.size(), 2); // METADATA_HEADER_SIZE
+    putBigEndian(body, metaBody.size(), 4);                          // METADATA_SIZE
+    putBigEndian(body, 42, 4);                                       // MSG_ID
     body.insert(body.end(), content.begin(), content.end());
     if (!metadata.empty()) {
         body.insert(body.end(), metaHeader.begin(), metaHeader.end());

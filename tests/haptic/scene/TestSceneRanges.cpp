@@ -125,7 +125,8 @@ TEST(SceneRanges, TheValuesOnceAcceptedAreRefused)
         EXPECT_NE(e.find(what), std::string::npos) << "'" << e << "' lacks '" << what << "'";
         EXPECT_EQ(e.find('\n'), std::string::npos) << e;
     };
-    expectRefused(with(baseScene(), "insertion.rate_Hz", 1e-9), "ranges.json: insertion.rate_Hz: must be in [1, 1e+06] Hz");
+    expectRefused(
+        with(baseScene(), "insertion.rate_Hz", 1e-9), "ranges.json: insertion.rate_Hz: must be in [1, 1e+06] Hz");
     expectRefused(with(baseScene(), "insertion.speed_mm_per_s", 1e300), "insertion.speed_mm_per_s: must be in");
     expectRefused(with(baseScene(), "device.max_force_N", 1e308), "device.max_force_N: must be in");
     expectRefused(with(with(baseScene(), "device.max_force_N", 3.0), "device.max_continuous_force_N", 5.0),
@@ -172,8 +173,8 @@ TEST(TissueRanges, QuantitiesBeyondThePhysicalRangeAreRefused)
         }
         return "";
     };
-    const std::string big = refusedTable(
-        tableWith("skin", "puncture_force", {{"value", 1e308}, {"unit", "N"}, {"source", "attack"}}));
+    const std::string big =
+        refusedTable(tableWith("skin", "puncture_force", {{"value", 1e308}, {"unit", "N"}, {"source", "attack"}}));
     EXPECT_NE(big.find("tissue 'skin'"), std::string::npos) << big;
     EXPECT_NE(big.find("puncture_force"), std::string::npos) << big;
     EXPECT_NE(big.find("at most 100"), std::string::npos) << big;
