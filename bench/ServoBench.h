@@ -21,6 +21,7 @@ struct ServoBenchOptions {
     double seconds = 30.0;                                             ///< the 1 kHz run
     std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
     double ladderSeconds = 2.0;
+    int ladderRepeats = 1;     ///< full ladders per scene; the highest sustained rate reported is their median
     double igtlSeconds = 10.0; ///< the OpenIGTLink round-trip run
     /// CPU-bound processes (a busy loop each, normal priority, like `yes > /dev/null`)
     /// running beside the loop for the whole benchmark.
@@ -31,7 +32,9 @@ struct ServoBenchOptions {
 
 struct ServoRun {
     std::string scene;
-    double rateHz = 0, seconds = 0, achievedHz = 0;
+    double rateHz = 0, seconds = 0, achievedHz = 0; ///< achieved: ticks over the first-to-last-tick window
+    double startS =
+        0; ///< wall time of the run outside that window: set-up before the first tick, the stop after the last
     long ticks = 0, overruns = 0;
     double computeP50Ns = 0, computeP99Ns = 0, computeMaxNs = 0;
     double periodErrP50Ns = 0, periodErrP99Ns = 0;
@@ -47,13 +50,15 @@ struct IgtlRoundTrip {
 
 struct ServoReport {
     std::string machine;
+    std::string rtBandwidth;      ///< the kernel's limit on real-time threads (sched_rt_runtime_us)
     int load = 0;                 ///< busy processes beside the loop
     std::string realtimeNote;     ///< why real-time scheduling was refused, if it was
     std::vector<ServoRun> median; ///< per scene: the median over repeats of achieved rate, jitter p99, overruns
     std::vector<ServoRun> runs;   ///< the long run at 1 kHz, per scene
     std::vector<ServoRun> ladder; ///< per scene and rate
-    std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene
-    IgtlRoundTrip igtl;                                        ///< at 1 kHz on the first scene
+    std::vector<std::pair<std::string, double>> sustainableHz; ///< per scene: the median over its ladders
+    std::vector<std::pair<std::string, std::vector<double>>> sustainedPerLadder; ///< per scene, each ladder's
+    IgtlRoundTrip igtl;                                                          ///< at 1 kHz on the first scene
 };
 
 ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress = {});

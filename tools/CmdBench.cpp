@@ -148,6 +148,10 @@ Action registerBench(CLI::App& app)
         ->check(CLI::Range(0, 64));
     servo->add_option("--repeats", o->servo.repeats, "1 kHz runs per scene; their median is reported (default 1)")
         ->check(CLI::Range(1, 100));
+    servo
+        ->add_option("--ladder-repeats", o->servo.ladderRepeats,
+            "Full rate ladders per scene; the highest sustained rate is their median (default 1)")
+        ->check(CLI::Range(1, 20));
     servo->add_flag("--no-realtime", o->noRealtime,
         "Do not ask for real-time scheduling (SCHED_FIFO) and locked memory for the loop");
     servo->add_option("--json", o->json, "Also write the figures as JSON");

@@ -169,6 +169,8 @@ void ServoLoop::loop() noexcept
         const std::int64_t actual = now - last;
         if (!first) mStats.addPeriodError(double(std::llabs(actual - period)));
         last = now;
+        if (first) mFirstTickNs.store(now, std::memory_order_relaxed);
+        mLastTickNs.store(now, std::memory_order_relaxed);
         tick(double(now - t0) * 1e-9, double(period) * 1e-9, first ? double(period) * 1e-9 : double(actual) * 1e-9);
         first = false;
         deadline += period;

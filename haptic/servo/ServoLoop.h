@@ -148,6 +148,14 @@ public:
     long droppedEvents() const noexcept { return mEvents->dropped(); }
     const TickStats& stats() const noexcept { return mStats; }
     long ticks() const noexcept { return mTicks.load(); }
+    /// @brief Time from the first tick to the last of start()'s thread [s]: the
+    /// window the loop's rate is measured over, without the set-up before the
+    /// first tick (mlockall, the scheduler call, the thread's start).
+    double tickingSeconds() const noexcept
+    {
+        return double(mLastTickNs.load(std::memory_order_relaxed) - mFirstTickNs.load(std::memory_order_relaxed)) *
+            1e-9;
+    }
     long overruns() const noexcept { return mOverruns.load(); }
     double maxComputeNs() const noexcept { return mMaxComputeNs.load(); }
     /// @brief The last rendered force magnitude [N] and layer, for a status line.
@@ -173,6 +181,7 @@ private:
     RealtimeStatus mRealtime;
     std::atomic<int> mSchedError{-1}; ///< set by the loop thread: 0 granted, else errno
     std::atomic<long> mTicks{0}, mOverruns{0};
+    std::atomic<std::int64_t> mFirstTickNs{0}, mLastTickNs{0}; ///< on the loop clock's time line
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};
     double mGain = 1.0, mQuietS = 0.0, mSimTime = 0.0;
