@@ -29,8 +29,7 @@ namespace voxhap::volume {
 Volume loadVolume(const std::filesystem::path&, const LoadOptions&, DicomLoadReport*) { notLinked("loadVolume"); }
 LumbarPreset parseLumbarPreset(const std::string&) { notLinked("parseLumbarPreset"); }
 LumbarLayout lumbarLayout(const LumbarParams&, const TissueTable&) { notLinked("lumbarLayout"); }
-PhantomModel lumbarModel(const LumbarParams&, const TissueTable&) { notLinked("lumbarModel"); }
-PhantomModel torsoModel(const TorsoParams&, const TissueTable&) { notLinked("torsoModel"); }
+PhantomModel phantomModel(const PhantomSpec&, const TissueTable&) { notLinked("phantomModel"); }
 Volume makePhantom(const PhantomModel&, const GridSpec&, const TissueTable&) { notLinked("makePhantom"); }
 std::optional<Vec3d> phantomLandmark(const Volume&, const std::string&) { notLinked("phantomLandmark"); }
 } // namespace voxhap::volume

@@ -305,31 +305,21 @@ Built phantomModel(const VolumeSpec& v, const volume::TissueTable& table)
 {
     Built b;
     if (v.kind == "file") return b;
-    if (v.kind == "slab") {
-        volume::SlabParams p;
-        p.tiltDeg = v.tiltDeg;
-        if (!v.layers.empty()) {
-            p.layers.clear();
-            for (const auto& [t, mm] : v.layers) p.layers.push_back({t, mm});
-        }
-        b.model = volume::slabModel(p, table);
-    } else if (v.kind == "sphere") {
-        volume::SphereParams p;
-        p.slabTissue = v.slabTissue;
-        p.sphereTissue = v.sphereTissue;
-        p.radiusMm = v.radiusMm;
-        p.slabThicknessMm = v.slabThicknessMm;
-        b.model = volume::sphereModel(p, table);
-    } else if (v.kind == "lumbar") {
-        volume::LumbarParams p;
-        p.preset = volume::parseLumbarPreset(v.preset);
-        p.bmi = v.bmi;
-        b.model = volume::lumbarModel(p, table);
-    } else {
-        volume::TorsoParams p;
-        p.lesionRadiusMm = v.lesionRadiusMm;
-        b.model = volume::torsoModel(p, table);
+    volume::PhantomSpec spec;
+    spec.kind = v.kind;
+    spec.slab.tiltDeg = v.tiltDeg;
+    if (!v.layers.empty()) {
+        spec.slab.layers.clear();
+        for (const auto& [t, mm] : v.layers) spec.slab.layers.push_back({t, mm});
     }
+    spec.sphere.slabTissue = v.slabTissue;
+    spec.sphere.sphereTissue = v.sphereTissue;
+    spec.sphere.radiusMm = v.radiusMm;
+    spec.sphere.slabThicknessMm = v.slabThicknessMm;
+    spec.lumbar.preset = volume::parseLumbarPreset(v.preset);
+    spec.lumbar.bmi = v.bmi;
+    spec.torso.lesionRadiusMm = v.lesionRadiusMm;
+    b.model = volume::phantomModel(spec, table);
     return b;
 }
 

@@ -87,29 +87,18 @@ int run(const PhantomOptions& o, const CLI::App& cmd)
     else
         throw UsageError("--field: expected 1.5 or 3, got '" + o.field + "'");
 
-    volume::PhantomModel model;
-    if (o.kind == "slab") {
-        volume::SlabParams p;
-        if (!o.layers.empty()) p.layers = parseLayers(o.layers);
-        p.tiltDeg = o.tilt;
-        model = volume::slabModel(p, table);
-    } else if (o.kind == "sphere") {
-        volume::SphereParams p;
-        p.slabTissue = o.slabTissue;
-        p.sphereTissue = o.sphereTissue;
-        p.radiusMm = o.radius;
-        p.slabThicknessMm = o.thickness;
-        model = volume::sphereModel(p, table);
-    } else if (o.kind == "lumbar") {
-        volume::LumbarParams p;
-        p.preset = volume::parseLumbarPreset(o.preset);
-        if (cmd.count("--bmi") > 0) p.bmi = o.bmi;
-        model = volume::lumbarModel(p, table);
-    } else {
-        volume::TorsoParams p;
-        p.lesionRadiusMm = o.lesionRadius;
-        model = volume::torsoModel(p, table);
-    }
+    volume::PhantomSpec spec;
+    spec.kind = o.kind;
+    if (!o.layers.empty()) spec.slab.layers = parseLayers(o.layers);
+    spec.slab.tiltDeg = o.tilt;
+    spec.sphere.slabTissue = o.slabTissue;
+    spec.sphere.sphereTissue = o.sphereTissue;
+    spec.sphere.radiusMm = o.radius;
+    spec.sphere.slabThicknessMm = o.thickness;
+    spec.lumbar.preset = volume::parseLumbarPreset(o.preset);
+    if (cmd.count("--bmi") > 0) spec.lumbar.bmi = o.bmi;
+    spec.torso.lesionRadiusMm = o.lesionRadius;
+    const volume::PhantomModel model = volume::phantomModel(spec, table);
 
     const std::string out = o.out.empty() ? o.kind + ".vdb" : o.out;
     if (stderrIsTerminal() && !o.common.json)

@@ -274,17 +274,12 @@ std::shared_ptr<const volume::Volume> makeSourceVolume(const VolumeSource& s, co
     }
     volume::GridSpec grid;
     grid.spacing = Vec3d::Constant(s.spacingMm);
-    volume::PhantomModel m;
-    if (s.phantom == "lumbar") {
-        volume::LumbarParams p;
-        p.preset = volume::parseLumbarPreset(s.preset);
-        p.bmi = s.bmi;
-        m = volume::lumbarModel(p, table);
-    } else if (s.phantom == "torso") {
-        m = volume::torsoModel({}, table);
-    } else {
-        throw ValueError("scene volume: unknown phantom '" + s.phantom + "' (lumbar, torso)");
-    }
+    // Any of the four phantoms with its default parameters; lumbar takes the preset and BMI.
+    volume::PhantomSpec spec;
+    spec.kind = s.phantom;
+    spec.lumbar.preset = volume::parseLumbarPreset(s.preset);
+    spec.lumbar.bmi = s.bmi;
+    const volume::PhantomModel m = volume::phantomModel(spec, table);
     return std::make_shared<const volume::Volume>(volume::makePhantom(m, grid, table));
 }
 

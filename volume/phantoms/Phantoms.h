@@ -100,6 +100,19 @@ PhantomModel sphereModel(const SphereParams& p, const TissueTable& table);
 PhantomModel lumbarModel(const LumbarParams& p, const TissueTable& table);
 PhantomModel torsoModel(const TorsoParams& p, const TissueTable& table);
 
+/// @brief A phantom by name with its parameters, as `voxhap phantom`, scenes and
+/// regression suites describe one; only the parameters of its kind are read.
+struct PhantomSpec {
+    std::string kind; ///< "slab", "sphere", "lumbar" or "torso"
+    SlabParams slab;
+    SphereParams sphere;
+    LumbarParams lumbar;
+    TorsoParams torso;
+};
+
+/// @brief The model of @p spec's kind. @throw ValueError naming an unknown kind
+PhantomModel phantomModel(const PhantomSpec& spec, const TissueTable& table);
+
 /// @brief Rasterise a model and record its layers and landmarks in the metadata.
 Volume makePhantom(const PhantomModel& model, const GridSpec& grid, const TissueTable& table);
 

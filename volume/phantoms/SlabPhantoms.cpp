@@ -102,4 +102,13 @@ PhantomModel sphereModel(const SphereParams& p, const TissueTable& table)
     return m;
 }
 
+PhantomModel phantomModel(const PhantomSpec& spec, const TissueTable& table)
+{
+    if (spec.kind == "slab") return slabModel(spec.slab, table);
+    if (spec.kind == "sphere") return sphereModel(spec.sphere, table);
+    if (spec.kind == "lumbar") return lumbarModel(spec.lumbar, table);
+    if (spec.kind == "torso") return torsoModel(spec.torso, table);
+    throw ValueError("phantom: unknown kind '" + spec.kind + "' (slab, sphere, lumbar, torso)");
+}
+
 } // namespace voxhap::volume

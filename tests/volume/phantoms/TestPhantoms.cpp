@@ -349,5 +349,41 @@ TEST(Phantoms, RejectBadParameters)
     EXPECT_THROW(makePhantom(slabModel(SlabParams{}, table()), grid, table()), ValueError);
 }
 
+// phantomModel is the one switch from a kind's name to its model (the phantom
+// command, scenes and regression suites all call it): each kind reads its own
+// parameters, and a kind it does not know is refused naming it.
+TEST(PhantomSpecs, EachKindReadsItsOwnParametersAndAnUnknownOneIsRefused)
+{
+    PhantomSpec spec;
+    spec.sphere.radiusMm = 7.0;
+    spec.slab.tiltDeg = 20.0;
+    spec.lumbar.preset = LumbarPreset::Overweight;
+    spec.torso.lesionRadiusMm = 5.0;
+    SphereParams sphere;
+    sphere.radiusMm = 7.0;
+    SlabParams slab;
+    slab.tiltDeg = 20.0;
+    LumbarParams lumbar;
+    lumbar.preset = LumbarPreset::Overweight;
+    TorsoParams torso;
+    torso.lesionRadiusMm = 5.0;
+    const std::pair<const char*, PhantomModel> direct[] = {{"slab", slabModel(slab, table())},
+        {"sphere", sphereModel(sphere, table())}, {"lumbar", lumbarModel(lumbar, table())},
+        {"torso", torsoModel(torso, table())}};
+    for (const auto& [kind, model] : direct) {
+        spec.kind = kind;
+        const PhantomModel m = phantomModel(spec, table());
+        EXPECT_EQ(m.description, model.description) << kind; // the description lists the parameters
+        EXPECT_EQ(m.pathTarget, model.pathTarget) << kind;
+    }
+    spec.kind = "cube";
+    try {
+        (void)phantomModel(spec, table());
+        ADD_FAILURE() << "an unknown kind was accepted";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("unknown kind 'cube'"), std::string::npos) << e.what();
+    }
+}
+
 } // namespace
 } // namespace voxhap::volume
