@@ -86,7 +86,8 @@ private:
     std::vector<pid_t> mPids;
 };
 
-ServoRun runOnce(const haptic::SceneInstance& inst, double rateHz, double seconds, bool realtime, std::string* note)
+ServoRun runOnce(
+    const haptic::SceneInstance& inst, double rateHz, double seconds, const ServoBenchOptions& o, std::string* note)
 {
     auto model = inst.makeModel();
     haptic::HandParams p;
@@ -95,7 +96,9 @@ ServoRun runOnce(const haptic::SceneInstance& inst, double rateHz, double second
     haptic::HandDevice hand(model->path(), p, model->device());
     haptic::ServoOptions so;
     so.rateHz = rateHz;
-    so.realtime = realtime;
+    so.realtime = o.realtime;
+    so.catchUpPeriods = o.catchUpPeriods;
+    so.pinCpu = o.pinCpu;
     haptic::ServoLoop loop(*model, hand, so);
     const double steal0 = stealSeconds();
     const auto t0 = std::chrono::steady_clock::now();
@@ -122,6 +125,7 @@ ServoRun runOnce(const haptic::SceneInstance& inst, double rateHz, double second
     r.achievedHz = r.ticks > 1 && ticking > 0.0 ? double(r.ticks - 1) / ticking : 0.0;
     r.startS = wall - ticking;
     r.overruns = loop.overruns();
+    r.skipped = loop.skippedPeriods();
     r.computeP50Ns = loop.stats().computeQuantileNs(0.5);
     r.computeP99Ns = loop.stats().computeQuantileNs(0.99);
     r.computeMaxNs = loop.maxComputeNs();
@@ -212,6 +216,49 @@ IgtlRoundTrip igtlRoundTrip(const haptic::SceneInstance& inst, double seconds)
     return out;
 }
 
+/// A thread that spins on the monotonic clock for @p seconds, at SCHED_FIFO when
+/// asked and allowed (as the servo thread), and counts the gaps between two readings:
+/// time the machine (interrupts, the scheduler tick, the host's own scheduling of a
+/// virtual CPU) took from a thread that asked for nothing else.
+InterruptionFloor measureInterruptionFloor(double seconds, bool realtime, int pinCpu)
+{
+    InterruptionFloor f;
+    f.seconds = seconds;
+    const std::vector<double> thresholdsUs{5, 10, 19, 50, 100, 500, 1000};
+    std::vector<long> counts(thresholdsUs.size(), 0);
+    const double steal0 = stealSeconds();
+    std::thread probe([&] {
+        if (realtime) {
+            sched_param p{};
+            p.sched_priority = haptic::ServoOptions{}.realtimePriority;
+            f.realtime = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
+        }
+        if (pinCpu >= 0) {
+            cpu_set_t set;
+            CPU_ZERO(&set);
+            CPU_SET(pinCpu, &set);
+            pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+        }
+        haptic::ServoClock& clock = haptic::monotonicServoClock();
+        const std::int64_t t0 = clock.nowNs(), end = t0 + std::int64_t(seconds * 1e9);
+        std::int64_t last = t0, maxGap = 0;
+        for (std::int64_t t = t0; t < end; last = t) {
+            t = clock.nowNs();
+            const std::int64_t gap = t - last;
+            if (gap > 5000)
+                for (std::size_t i = 0; i < thresholdsUs.size(); ++i)
+                    if (double(gap) > thresholdsUs[i] * 1e3) ++counts[i];
+            maxGap = std::max(maxGap, gap);
+        }
+        f.maxGapUs = double(maxGap) * 1e-3;
+    });
+    probe.join();
+    f.stealS = stealSeconds() - steal0;
+    for (std::size_t i = 0; i < thresholdsUs.size(); ++i)
+        f.gapsPerSecond.emplace_back(thresholdsUs[i], double(counts[i]) / seconds);
+    return f;
+}
+
 } // namespace
 
 ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
@@ -220,7 +267,12 @@ ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
     report.machine = machineDescription();
     report.rtBandwidth = rtBandwidth();
     report.load = o.load;
+    report.catchUpPeriods = o.catchUpPeriods;
     const BusyLoad load(o.load); // beside every run, ladder included
+    if (o.floorSeconds > 0.0) {
+        if (progress) progress(-1.0, "interruption floor: a real-time thread that only reads the clock");
+        report.floor = measureInterruptionFloor(o.floorSeconds, o.realtime, o.pinCpu);
+    }
     const auto& table = volume::TissueTable::builtin();
     for (const std::string& name : o.scenes) {
         if (progress) progress(-1.0, "building " + name);
@@ -230,7 +282,7 @@ ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
         for (int k = 0; k < std::max(1, o.repeats); ++k) {
             if (progress && o.repeats > 1)
                 progress(-1.0, name + ": 1 kHz run " + std::to_string(k + 1) + " of " + std::to_string(o.repeats));
-            runs.push_back(runOnce(inst, 1000.0, o.seconds, o.realtime, &report.realtimeNote));
+            runs.push_back(runOnce(inst, 1000.0, o.seconds, o, &report.realtimeNote));
             report.runs.push_back(runs.back());
         }
         // The median of each figure over the runs (runs with steal are kept, and show it).
@@ -245,6 +297,7 @@ ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
         m.periodErrP99Ns = median(&ServoRun::periodErrP99Ns);
         m.periodErrP50Ns = median(&ServoRun::periodErrP50Ns);
         m.overruns = long(median(&ServoRun::overruns));
+        m.skipped = long(median(&ServoRun::skipped));
         m.ticks = long(median(&ServoRun::ticks));
         m.computeP99Ns = median(&ServoRun::computeP99Ns);
         m.stealS = median(&ServoRun::stealS);
@@ -255,7 +308,7 @@ ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
             double best = 0.0;
             for (const double rate : o.rates) {
                 if (progress) progress(-1.0, name + ": " + std::to_string(int(rate)) + " Hz");
-                const ServoRun r = runOnce(inst, rate, o.ladderSeconds, o.realtime, nullptr);
+                const ServoRun r = runOnce(inst, rate, o.ladderSeconds, o, nullptr);
                 report.ladder.push_back(r);
                 // Sustained: the rate achieved within 1 % and fewer than 0.1 % of ticks overrun.
                 if (r.achievedHz >= 0.99 * rate && double(r.overruns) <= 1e-3 * double(r.ticks)) best = rate;
@@ -273,26 +326,38 @@ ServoReport runServoBench(const ServoBenchOptions& o, const Progress& progress)
     return report;
 }
 
+namespace {
+double gapsOver(const InterruptionFloor& f, double us)
+{
+    for (const auto& [t, n] : f.gapsPerSecond)
+        if (t == us) return n;
+    return 0.0;
+}
+} // namespace
+
 void printServoReport(std::ostream& os, const ServoReport& r)
 {
     os << "machine: " << r.machine << "\n\n";
     const auto row = [&](const ServoRun& x) {
         os << std::left << std::setw(16) << x.scene << std::right << std::fixed << std::setprecision(0) << std::setw(9)
            << x.rateHz << std::setw(10) << x.achievedHz << std::setw(9) << x.ticks << std::setw(9) << x.overruns
-           << std::setprecision(2) << std::setw(10) << x.computeP50Ns * 1e-3 << std::setw(10) << x.computeP99Ns * 1e-3
-           << std::setw(10) << x.computeMaxNs * 1e-3 << std::setw(10) << x.periodErrP50Ns * 1e-3 << std::setw(10)
-           << x.periodErrP99Ns * 1e-3 << std::setprecision(3) << std::setw(9) << x.startS << '\n';
+           << std::setw(9) << x.skipped << std::setprecision(2) << std::setw(10) << x.computeP50Ns * 1e-3
+           << std::setw(10) << x.computeP99Ns * 1e-3 << std::setw(10) << x.computeMaxNs * 1e-3 << std::setw(10)
+           << x.periodErrP50Ns * 1e-3 << std::setw(10) << x.periodErrP99Ns * 1e-3 << std::setprecision(3)
+           << std::setw(9) << x.startS << '\n';
     };
     const auto header = [&] {
         os << std::left << std::setw(16) << "scene" << std::right << std::setw(9) << "rate" << std::setw(10)
-           << "achieved" << std::setw(9) << "ticks" << std::setw(9) << "overrun" << std::setw(10) << "p50 us"
-           << std::setw(10) << "p99 us" << std::setw(10) << "max us" << std::setw(10) << "jit50 us" << std::setw(10)
-           << "jit99 us" << std::setw(9) << "start s" << '\n';
+           << "achieved" << std::setw(9) << "ticks" << std::setw(9) << "overrun" << std::setw(9) << "skipped"
+           << std::setw(10) << "p50 us" << std::setw(10) << "p99 us" << std::setw(10) << "max us" << std::setw(10)
+           << "jit50 us" << std::setw(10) << "jit99 us" << std::setw(9) << "start s" << '\n';
     };
     os << "kernel real-time bandwidth: " << r.rtBandwidth << "\n";
     os << "load: " << r.load << " busy process(es) beside the loop; real-time scheduling "
        << (r.runs.empty() || !r.runs.front().realtime ? "not granted" : "granted (SCHED_FIFO)") << '\n';
     if (!r.realtimeNote.empty()) os << "  " << r.realtimeNote << '\n';
+    os << "catch-up: missed deadlines up to " << r.catchUpPeriods
+       << " period(s) behind run late; longer stalls drop their periods (skipped)\n";
     os << "1 kHz servo loop, simulated hand (tick compute; period error; host steal time per run)\n";
     header();
     for (const ServoRun& x : r.runs) {
@@ -317,6 +382,17 @@ void printServoReport(std::ostream& os, const ServoReport& r)
         }
         os << '\n';
     }
+    if (r.floor.seconds > 0.0) {
+        os << "\ninterruption floor: a " << (r.floor.realtime ? "SCHED_FIFO" : "normal-priority")
+           << " thread that only reads the clock, " << std::setprecision(0) << r.floor.seconds
+           << " s; gaps per second longer than:\n ";
+        for (const auto& [us, n] : r.floor.gapsPerSecond)
+            os << "  " << std::setprecision(0) << us << " us: " << std::setprecision(1) << n;
+        os << "\n  longest " << std::setprecision(0) << r.floor.maxGapUs << " us; host steal " << std::setprecision(2)
+           << r.floor.stealS << " s. A loop overruns at least as often as gaps exceed its period less its tick:\n"
+           << "  gaps > 19 us are " << std::setprecision(3) << gapsOver(r.floor, 19) / 500.0
+           << " % of the ticks at 50 kHz (bound 0.1 %)\n";
+    }
     os << "\nOpenIGTLink pose -> force round trip on loopback at 1 kHz, servo running: " << r.igtl.samples
        << " samples, " << r.igtl.lost << " lost; p50 " << std::setprecision(1) << r.igtl.p50Us << " us, p99 "
        << r.igtl.p99Us << " us, max " << r.igtl.maxUs << " us\n";
@@ -327,16 +403,22 @@ nlohmann::json servoReportJson(const ServoReport& r)
     const auto run = [](const ServoRun& x) {
         return nlohmann::json{{"scene", x.scene}, {"rate_hz", x.rateHz}, {"achieved_hz", x.achievedHz},
             {"seconds", x.seconds}, {"outside_ticking_s", x.startS}, {"ticks", x.ticks}, {"overruns", x.overruns},
-            {"compute_p50_ns", x.computeP50Ns}, {"compute_p99_ns", x.computeP99Ns}, {"compute_max_ns", x.computeMaxNs},
-            {"period_error_p50_ns", x.periodErrP50Ns}, {"period_error_p99_ns", x.periodErrP99Ns},
-            {"realtime", x.realtime}, {"steal_s", x.stealS}};
+            {"skipped_periods", x.skipped}, {"compute_p50_ns", x.computeP50Ns}, {"compute_p99_ns", x.computeP99Ns},
+            {"compute_max_ns", x.computeMaxNs}, {"period_error_p50_ns", x.periodErrP50Ns},
+            {"period_error_p99_ns", x.periodErrP99Ns}, {"realtime", x.realtime}, {"steal_s", x.stealS}};
     };
-    nlohmann::json j{
-        {"machine", r.machine}, {"rt_bandwidth", r.rtBandwidth}, {"load", r.load}, {"realtime_note", r.realtimeNote}};
+    nlohmann::json j{{"machine", r.machine}, {"rt_bandwidth", r.rtBandwidth}, {"load", r.load},
+        {"realtime_note", r.realtimeNote}, {"catch_up_periods", r.catchUpPeriods}};
     for (const auto& x : r.median) j["median"].push_back(run(x));
     for (const auto& x : r.runs) j["runs"].push_back(run(x));
     for (const auto& x : r.ladder) j["ladder"].push_back(run(x));
     for (const auto& [scene, hz] : r.sustainableHz) j["sustainable_hz"][scene] = hz;
+    if (r.floor.seconds > 0.0) {
+        nlohmann::json g = nlohmann::json::object();
+        for (const auto& [us, n] : r.floor.gapsPerSecond) g[std::to_string(int(us)) + "us"] = n;
+        j["interruption_floor"] = {{"seconds", r.floor.seconds}, {"realtime", r.floor.realtime},
+            {"gaps_per_second_longer_than", g}, {"max_gap_us", r.floor.maxGapUs}, {"steal_s", r.floor.stealS}};
+    }
     j["igtl_round_trip"] = {{"samples", r.igtl.samples}, {"lost", r.igtl.lost}, {"p50_us", r.igtl.p50Us},
         {"p99_us", r.igtl.p99Us}, {"max_us", r.igtl.maxUs}};
     return j;

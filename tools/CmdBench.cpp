@@ -77,6 +77,7 @@ int runServo(BenchOptions o)
         o.servo.seconds = 5.0;
         o.servo.ladderSeconds = 1.0;
         o.servo.igtlSeconds = 3.0;
+        o.servo.floorSeconds = 2.0;
     }
     const auto progress = progressLine();
     const auto report = bench::runServoBench(o.servo, progress);
@@ -152,6 +153,22 @@ Action registerBench(CLI::App& app)
         ->add_option("--ladder-repeats", o->servo.ladderRepeats,
             "Full rate ladders per scene; the highest sustained rate is their median (default 1)")
         ->check(CLI::Range(1, 20));
+    servo
+        ->add_option("--catch-up", o->servo.catchUpPeriods,
+            "Missed periods the loop runs late instead of dropping (ServoOptions::catchUpPeriods; default 5, 0: "
+            "drop every missed period)")
+        ->check(CLI::Range(0, 1000));
+    servo->add_option("--pin", o->servo.pinCpu, "Pin the loop thread to this CPU (default: not pinned)")
+        ->check(CLI::Range(0, 1023));
+    servo
+        ->add_option("--floor-seconds", o->servo.floorSeconds,
+            "Length of the interruption probe, a real-time thread that only reads the clock (default 10, 0: none)")
+        ->check(CLI::Range(0.0, 3600.0));
+    servo->add_option("--scenes", o->servo.scenes, "Scenes to run (default senac-average kyung)");
+    servo
+        ->add_option(
+            "--rates", o->servo.rates, "The rate ladder [Hz] (default 1000 2000 5000 10000 20000 50000 100000)")
+        ->check(CLI::Range(1.0, 1e6));
     servo->add_flag("--no-realtime", o->noRealtime,
         "Do not ask for real-time scheduling (SCHED_FIFO) and locked memory for the loop");
     servo->add_option("--json", o->json, "Also write the figures as JSON");

@@ -191,9 +191,9 @@ int run(const ServeOptions& o, const CLI::App& cmd)
             {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
                 {"max", loop.maxComputeNs()}}},
         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
-        {"records", session.recordCount()}, {"dropped_records", loop.droppedRecords()},
-        {"dropped_events", loop.droppedEvents()}, {"pose_faults", m.poseFaults},
-        {"interrupted", InterruptGuard::interrupted()}};
+        {"skipped_periods", loop.skippedPeriods()}, {"records", session.recordCount()},
+        {"dropped_records", loop.droppedRecords()}, {"dropped_events", loop.droppedEvents()},
+        {"pose_faults", m.poseFaults}, {"interrupted", InterruptGuard::interrupted()}};
     // The session and its metrics replace an earlier run's together (OutputSet): never a new
     // session.csv beside a stale metrics.json.
     OutputSet outputs;
@@ -214,7 +214,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     if (m.overshootMm) std::cout << "  epidural travel " << *m.overshootMm << " mm\n";
     std::cout << "  tick compute    p50 " << std::setprecision(1) << loop.stats().computeQuantileNs(0.5) * 1e-3
               << " us, p99 " << loop.stats().computeQuantileNs(0.99) * 1e-3 << " us, overruns " << loop.overruns()
-              << "\n"
+              << ", periods skipped " << loop.skippedPeriods() << "\n"
               << "\noutputs:\n  " << (fs::path(o.out) / "session.csv").string() << "\n  "
               << (fs::path(o.out) / "events.csv").string() << "\n  " << (fs::path(o.out) / "metrics.json").string()
               << '\n';

@@ -150,7 +150,7 @@ void ServoLoop::loop() noexcept
     ServoClock& clock = *mClock;
     const std::int64_t t0 = clock.nowNs();
     std::int64_t deadline = t0, last = t0;
-    bool first = true;
+    bool first = true, behind = false; // behind: catching up on missed deadlines
     const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
     if (mOpt.realtime) {                    // before the first tick; start() reports the outcome
@@ -175,9 +175,21 @@ void ServoLoop::loop() noexcept
         first = false;
         deadline += period;
         const std::int64_t after = clock.nowNs();
-        if (after > deadline) { // missed the next deadline: count it and re-anchor
-            mOverruns.fetch_add(1, std::memory_order_relaxed);
-            deadline = after + period - (after - deadline) % period;
+        if (after <= deadline) {
+            behind = false;
+            continue;
+        }
+        // Missed the next deadline: once per episode an overrun. Deadlines already
+        // passed, the next one included: run them at once when they are few
+        // (ServoOptions::catchUpPeriods), otherwise drop them and re-anchor the grid.
+        if (!behind) mOverruns.fetch_add(1, std::memory_order_relaxed);
+        const std::int64_t missed = (after - deadline) / period + 1;
+        if (missed > std::int64_t(std::max(0, mOpt.catchUpPeriods))) {
+            mSkipped.fetch_add(long(missed), std::memory_order_relaxed);
+            deadline += missed * period; // the first grid point after `after`
+            behind = false;
+        } else {
+            behind = true;
         }
     }
     mRunning.store(false);

@@ -56,6 +56,17 @@ struct ServoOptions {
     /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
     /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
     double spinBelowS = 100e-6;
+    /// Bounded catch-up after a missed deadline [chosen]. The model integrates with
+    /// the nominal dt = 1/rateHz on every tick (NeedleInput::dtS), so the tissue's
+    /// clock is the tick count times the period: periods dropped after a stall slow
+    /// that clock against the hand's. When the loop falls behind by at most this many
+    /// periods, the missed ticks run at once, one after another, until the loop is
+    /// back on its grid of t0 + n·T; the device holds the last force written, so the
+    /// hand feels only the newest of them. A longer stall drops its periods (counted
+    /// in skippedPeriods()) and re-anchors the grid: the watchdog handles that case.
+    /// 0 drops every missed period. 5 covers the 1-5 ms scheduling gaps of a loaded or
+    /// virtual machine at 1 kHz, and 100 µs at 50 kHz.
+    int catchUpPeriods = 5;
     /// The clock of the real-time loop; null: monotonicServoClock(). Set before
     /// start(); it must outlive the loop.
     ServoClock* clock = nullptr;
@@ -156,7 +167,12 @@ public:
         return double(mLastTickNs.load(std::memory_order_relaxed) - mFirstTickNs.load(std::memory_order_relaxed)) *
             1e-9;
     }
+    /// @brief Times the loop fell behind its grid (a tick ended after the next
+    /// deadline), once per episode: the ticks that catch up are not counted again.
     long overruns() const noexcept { return mOverruns.load(); }
+    /// @brief Periods dropped, not caught up, after stalls longer than
+    /// ServoOptions::catchUpPeriods.
+    long skippedPeriods() const noexcept { return mSkipped.load(); }
     double maxComputeNs() const noexcept { return mMaxComputeNs.load(); }
     /// @brief The last rendered force magnitude [N] and layer, for a status line.
     double lastForceN() const noexcept { return mLastForce.load(); }
@@ -180,7 +196,7 @@ private:
     std::atomic<bool> mReleasing{false}, mReleased{false};
     RealtimeStatus mRealtime;
     std::atomic<int> mSchedError{-1}; ///< set by the loop thread: 0 granted, else errno
-    std::atomic<long> mTicks{0}, mOverruns{0};
+    std::atomic<long> mTicks{0}, mOverruns{0}, mSkipped{0};
     std::atomic<std::int64_t> mFirstTickNs{0}, mLastTickNs{0}; ///< on the loop clock's time line
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};

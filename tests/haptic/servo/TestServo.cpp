@@ -575,6 +575,73 @@ TEST(Servo, StalledLoopCutsTheGainByTheStallAndRampsBack)
     EXPECT_EQ(loop.watchdogGain(), 1.0);
 }
 
+// Bounded catch-up (ServoOptions::catchUpPeriods = 5) on a simulated clock. The wait
+// before tick 50 lasts 2.5 ms longer: tick 50 runs at 52.5 ms and ends past the
+// deadlines of 51 and 52 ms, 2 periods behind, within the bound. Ticks 51 and 52 run at
+// once (still 52.5 ms on this clock, where a tick takes no time), tick 53 is back on the
+// grid at 53 ms. One overrun, nothing dropped, and the same 352 ticks as a loop that
+// never stalled (ticks at 0..351 ms, the script ending at 350.5 ms). The model steps
+// by the nominal 1 ms on every tick, so its clock (ticks × 1 ms) keeps up with the wall.
+TEST(Servo, ShortStallIsCaughtUpTickForTick)
+{
+    const DeviceLimits dev = stiffDevice();
+    auto model = boneHold(dev);
+    ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 0.3505), dev);
+    SimulatedClock clock;
+    clock.stallTick = {50};
+    clock.stallNs = {2 * kTickNs + kTickNs / 2};
+    ServoOptions opt;
+    opt.clock = &clock;
+    ServoLoop loop(*model, script, opt);
+    runToEnd(loop);
+    EXPECT_EQ(loop.ticks(), 352);
+    EXPECT_EQ(loop.overruns(), 1);
+    EXPECT_EQ(loop.skippedPeriods(), 0);
+    const std::vector<ServoRecord> rec = drain(loop);
+    ASSERT_EQ(long(rec.size()), loop.ticks());
+    for (long k = 0; k < long(rec.size()); ++k) {
+        const double expectMs = k >= 50 && k <= 52 ? 52.5 : double(k);
+        EXPECT_NEAR(rec[std::size_t(k)].timeS, expectMs * kTickS, 1e-12) << k;
+    }
+}
+
+// A stall past the bound drops its periods and re-anchors the grid. The wait before tick
+// 50 lasts 7.5 ms longer: tick 50 runs at 57.5 ms and ends 7 deadlines behind (51..57
+// ms), more than the 5 the loop catches up: the 7 periods are dropped (counted) and tick
+// n ≥ 51 runs at n + 7 ms; the first tick past 350.5 ms is tick 344 at 351 ms: 345
+// ticks. With catchUpPeriods = 0 the 2.5 ms stall of the test above drops its 2 periods
+// instead: tick n ≥ 51 at n + 2 ms, the last one tick 349 at 351 ms, 350 ticks.
+TEST(Servo, StallPastTheCatchUpBoundDropsItsPeriods)
+{
+    struct Case {
+        std::int64_t stallNs;
+        int catchUp;
+        long shiftMs, ticks, skipped;
+    };
+    for (const Case c :
+        {Case{7 * kTickNs + kTickNs / 2, 5, 7, 345, 7}, Case{2 * kTickNs + kTickNs / 2, 0, 2, 350, 2}}) {
+        const DeviceLimits dev = stiffDevice();
+        auto model = boneHold(dev);
+        ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 0.3505), dev);
+        SimulatedClock clock;
+        clock.stallTick = {50};
+        clock.stallNs = {c.stallNs};
+        ServoOptions opt;
+        opt.clock = &clock;
+        opt.catchUpPeriods = c.catchUp;
+        ServoLoop loop(*model, script, opt);
+        runToEnd(loop);
+        EXPECT_EQ(loop.ticks(), c.ticks) << c.catchUp;
+        EXPECT_EQ(loop.overruns(), 1) << c.catchUp;
+        EXPECT_EQ(loop.skippedPeriods(), c.skipped) << c.catchUp;
+        const std::vector<ServoRecord> rec = drain(loop);
+        ASSERT_EQ(long(rec.size()), loop.ticks());
+        EXPECT_NEAR(rec[50].timeS, (50.0 + double(c.stallNs) * 1e-6) * kTickS, 1e-12);
+        for (long k = 51; k < long(rec.size()); ++k)
+            EXPECT_NEAR(rec[std::size_t(k)].timeS, double(k + c.shiftMs) * kTickS, 1e-12) << c.catchUp << " " << k;
+    }
+}
+
 // On its own thread with the monotonic clock: starts, ticks, stops cleanly. Driven by
 // counts, not by wall-clock time (rates and jitter are measured in bench/): wait until
 // ten ticks have run, stop, and every tick is counted once by the statistics and
