@@ -99,6 +99,7 @@ ServoRun runOnce(
     so.realtime = o.realtime;
     so.catchUpPeriods = o.catchUpPeriods;
     so.pinCpu = o.pinCpu;
+    so.alignToInterruptions = o.align;
     haptic::ServoLoop loop(*model, hand, so);
     const double steal0 = stealSeconds();
     const auto t0 = std::chrono::steady_clock::now();
@@ -126,6 +127,7 @@ ServoRun runOnce(
     r.startS = wall - ticking;
     r.overruns = loop.overruns();
     r.skipped = loop.skippedPeriods();
+    r.phaseUs = loop.interruptionPhaseNs() < 0 ? -1.0 : double(loop.interruptionPhaseNs()) * 1e-3;
     r.computeP50Ns = loop.stats().computeQuantileNs(0.5);
     r.computeP99Ns = loop.stats().computeQuantileNs(0.99);
     r.computeMaxNs = loop.maxComputeNs();
@@ -344,20 +346,25 @@ void printServoReport(std::ostream& os, const ServoReport& r)
            << std::setw(9) << x.skipped << std::setprecision(2) << std::setw(10) << x.computeP50Ns * 1e-3
            << std::setw(10) << x.computeP99Ns * 1e-3 << std::setw(10) << x.computeMaxNs * 1e-3 << std::setw(10)
            << x.periodErrP50Ns * 1e-3 << std::setw(10) << x.periodErrP99Ns * 1e-3 << std::setprecision(3)
-           << std::setw(9) << x.startS << '\n';
+           << std::setw(9) << x.startS;
+        if (x.phaseUs >= 0.0) os << std::setprecision(2) << std::setw(9) << x.phaseUs;
+        os << '\n';
     };
     const auto header = [&] {
         os << std::left << std::setw(16) << "scene" << std::right << std::setw(9) << "rate" << std::setw(10)
            << "achieved" << std::setw(9) << "ticks" << std::setw(9) << "overrun" << std::setw(9) << "skipped"
            << std::setw(10) << "p50 us" << std::setw(10) << "p99 us" << std::setw(10) << "max us" << std::setw(10)
-           << "jit50 us" << std::setw(10) << "jit99 us" << std::setw(9) << "start s" << '\n';
+           << "jit50 us" << std::setw(10) << "jit99 us" << std::setw(9) << "start s" << std::setw(9) << "phase us"
+           << '\n';
     };
     os << "kernel real-time bandwidth: " << r.rtBandwidth << "\n";
     os << "load: " << r.load << " busy process(es) beside the loop; real-time scheduling "
        << (r.runs.empty() || !r.runs.front().realtime ? "not granted" : "granted (SCHED_FIFO)") << '\n';
     if (!r.realtimeNote.empty()) os << "  " << r.realtimeNote << '\n';
     os << "catch-up: missed deadlines up to " << r.catchUpPeriods
-       << " period(s) behind run late; longer stalls drop their periods (skipped)\n";
+       << " period(s) behind run late; longer stalls drop their periods (skipped)\n"
+       << "phase us: spinning loops start their grid so that each tick ends before the phase of the period at which\n"
+       << "  the machine was seen to interrupt them (InterruptionPhase.h); blank: not aligned\n";
     os << "1 kHz servo loop, simulated hand (tick compute; period error; host steal time per run)\n";
     header();
     for (const ServoRun& x : r.runs) {
@@ -403,9 +410,10 @@ nlohmann::json servoReportJson(const ServoReport& r)
     const auto run = [](const ServoRun& x) {
         return nlohmann::json{{"scene", x.scene}, {"rate_hz", x.rateHz}, {"achieved_hz", x.achievedHz},
             {"seconds", x.seconds}, {"outside_ticking_s", x.startS}, {"ticks", x.ticks}, {"overruns", x.overruns},
-            {"skipped_periods", x.skipped}, {"compute_p50_ns", x.computeP50Ns}, {"compute_p99_ns", x.computeP99Ns},
-            {"compute_max_ns", x.computeMaxNs}, {"period_error_p50_ns", x.periodErrP50Ns},
-            {"period_error_p99_ns", x.periodErrP99Ns}, {"realtime", x.realtime}, {"steal_s", x.stealS}};
+            {"skipped_periods", x.skipped}, {"interruption_phase_us", x.phaseUs}, {"compute_p50_ns", x.computeP50Ns},
+            {"compute_p99_ns", x.computeP99Ns}, {"compute_max_ns", x.computeMaxNs},
+            {"period_error_p50_ns", x.periodErrP50Ns}, {"period_error_p99_ns", x.periodErrP99Ns},
+            {"realtime", x.realtime}, {"steal_s", x.stealS}};
     };
     nlohmann::json j{{"machine", r.machine}, {"rt_bandwidth", r.rtBandwidth}, {"load", r.load},
         {"realtime_note", r.realtimeNote}, {"catch_up_periods", r.catchUpPeriods}};

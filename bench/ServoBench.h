@@ -30,6 +30,7 @@ struct ServoBenchOptions {
     bool realtime = true; ///< ask for SCHED_FIFO and locked memory (ServoOptions::realtime)
     int repeats = 1;      ///< 1 kHz runs per scene; the report gives each and their median
     int catchUpPeriods = haptic::ServoOptions{}.catchUpPeriods; ///< ServoOptions::catchUpPeriods
+    bool align = true;                                          ///< ServoOptions::alignToInterruptions
     int pinCpu = -1;                                            ///< ServoOptions::pinCpu
     double floorSeconds = 10.0;                                 ///< the interruption probe before the scenes (0: none)
 };
@@ -40,7 +41,8 @@ struct ServoRun {
     double startS =
         0; ///< wall time of the run outside that window: set-up before the first tick, the stop after the last
     long ticks = 0, overruns = 0;
-    long skipped = 0; ///< periods dropped after stalls longer than the catch-up bound
+    long skipped = 0;    ///< periods dropped after stalls longer than the catch-up bound
+    double phaseUs = -1; ///< the interruption phase the grid was aligned to [us into the period]; -1: not aligned
     double computeP50Ns = 0, computeP99Ns = 0, computeMaxNs = 0;
     double periodErrP50Ns = 0, periodErrP99Ns = 0;
     bool realtime = false; ///< SCHED_FIFO was granted

@@ -158,6 +158,9 @@ Action registerBench(CLI::App& app)
             "Missed periods the loop runs late instead of dropping (ServoOptions::catchUpPeriods; default 5, 0: "
             "drop every missed period)")
         ->check(CLI::Range(0, 1000));
+    servo->add_flag(
+        "--no-align", [o](std::int64_t) { o->servo.align = false; },
+        "Do not align spinning loops' grids to the machine's interruption phase (ServoOptions::alignToInterruptions)");
     servo->add_option("--pin", o->servo.pinCpu, "Pin the loop thread to this CPU (default: not pinned)")
         ->check(CLI::Range(0, 1023));
     servo

@@ -2,6 +2,8 @@
 /// @file ServoLoop.cpp
 #include "haptic/servo/ServoLoop.h"
 
+#include "haptic/servo/InterruptionPhase.h"
+
 #include <algorithm>
 #include <cmath>
 #include <ctime>
@@ -148,8 +150,7 @@ void ServoLoop::loop() noexcept
 {
     const std::int64_t period = std::int64_t(std::llround(1e9 / mOpt.rateHz));
     ServoClock& clock = *mClock;
-    const std::int64_t t0 = clock.nowNs();
-    std::int64_t deadline = t0, last = t0;
+    std::int64_t t0 = clock.nowNs();
     bool first = true, behind = false; // behind: catching up on missed deadlines
     const bool spin = double(period) * 1e-9 <= mOpt.spinBelowS;
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); // wake at the deadline, not up to 50 µs after it
@@ -161,6 +162,18 @@ void ServoLoop::loop() noexcept
     } else {
         mSchedError.store(0);
     }
+    mInterruptionPhase.store(-1);
+    if (spin && mOpt.alignToInterruptions && mClock == &monotonicServoClock()) {
+        // Before the first tick, at the loop's own priority and CPU (InterruptionPhase.h).
+        const auto phase = measureInterruptionPhase([&clock] { return clock.nowNs(); }, period);
+        if (phase) {
+            mInterruptionPhase.store(*phase);
+            t0 = alignedGridStart(clock.nowNs(), period, *phase, std::llround(mOpt.interruptionLeadS * 1e9));
+        } else {
+            t0 = clock.nowNs();
+        }
+    }
+    std::int64_t deadline = t0, last = t0;
     while (
         !mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed)) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.

@@ -67,6 +67,14 @@ struct ServoOptions {
     /// 0 drops every missed period. 5 covers the 1-5 ms scheduling gaps of a loaded or
     /// virtual machine at 1 kHz, and 100 µs at 50 kHz.
     int catchUpPeriods = 5;
+    /// Spinning loops only (periods up to spinBelowS), on the monotonic clock: before
+    /// the first tick, spin 60 ms and find the phase of the period at which the
+    /// machine interrupts the thread (InterruptionPhase.h: the kernel's scheduler tick,
+    /// 20-30 µs a time on a virtual machine), then start the grid so that each tick
+    /// ends interruptionLeadS before it. A gap that lands while the loop waits costs
+    /// nothing; one that lands on a tick makes a 50 kHz loop miss its deadline.
+    bool alignToInterruptions = true;
+    double interruptionLeadS = 3e-6; ///< [s] above the tick's p99 compute (< 1 µs) [chosen]
     /// The clock of the real-time loop; null: monotonicServoClock(). Set before
     /// start(); it must outlive the loop.
     ServoClock* clock = nullptr;
@@ -170,6 +178,9 @@ public:
     /// @brief Times the loop fell behind its grid (a tick ended after the next
     /// deadline), once per episode: the ticks that catch up are not counted again.
     long overruns() const noexcept { return mOverruns.load(); }
+    /// @brief The interruption phase the grid was aligned to [ns into the period], or
+    /// −1 when the loop did not align (sleeping loop, option off, no dominant phase).
+    std::int64_t interruptionPhaseNs() const noexcept { return mInterruptionPhase.load(); }
     /// @brief Periods dropped, not caught up, after stalls longer than
     /// ServoOptions::catchUpPeriods.
     long skippedPeriods() const noexcept { return mSkipped.load(); }
@@ -197,7 +208,8 @@ private:
     RealtimeStatus mRealtime;
     std::atomic<int> mSchedError{-1}; ///< set by the loop thread: 0 granted, else errno
     std::atomic<long> mTicks{0}, mOverruns{0}, mSkipped{0};
-    std::atomic<std::int64_t> mFirstTickNs{0}, mLastTickNs{0}; ///< on the loop clock's time line
+    std::atomic<std::int64_t> mFirstTickNs{0}, mLastTickNs{0},
+        mInterruptionPhase{-1}; ///< on the loop clock's time line
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};
     double mGain = 1.0, mQuietS = 0.0, mSimTime = 0.0;
