@@ -99,6 +99,7 @@ Action registerPlot(CLI::App& app);
 Action registerView(CLI::App& app);
 Action registerPlan(CLI::App& app);
 Action registerRegress(CLI::App& app);
+Action registerBatch(CLI::App& app);
 
 /// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
 struct PlanFiles {

@@ -33,6 +33,7 @@ int main(int argc, char** argv)
         {"view", registerView(app)},
         {"bench", registerBench(app)},
         {"regress", registerRegress(app)},
+        {"batch", registerBatch(app)},
     };
 
     if (argc > 1 && argv[1][0] != '-' && !actions.count(argv[1])) {
