@@ -42,6 +42,8 @@ packages=(
   gnuplot-nox
   # real DICOM test files of other encodings and object classes (pydicom's test data)
   python3-pydicom
+  # a one-node SLURM for the test that runs the cohort example as an array job
+  slurmctld slurmd slurm-client
 )
 
 missing=()
