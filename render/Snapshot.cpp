@@ -92,7 +92,7 @@ Image Snapshot::render(ViewKind v)
         m3d = std::make_unique<View3d>();
         m3d->view = std::make_unique<VolumeView3d>(*mVolume, f, style, mTable, o);
     }
-    return m3d->view->render();
+    return m3d->view->render(mRequest.quality3d);
 }
 
 Image contactSheet(const std::vector<Image>& views)

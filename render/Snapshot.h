@@ -41,6 +41,10 @@ struct RenderRequest {
     int maxPixels = 768;          ///< largest side of a view [px] (the pixel size grows to fit)
     bool labels = true;           ///< tissue colours on the slices (when the volume has labels)
     bool criticalSurfaces = true; ///< critical structures as surfaces in 3D (when it has labels)
+    /// The 3D view's quality: Full for a still picture; Moving (the viewer's
+    /// reduced path while the camera moves) where a 3D overview must come at the
+    /// cost of a slice, as in `voxhap plan`'s views.
+    RenderQuality quality3d = RenderQuality::Full;
 };
 
 class Snapshot {

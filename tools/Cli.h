@@ -105,6 +105,7 @@ Action registerBatch(CLI::App& app);
 struct PlanFiles {
     std::string report, markups, views, plot; ///< views and plot empty when not written
     std::string why;                          ///< why there is no plot
+    std::string why3d;                        ///< why views.png has no 3D view (no X display)
 };
 /// @brief report.json, paths.mrk.json, views.png (slices with the paths, when @p views)
 /// and force-depth.png (the first path's predicted profile) in @p outDir.

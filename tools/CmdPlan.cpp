@@ -13,6 +13,7 @@
 #include "planning/Markups.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
+#include "render/Display.h"
 #include "render/ForcePlot.h"
 #include "render/ImageFile.h"
 #include "render/Snapshot.h"
@@ -26,6 +27,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace voxhap::tools {
@@ -133,9 +135,20 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
         fs::remove(pngTemporary, ignored);
         out.remove(png);
     }
-    if (views && !paths.empty()) { // slices through the first target, every path drawn (no display needed)
+    std::optional<render::DisplayGuard> display; // the 3D view needs X (Xvfb when there is none)
+    if (views && !paths.empty()) {               // slices through the first target and a 3D view, every path drawn
         render::RenderRequest req;
         req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
+        display.emplace();
+        if (display->available()) {
+            // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
+            // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
+            // more than the whole plan's budget (README "Planning").
+            req.views.push_back(render::ViewKind::ThreeD);
+            req.quality3d = render::RenderQuality::Moving;
+        } else {
+            f.why3d = display->why();
+        }
         req.point = paths.front().target;
         for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
         render::Snapshot snap(planner.volume(), req, planner.table());
@@ -161,8 +174,11 @@ void printPlanFiles(std::ostream& os, const PlanFiles& f)
 {
     os << "  " << f.report << "  (report: segments, clearances, force profile, warnings, risk)\n";
     os << "  " << f.markups << "  (3D Slicer markups: one Line per path, LPS mm)\n";
-    if (!f.views.empty())
-        os << "  " << f.views << "  (axial, sagittal, coronal slices through the target, paths drawn)\n";
+    if (!f.views.empty()) {
+        os << "  " << f.views << "  (axial, sagittal, coronal slices through the target"
+           << (f.why3d.empty() ? " and a 3D view" : "") << ", paths drawn)\n";
+        if (!f.why3d.empty()) os << "     no 3D view: " << f.why3d << "\n";
+    }
     if (!f.plot.empty()) os << "  " << f.plot << "  (predicted force against depth, path 1)\n";
 }
 
@@ -234,8 +250,9 @@ int run(const PlanCliOptions& o)
     const PlanFiles files = writePlanOutputs(planner, paths, report, o.out, !o.noViews);
     if (o.common.json) {
         nlohmann::json j = report;
-        j["outputs"] = {
-            {"report", files.report}, {"markups", files.markups}, {"views", files.views}, {"plot", files.plot}};
+        j["outputs"] = {{"report", files.report}, {"markups", files.markups}, {"views", files.views},
+            {"plot", files.plot}, {"views_3d", !files.views.empty() && files.why3d.empty()},
+            {"why_no_3d", files.why3d}};
         std::cout << j.dump(2) << '\n';
     } else {
         std::cout << "plan to (" << fixed(target.x()) << ", " << fixed(target.y()) << ", " << fixed(target.z())

@@ -4,6 +4,7 @@
 /// markups read back as input, one-line errors and no partial outputs.
 
 #include "common/CliRunner.h"
+#include "render/ImageFile.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -47,8 +48,22 @@ TEST_F(CliPlan, SearchWritesReportAndMarkupsThatReadBackAsInput)
     // Planned again into the same folder with views, then with a path that finds
     // nothing (issue 20 item 9): each run's outputs replace the last run's together;
     // a plot or views the run does not make are removed, not left beside its report.
-    ASSERT_EQ(run("plan torso.vdb --target 5,-78,0 --top 1 --step 5 --max-angle 60 --out out").exitCode, 0);
-    EXPECT_TRUE(fs::exists(mDir / "out/views.png"));
+    const Result withViews = run("plan torso.vdb --target 5,-78,0 --top 1 --step 5 --max-angle 60 --out out --json");
+    ASSERT_EQ(withViews.exitCode, 0) << withViews.err;
+    ASSERT_TRUE(fs::exists(mDir / "out/views.png"));
+    // The sheet is 2 x 2: axial, sagittal / coronal, and the 3D view in the fourth cell
+    // (Xvfb is one of the packages tools/setup.sh installs). Without the 3D view that cell
+    // stays the sheet's grey gap colour (60, 60, 60) everywhere.
+    EXPECT_TRUE(nlohmann::json::parse(withViews.out)["outputs"]["views_3d"].get<bool>()) << withViews.out;
+    const voxhap::render::Image sheet = voxhap::render::readImage(mDir / "out/views.png");
+    int notGap = 0, total = 0;
+    for (int y = sheet.height() * 5 / 8; y < sheet.height() * 7 / 8; ++y) {
+        for (int x = sheet.width() * 5 / 8; x < sheet.width() * 7 / 8; ++x, ++total) {
+            const auto& p = sheet.at(x, y);
+            notGap += !(p.r == 60 && p.g == 60 && p.b == 60);
+        }
+    }
+    EXPECT_GT(notGap, total / 2) << "the fourth quadrant of views.png is empty";
     const Result none = run("plan torso.vdb --target 5,-78,0 --max-angle 1 --min-clearance 500 --out out --no-views");
     // No path satisfies a 500 mm clearance: exit 1, with the report of the rejections written.
     if (none.exitCode == 1 && readJson("out/report.json")["paths"].empty()) {
