@@ -28,6 +28,14 @@ struct BenchOptions {
     bool fidelityGiven = false;
     bool noRealtime = false;
     std::string json, png;
+    std::vector<CLI::Option*> jsonOptions; ///< each subcommand's --json
+    /// `--json` given without a file: JSON on stdout instead of the table.
+    bool jsonStdout() const
+    {
+        for (const CLI::Option* opt : jsonOptions)
+            if (opt->count() > 0 && json.empty()) return true;
+        return false;
+    }
 };
 
 /// A progress line on a terminal, overwritten in place; nothing otherwise.
@@ -39,11 +47,19 @@ Progress progressLine()
     };
 }
 
-void writeJson(const std::string& file, const nlohmann::json& j)
+/// The figures out: `--json` alone prints them as JSON on stdout instead of the table,
+/// as every command's --json does; `--json FILE` keeps the table and also writes the
+/// JSON to FILE (benchmarks.md: results compared across commits).
+void emit(const BenchOptions& o, const nlohmann::json& j, const std::function<void(std::ostream&)>& table)
 {
-    if (file.empty()) return;
-    writeStreamAtomically(file, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
-    std::cout << "json: " << file << '\n';
+    if (o.jsonStdout()) {
+        std::cout << j.dump(2) << '\n';
+        return;
+    }
+    table(std::cout);
+    if (o.json.empty()) return;
+    writeStreamAtomically(o.json, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    std::cout << "json: " << o.json << '\n';
 }
 
 int runSampler(BenchOptions o)
@@ -60,12 +76,11 @@ int runSampler(BenchOptions o)
     const auto progress = progressLine();
     const auto report = bench::runSamplerBench(o.sampler, progress);
     progress(-1.0, "");
-    bench::printSamplerReport(std::cout, report);
-    writeJson(o.json, bench::samplerReportJson(report));
+    emit(o, bench::samplerReportJson(report), [&](std::ostream& os) { bench::printSamplerReport(os, report); });
     if (!o.png.empty()) {
         std::string why;
         if (!bench::plotSamplerReport(report, o.png, why)) throw std::runtime_error(o.png + ": " + why);
-        std::cout << "plot: " << o.png << '\n';
+        (o.jsonStdout() ? std::cerr : std::cout) << "plot: " << o.png << '\n';
     }
     return 0;
 }
@@ -82,8 +97,7 @@ int runServo(BenchOptions o)
     const auto progress = progressLine();
     const auto report = bench::runServoBench(o.servo, progress);
     progress(-1.0, "");
-    bench::printServoReport(std::cout, report);
-    writeJson(o.json, bench::servoReportJson(report));
+    emit(o, bench::servoReportJson(report), [&](std::ostream& os) { bench::printServoReport(os, report); });
     return 0;
 }
 
@@ -93,9 +107,18 @@ int runRender(BenchOptions o)
     const auto progress = progressLine();
     const auto report = bench::runRenderBench(o.render, progress);
     progress(-1.0, "");
-    bench::printRenderReport(std::cout, report);
-    writeJson(o.json, bench::renderReportJson(report));
+    emit(o, bench::renderReportJson(report), [&](std::ostream& os) { bench::printRenderReport(os, report); });
     return 0;
+}
+
+/// `--json` (JSON on stdout instead of the table) or `--json FILE` (the table, and the
+/// JSON also written to FILE).
+void addJsonOption(CLI::App& cmd, BenchOptions& o)
+{
+    o.jsonOptions.push_back(cmd.add_option("--json", o.json,
+                                   "Print the figures as JSON on stdout instead of the table; with FILE, print the "
+                                   "table and also write the JSON to FILE")
+                                ->expected(0, 1));
 }
 
 } // namespace
@@ -133,7 +156,7 @@ Action registerBench(CLI::App& app)
         ->check(CLI::ExistingPath);
     sampler->add_option("--mr", o->sampler.mrDir, "Add the real-MR workload: a T1-weighted DICOM folder or volume file")
         ->check(CLI::ExistingPath);
-    sampler->add_option("--json", o->json, "Also write the table as JSON");
+    addJsonOption(*sampler, *o);
     sampler->add_option("--png", o->png, "Also draw time against error, log-log (needs gnuplot)");
     CLI::App* servo = cmd->add_subcommand(
         "servo", "The servo loop in real time with the simulated hand: tick compute, jitter, overruns, sustained rate");
@@ -174,7 +197,7 @@ Action registerBench(CLI::App& app)
         ->check(CLI::Range(1.0, 1e6));
     servo->add_flag("--no-realtime", o->noRealtime,
         "Do not ask for real-time scheduling (SCHED_FIFO) and locked memory for the loop");
-    servo->add_option("--json", o->json, "Also write the figures as JSON");
+    addJsonOption(*servo, *o);
     CLI::App* render = cmd->add_subcommand("render",
         "Four-view frame of the viewer, first and steady, and the interactive 3D orbit (moving fps, full quality after "
         "stopping), on a CT (--ct) and a 256^3 torso phantom");
@@ -192,7 +215,7 @@ Action registerBench(CLI::App& app)
         "--orbit-only", [o](std::int64_t) { o->render.fourView = false; },
         "Only the interactive 3D orbit, not the four-view frames");
     render->add_flag("--quick", o->quick, "One first frame, two steady frames, a 12-frame orbit");
-    render->add_option("--json", o->json, "Also write the figures as JSON");
+    addJsonOption(*render, *o);
     return [o, servo, render] {
         return servo->parsed() ? runServo(*o) : render->parsed() ? runRender(*o) : runSampler(*o);
     };

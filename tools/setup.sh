@@ -30,8 +30,8 @@ packages=(
   zlib1g-dev libnifti2-dev
   # device link
   libopenigtlink-dev openigtlink-examples
-  # CLI, config, logs
-  libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # CLI, config
+  libcli11-dev nlohmann-json3-dev
   # tests, benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # libFuzzer targets of the parsers (clang's runtime: fuzzer, address, undefined)
