@@ -10,14 +10,24 @@ function(voxhap_warnings target)
     -Wno-missing-field-initializers)
 endfunction()
 
+# Where the installed package keeps the public headers: include/voxhap/<folder>/File.h,
+# so that "<folder>/File.h" reads the same inside the tree and in an embedding
+# project, without putting core/, volume/, ... directly under the prefix's include/.
+set(VOXHAP_INSTALL_INCLUDEDIR include/voxhap)
+
 # voxhap_add_library(<folder> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...] [NO_PCH])
 # Defines voxhap_<folder> with alias voxhap::<folder>; headers are included
-# as "<folder>/File.h" from the project root.
+# as "<folder>/File.h" from the project root (or from the installed include/voxhap).
 function(voxhap_add_library name)
   cmake_parse_arguments(ARG "NO_PCH" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(voxhap_${name} STATIC ${ARG_SOURCES})
   add_library(voxhap::${name} ALIAS voxhap_${name})
-  target_include_directories(voxhap_${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  # voxhap::<folder> in the installed package too (cmake/VoxhapInstall.cmake).
+  set_target_properties(voxhap_${name} PROPERTIES EXPORT_NAME ${name})
+  target_include_directories(voxhap_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}> $<INSTALL_INTERFACE:${VOXHAP_INSTALL_INCLUDEDIR}>)
+  # The public headers are C++20: an embedding project compiles them as such.
+  target_compile_features(voxhap_${name} PUBLIC cxx_std_20)
   target_link_libraries(voxhap_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   voxhap_warnings(voxhap_${name})
   if(NOT ARG_NO_PCH)

@@ -74,9 +74,10 @@ ServoClock& monotonicServoClock() noexcept
 
 ServoLoop::ServoLoop(NeedleForceModel& model, Device& device, const ServoOptions& options)
     : mModel(model), mDevice(device), mOpt(options), mClock(options.clock ? options.clock : &monotonicServoClock()),
+      mStep(model, ServoStepOptions{.rateHz = options.rateHz, .watchdogS = options.watchdogS, .rampS = options.rampS}),
       mEvents(std::make_unique<SpscQueue<Event, 1024>>()), mRecords(std::make_unique<SpscQueue<ServoRecord, 1 << 16>>())
 {
-    if (!(mOpt.rateHz > 0.0) || !std::isfinite(mOpt.rateHz)) mOpt.rateHz = 1000.0;
+    mOpt.rateHz = mStep.options().rateHz; // a rate that is not positive and finite is 1 kHz
 }
 
 ServoLoop::~ServoLoop() { stop(); }
@@ -85,52 +86,29 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
 {
     const std::int64_t start = mClock->nowNs();
     const DeviceReading r = mDevice.read(t);
-    Vec3d target = mLastForceVec;
-    if (r.valid) {
-        mQuietS = r.poseAgeS; // an aging network pose is quiet time already spent
-        NeedleInput in;
-        in.timeS = t;
-        in.dtS = dt;
-        in.tip = r.tip;
-        in.direction = r.direction;
-        in.velocity = r.velocity;
-        mModel.step(in, mOut);
-        target = mOut.force;
-        for (const Event& e : mOut.events) mEvents->push(e), mDevice.event(e);
-    } else {
-        mQuietS += dt;
-    }
-    // Watchdog (ServoOptions): a quiet device ramps the force to zero, a stalled loop
-    // cuts it in proportion to the stall; it comes back the same way.
-    constexpr double kTimeTolS = 1e-9; // sums of tick periods carry round-off
-    const bool stalled = mQuietS > mOpt.watchdogS + kTimeTolS || lastPeriod > mOpt.watchdogS + kTimeTolS;
-    const double step = mOpt.rampS > 0.0 ? std::max(dt, lastPeriod) / mOpt.rampS : 1.0;
-    const bool releasing = mReleasing.load(std::memory_order_relaxed);
-    mGain = r.lost ? 0.0 : stalled || releasing ? std::max(0.0, mGain - step) : std::min(1.0, mGain + step);
-    mLastForceVec = target;
-    const Vec3d f = mGain * target;
-    // A release ends on the tick that sends zero.
-    if (releasing && mGain == 0.0) mReleased.store(true, std::memory_order_relaxed);
-    mDevice.write(f, mOut.plungerN, t);
+    const Vec3d f = mStep.step(r, t, dt, lastPeriod);
+    const NeedleOutput& out = mStep.output();
+    for (const Event& e : out.events) mEvents->push(e), mDevice.event(e);
+    mDevice.write(f, out.plungerN, t);
 
     ServoRecord rec;
     rec.timeS = t;
     rec.tip = r.tip;
     rec.direction = r.direction;
     rec.force = f;
-    rec.plungerN = mOut.plungerN;
+    rec.plungerN = out.plungerN;
     rec.plungerFraction = r.plungerFraction;
-    rec.depthMm = mOut.tip.depthMm;
-    rec.axialN = mOut.axialN;
-    rec.layer = std::int16_t(mOut.tip.currentLayer());
+    rec.depthMm = out.tip.depthMm;
+    rec.axialN = out.axialN;
+    rec.layer = std::int16_t(out.tip.currentLayer());
     rec.state = rec.layer >= 0 ? mModel.state().state(rec.layer) : LayerState::Intact;
-    rec.fault = mOut.fault;
-    rec.critical = mOut.critical;
+    rec.fault = out.fault;
+    rec.critical = out.critical;
     mRecords->push(rec);
 
     mLastForce.store(f.norm(), std::memory_order_relaxed);
     mLastLayer.store(rec.layer, std::memory_order_relaxed);
-    mGainPublic.store(mGain, std::memory_order_relaxed);
+    mGainPublic.store(mStep.gain(), std::memory_order_relaxed);
     mTicks.fetch_add(1, std::memory_order_relaxed);
     const double ns = double(mClock->nowNs() - start);
     mStats.addCompute(ns);
@@ -140,7 +118,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
 void ServoLoop::runTicks(long n) noexcept
 {
     const double T = 1.0 / mOpt.rateHz;
-    for (long i = 0; i < n && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed); ++i) {
+    for (long i = 0; i < n && !mDevice.finished() && !mStep.released(); ++i) {
         tick(mSimTime, T, T);
         mSimTime += T;
     }
@@ -174,8 +152,7 @@ void ServoLoop::loop() noexcept
         }
     }
     std::int64_t deadline = t0, last = t0;
-    while (
-        !mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mReleased.load(std::memory_order_relaxed)) {
+    while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mStep.released()) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
         clock.waitUntilNs(deadline, spin);
         const std::int64_t now = clock.nowNs();

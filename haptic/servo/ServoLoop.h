@@ -2,13 +2,14 @@
 /// @file ServoLoop.h
 /// @brief The haptic servo loop (architecture.md "Threads"): one thread at a fixed
 /// rate with absolute deadlines; each tick reads the device, steps the force
-/// model, applies the watchdog and writes the force. The tick never allocates,
+/// model and applies the watchdog (ServoStep.h) and writes the force. The tick never allocates,
 /// locks, throws or logs: events and records leave through lock-free queues, and
 /// timing statistics are lock-free histograms.
 #pragma once
 
 #include "haptic/servo/Device.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/servo/ServoStep.h"
 #include "haptic/servo/SpscQueue.h"
 
 #include <array>
@@ -151,9 +152,9 @@ public:
     void releaseAndStop();
     /// @brief Ask for the ramp to zero without waiting (runTicks() then ends
     /// once a zero force was sent).
-    void beginRelease() noexcept { mReleasing.store(true); }
+    void beginRelease() noexcept { mStep.beginRelease(); }
     /// @brief The zero force that ends a release has been sent.
-    bool released() const noexcept { return mReleased.load(); }
+    bool released() const noexcept { return mStep.released(); }
     bool running() const noexcept { return mRunning.load(); }
     /// @brief After start(): what real-time scheduling the loop thread got.
     const RealtimeStatus& realtimeStatus() const noexcept { return mRealtime; }
@@ -198,13 +199,12 @@ private:
     Device& mDevice;
     ServoOptions mOpt;
     ServoClock* mClock;
-    NeedleOutput mOut;
+    ServoStep mStep; ///< the model's step and the watchdog
     TickStats mStats;
     // On the heap: 65 s of records at 1 kHz is megabytes, too big for a stack.
     std::unique_ptr<SpscQueue<Event, 1024>> mEvents;
     std::unique_ptr<SpscQueue<ServoRecord, 1 << 16>> mRecords;
     std::atomic<bool> mRunning{false}, mStop{false};
-    std::atomic<bool> mReleasing{false}, mReleased{false};
     RealtimeStatus mRealtime;
     std::atomic<int> mSchedError{-1}; ///< set by the loop thread: 0 granted, else errno
     std::atomic<long> mTicks{0}, mOverruns{0}, mSkipped{0};
@@ -212,8 +212,7 @@ private:
         mInterruptionPhase{-1}; ///< on the loop clock's time line
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};
-    double mGain = 1.0, mQuietS = 0.0, mSimTime = 0.0;
-    Vec3d mLastForceVec{0, 0, 0};
+    double mSimTime = 0.0;
     std::thread mThread;
 };
 

@@ -13,6 +13,7 @@
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
+#include "haptic/servo/ServoStep.h"
 #include "haptic/servo/SimulatedDevices.h"
 #include "volume/Grids.h"
 
@@ -130,6 +131,34 @@ TEST(ForceStress, ServoTickNeverAllocates)
     Event e;
     bool dura = false;
     while (loop.popEvent(e)) dura = dura || e.type == EventType::DuraPuncture;
+    EXPECT_TRUE(dura); // the ticks did go through the interesting states
+}
+
+// The tick in a caller's own loop (a device SDK's callback, examples/device-loop/):
+// ServoStep's step from the caller's times, reading and writing the caller's device,
+// allocates nothing either.
+TEST(ForceStress, ServoStepInTheCallersLoopNeverAllocates)
+{
+    const SceneInstance& inst = instance("senac-average");
+    auto model = inst.makeModel();
+    HandParams p;
+    p.speedMmPerS = 10.0;
+    p.stopOnLor = false;
+    HandDevice hand(model->path(), p, model->device());
+    ServoStep servo(*model);
+    double t = 0.0;
+    bool dura = false;
+    auto tick = [&] {
+        const Vec3d f = servo.step(hand.read(t), t);
+        for (const Event& e : servo.output().events) dura = dura || e.type == EventType::DuraPuncture;
+        hand.write(f, servo.output().plungerN, t);
+        t += 1e-3;
+    };
+    for (int k = 0; k < 10; ++k) tick(); // first touches
+    const long before = test::allocations(), freesBefore = test::deallocations();
+    for (int k = 0; k < 8000; ++k) tick(); // through skin, ligaments, LOR and dura
+    EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
     EXPECT_TRUE(dura); // the ticks did go through the interesting states
 }
 
