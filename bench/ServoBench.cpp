@@ -361,8 +361,9 @@ void printServoReport(std::ostream& os, const ServoReport& r)
     os << "load: " << r.load << " busy process(es) beside the loop; real-time scheduling "
        << (r.runs.empty() || !r.runs.front().realtime ? "not granted" : "granted (SCHED_FIFO)") << '\n';
     if (!r.realtimeNote.empty()) os << "  " << r.realtimeNote << '\n';
-    os << "catch-up: missed deadlines up to " << r.catchUpPeriods
-       << " period(s) behind run late; longer stalls drop their periods (skipped)\n"
+    os << "catch-up: missed deadlines up to "
+       << (r.catchUpPeriods < 0 ? std::string("the watchdog's 20 ms") : std::to_string(r.catchUpPeriods) + " period(s)")
+       << " behind run late; longer stalls drop their periods (skipped)\n"
        << "phase us: spinning loops start their grid so that each tick ends before the phase of the period at which\n"
        << "  the machine was seen to interrupt them (InterruptionPhase.h); blank: not aligned\n";
     os << "1 kHz servo loop, simulated hand (tick compute; period error; host steal time per run)\n";

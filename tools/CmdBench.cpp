@@ -178,8 +178,8 @@ Action registerBench(CLI::App& app)
         ->check(CLI::Range(1, 20));
     servo
         ->add_option("--catch-up", o->servo.catchUpPeriods,
-            "Missed periods the loop runs late instead of dropping (ServoOptions::catchUpPeriods; default 5, 0: "
-            "drop every missed period)")
+            "Missed periods the loop runs late instead of dropping (ServoOptions::catchUpPeriods; default -1: those "
+            "within the watchdog's 20 ms; 0: drop every missed period)")
         ->check(CLI::Range(0, 1000));
     servo->add_flag(
         "--no-align", [o](std::int64_t) { o->servo.align = false; },

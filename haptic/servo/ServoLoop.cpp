@@ -151,10 +151,24 @@ void ServoLoop::loop() noexcept
             t0 = clock.nowNs();
         }
     }
+    // The catch-up bound (ServoOptions::catchUpPeriods): by default what the watchdog
+    // does not call a stall.
+    const std::int64_t catchUp = mOpt.catchUpPeriods >= 0
+        ? std::int64_t(mOpt.catchUpPeriods)
+        : std::int64_t(std::floor(mOpt.watchdogS * 1e9 / double(period) + 1e-9));
+    // A sleeping loop on the real clock wakes wakeLeadS early and spins to the deadline.
+    const std::int64_t wakeLead = !spin && mClock == &monotonicServoClock()
+        ? std::min(period / 2, std::int64_t(std::llround(std::max(0.0, mOpt.wakeLeadS) * 1e9)))
+        : 0;
     std::int64_t deadline = t0, last = t0;
     while (!mStop.load(std::memory_order_relaxed) && !mDevice.finished() && !mStep.released()) {
         // Absolute deadlines: sleeping until t0 + n·T does not accumulate drift.
-        clock.waitUntilNs(deadline, spin);
+        if (wakeLead > 0) {
+            clock.waitUntilNs(deadline - wakeLead, false);
+            clock.waitUntilNs(deadline, true);
+        } else {
+            clock.waitUntilNs(deadline, spin);
+        }
         const std::int64_t now = clock.nowNs();
         const std::int64_t actual = now - last;
         if (!first) mStats.addPeriodError(double(std::llabs(actual - period)));
@@ -174,7 +188,7 @@ void ServoLoop::loop() noexcept
         // (ServoOptions::catchUpPeriods), otherwise drop them and re-anchor the grid.
         if (!behind) mOverruns.fetch_add(1, std::memory_order_relaxed);
         const std::int64_t missed = (after - deadline) / period + 1;
-        if (missed > std::int64_t(std::max(0, mOpt.catchUpPeriods))) {
+        if (missed > catchUp) {
             mSkipped.fetch_add(long(missed), std::memory_order_relaxed);
             deadline += missed * period; // the first grid point after `after`
             behind = false;

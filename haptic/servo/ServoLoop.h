@@ -57,6 +57,11 @@ struct ServoOptions {
     /// Periods up to this long are waited for by spinning, not sleeping: the kernel's
     /// sleep granularity (tens of µs) is a whole period at 20 kHz and above [s].
     double spinBelowS = 100e-6;
+    /// Sleeping loops on the monotonic clock sleep until this long before each
+    /// deadline and spin the rest: the kernel wakes a real-time thread tens of µs
+    /// late at its 99th percentile on a virtual machine, so the last stretch is
+    /// waited for on the CPU (a tenth of a core at 1 kHz). 0: sleep to the deadline [s].
+    double wakeLeadS = 100e-6;
     /// Bounded catch-up after a missed deadline [chosen]. The model integrates with
     /// the nominal dt = 1/rateHz on every tick (NeedleInput::dtS), so the tissue's
     /// clock is the tick count times the period: periods dropped after a stall slow
@@ -64,10 +69,11 @@ struct ServoOptions {
     /// periods, the missed ticks run at once, one after another, until the loop is
     /// back on its grid of t0 + n·T; the device holds the last force written, so the
     /// hand feels only the newest of them. A longer stall drops its periods (counted
-    /// in skippedPeriods()) and re-anchors the grid: the watchdog handles that case.
-    /// 0 drops every missed period. 5 covers the 1-5 ms scheduling gaps of a loaded or
-    /// virtual machine at 1 kHz, and 100 µs at 50 kHz.
-    int catchUpPeriods = 5;
+    /// in skippedPeriods()) and re-anchors the grid. −1 (default): the periods that fit
+    /// in watchdogS, so that every gap the watchdog does not treat as a stall (a
+    /// virtual machine's host takes the CPU for 1-10 ms at times) is caught up, and
+    /// every gap it does treat as one is dropped; 0 drops every missed period.
+    int catchUpPeriods = -1;
     /// Spinning loops only (periods up to spinBelowS), on the monotonic clock: before
     /// the first tick, spin 60 ms and find the phase of the period at which the
     /// machine interrupts the thread (InterruptionPhase.h: the kernel's scheduler tick,

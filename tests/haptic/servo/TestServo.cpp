@@ -557,6 +557,7 @@ TEST(Servo, StalledLoopCutsTheGainByTheStallAndRampsBack)
     clock.stallNs = {19 * kTickNs, 30 * kTickNs};
     ServoOptions opt;
     opt.clock = &clock;
+    opt.catchUpPeriods = 0; // the watchdog alone: missed periods dropped (catch-up: the tests below)
     ServoLoop loop(*model, script, opt);
     runToEnd(loop);
     EXPECT_EQ(loop.ticks(), 253);
@@ -575,7 +576,8 @@ TEST(Servo, StalledLoopCutsTheGainByTheStallAndRampsBack)
     EXPECT_EQ(loop.watchdogGain(), 1.0);
 }
 
-// Bounded catch-up (ServoOptions::catchUpPeriods = 5) on a simulated clock. The wait
+// Bounded catch-up (ServoOptions::catchUpPeriods, by default the 20 periods of the 20 ms
+// watchdog at 1 kHz) on a simulated clock. The wait
 // before tick 50 lasts 2.5 ms longer: tick 50 runs at 52.5 ms and ends past the
 // deadlines of 51 and 52 ms, 2 periods behind, within the bound. Ticks 51 and 52 run at
 // once (still 52.5 ms on this clock, where a tick takes no time), tick 53 is back on the
@@ -607,10 +609,12 @@ TEST(Servo, ShortStallIsCaughtUpTickForTick)
 
 // A stall past the bound drops its periods and re-anchors the grid. The wait before tick
 // 50 lasts 7.5 ms longer: tick 50 runs at 57.5 ms and ends 7 deadlines behind (51..57
-// ms), more than the 5 the loop catches up: the 7 periods are dropped (counted) and tick
+// ms), more than the 5 the loop is set to catch up: the 7 periods are dropped (counted) and tick
 // n ≥ 51 runs at n + 7 ms; the first tick past 350.5 ms is tick 344 at 351 ms: 345
 // ticks. With catchUpPeriods = 0 the 2.5 ms stall of the test above drops its 2 periods
-// instead: tick n ≥ 51 at n + 2 ms, the last one tick 349 at 351 ms, 350 ticks.
+// instead: tick n ≥ 51 at n + 2 ms, the last one tick 349 at 351 ms, 350 ticks. By
+// default (−1) the bound is the watchdog's 20 periods: a 25.5 ms stall ends 25 deadlines
+// behind, they are dropped, tick n ≥ 51 runs at n + 25 ms and tick 326 is the last, 327.
 TEST(Servo, StallPastTheCatchUpBoundDropsItsPeriods)
 {
     struct Case {
@@ -618,8 +622,8 @@ TEST(Servo, StallPastTheCatchUpBoundDropsItsPeriods)
         int catchUp;
         long shiftMs, ticks, skipped;
     };
-    for (const Case c :
-        {Case{7 * kTickNs + kTickNs / 2, 5, 7, 345, 7}, Case{2 * kTickNs + kTickNs / 2, 0, 2, 350, 2}}) {
+    for (const Case c : {Case{7 * kTickNs + kTickNs / 2, 5, 7, 345, 7}, Case{2 * kTickNs + kTickNs / 2, 0, 2, 350, 2},
+             Case{25 * kTickNs + kTickNs / 2, -1, 25, 327, 25}}) {
         const DeviceLimits dev = stiffDevice();
         auto model = boneHold(dev);
         ScriptedDevice script(model->path(), holdAt(kHoldDepthMm, 0.3505), dev);
