@@ -56,13 +56,18 @@ std::string vecText(const Vec3d& v)
 }
 
 /// A scene file flattened into "scene.terms.damping.cap_N" keys; its prose
-/// (name, description, sources) shapes nothing and is left out.
+/// (name, description, sources) shapes nothing and is left out. An object
+/// without parameters is recorded as "{}": `"lock": {}` turns a term on.
 void flattenScene(const Json& j, const std::string& prefix, Inputs& out)
 {
     for (const auto& [k, v] : j.items()) {
         if (k == "description" || k == "source" || k == "name" || k == "schema") continue;
         const std::string key = prefix + "." + k;
-        if (v.is_object()) {
+        bool bare = v.is_object(); // no parameters, only prose
+        for (const auto& [k2, v2] : v.items()) bare = bare && (k2 == "description" || k2 == "source" || k2 == "name");
+        if (bare) {
+            putText(out, key, "{}");
+        } else if (v.is_object()) {
             flattenScene(v, key, out);
         } else if (v.is_number()) {
             putNumber(out, key, v.get<double>(), "");
