@@ -55,11 +55,22 @@ struct Band {
     double startMm = 0, endMm = 0;
 };
 
+/// @brief An event a closed form places: its kind (haptic::eventName) and depth.
+struct ExpectedEvent {
+    std::string event;
+    double depthMm = 0;
+    double toleranceMm = 0; ///< the rule's own: the tick grid decides where it lands
+};
+
 /// @brief The closed form of physics.md §7 a case is checked against, per sample.
 struct ClosedForm {
     std::string rule;               ///< e.g. "physics.md §7 R1 (layered damping slab)"
     std::vector<double> modelN;     ///< the closed form at each sample's depth [N]
     std::vector<double> toleranceN; ///< allowed |ΔF| at each sample [N], from the rule's bound
+    /// Events the rule places (R4: each pop), compared with the run's events of
+    /// that kind shallower than @ref eventsUpToMm, in order.
+    std::vector<ExpectedEvent> events;
+    double eventsUpToMm = 0;
 };
 
 struct CaseRun {
@@ -107,7 +118,8 @@ private:
 /// @brief The closed form for a case, if physics.md §7 has one for it (the
 /// damping slab R1, tilted or not, and the sphere in a slab R5, under a model
 /// whose only axial term is voxel damping; the [LP] stack R2 and the Conci
-/// profile R3 for their scenes' fixed tables), evaluated at @p samples with the
+/// profile R3 for their scenes' fixed tables; the Sénac nested boxes R4 on the
+/// lumbar phantom's midline), evaluated at @p samples with the
 /// tissue and scene values in @p recorded (the baseline's record, so that an
 /// edited value fails here too) — missing keys fall back to @p current.
 std::optional<ClosedForm> closedForm(

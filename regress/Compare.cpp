@@ -275,6 +275,30 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
             if (d > cf->toleranceN[i]) note(now[i].depthMm, d, cf->toleranceN[i], cf->rule);
         }
         r.closedFormMaxDeltaN = worst;
+        // The events the rule places (R4's pops), in order, within the rule's slack.
+        std::map<std::string, std::vector<double>> want, got;
+        for (const ExpectedEvent& e : cf->events) want[e.event].push_back(e.depthMm);
+        for (const EventRecord& e : run.profile.events) {
+            if (want.count(e.event) && e.depthMm < cf->eventsUpToMm) got[e.event].push_back(e.depthMm);
+        }
+        for (const auto& [kind, depths] : want) {
+            const auto& is = got[kind];
+            if (is.size() != depths.size()) {
+                r.eventDiffs.push_back(kind + " count " + std::to_string(depths.size()) + " (" + cf->rule + ") → " +
+                    std::to_string(is.size()));
+                note(std::min(depths.empty() ? 1e300 : depths.front(), is.empty() ? 1e300 : is.front()), 0.0, 0.0,
+                    cf->rule + " (" + kind + " count)");
+            }
+        }
+        std::map<std::string, std::size_t> seen;
+        for (const ExpectedEvent& e : cf->events) {
+            const std::size_t k = seen[e.event]++;
+            const auto& is = got[e.event];
+            if (k >= is.size() || std::abs(is[k] - e.depthMm) <= e.toleranceMm) continue;
+            r.eventDiffs.push_back(e.event + " #" + std::to_string(k + 1) + " depth " + fixed(e.depthMm, 3) + " (" +
+                cf->rule + ") → " + fixed(is[k], 3) + " mm");
+            note(std::min(e.depthMm, is[k]), 0.0, 0.0, cf->rule + " (" + e.event + " moved)");
+        }
     }
     r.pass = baseline && !r.first && r.eventDiffs.empty() && r.peakDiffs.empty();
     return r;
