@@ -286,14 +286,21 @@ namespace {
     throw ValueError(s.origin + ": cases." + c.name + "." + field + ": " + why);
 }
 
+/// The file a case's scene comes from: DIR/NAME.json from --scenes when it
+/// exists, else the built-in NAME or the file the case names.
+std::string sceneRef(const Case& c, const fs::path& scenesDir)
+{
+    if (!scenesDir.empty() && c.scene.find('/') == std::string::npos) {
+        const fs::path edited = scenesDir / (c.scene + ".json");
+        if (fs::exists(edited)) return edited.string();
+    }
+    return c.scene;
+}
+
 /// A scene NAME, DIR/NAME.json from --scenes when it exists, or a file.
 std::pair<haptic::Scene, Json> resolveScene(const Suite& s, const Case& c, const fs::path& scenesDir)
 {
-    std::string ref = c.scene;
-    if (!scenesDir.empty() && ref.find('/') == std::string::npos) {
-        const fs::path edited = scenesDir / (ref + ".json");
-        if (fs::exists(edited)) ref = edited.string();
-    }
+    const std::string ref = sceneRef(c, scenesDir);
     try {
         for (const auto& [name, text] : haptic::builtinSceneFiles()) {
             if (name == ref) return {haptic::parseScene(text, "builtin:" + name), Json::parse(text)};
@@ -410,11 +417,28 @@ Runner::Runner(const Suite& suite, std::vector<std::size_t> selected, const RunO
             try {
                 slot = std::make_unique<volume::TissueTable>(volume::TissueTable::load(tableFile));
             } catch (const Error& e) {
+                if (!options.tissues.empty()) throw ValueError("--tissues: " + std::string(e.what()));
                 caseFail(suite, c, "tissues", e.what());
             }
         }
         p.table = tableFile.empty() ? &volume::TissueTable::builtin() : slot.get();
         std::tie(p.scene, p.sceneJson) = resolveScene(suite, c, options.scenesDir);
+        // A scene naming a tissue the table does not have would change nothing,
+        // silently: a misspelt override would look like an edit that moves no force.
+        const std::string sceneFile = sceneRef(c, options.scenesDir);
+        for (const auto& [name, unused] : p.scene.recipe.overrides) {
+            if (!p.table->find(name))
+                caseFail(suite, c, "scene",
+                    sceneFile + ": overrides." + name + ": unknown tissue '" + name + "' (not in " + p.table->origin() +
+                        ")");
+        }
+        if (p.scene.recipe.model == haptic::LayerModel::Senac) { // the only model that tents by name
+            for (const std::string& name : p.scene.recipe.tenting) {
+                if (!p.table->find(name))
+                    caseFail(suite, c, "scene",
+                        sceneFile + ": tenting: unknown tissue '" + name + "' (not in " + p.table->origin() + ")");
+            }
+        }
         if (!p.scene.terms.damping.on && c.strategy != "servo" && c.strategy != "exact-voxel")
             caseFail(suite, c, "strategy",
                 "scene '" + p.scene.name +

@@ -81,6 +81,7 @@ std::vector<std::string> explanation(const CaseReport& c)
         for (const auto& d : c.inputDiffs) lines.push_back("input: " + d);
     }
     if (!c.png.empty()) lines.push_back("plot: " + c.png);
+    if (!c.plotProblem.empty()) lines.push_back("plot: not drawn: " + c.plotProblem);
     return lines;
 }
 
@@ -132,8 +133,13 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
             } else {
                 baselines.push_back(readBaseline(baselinePath(suite.baselinesDir, name)));
             }
-        } catch (const Error&) {
-            if (!o.update) throw;
+        } catch (const Error& e) {
+            if (!o.update) {
+                // One line naming the suite, the case and the baseline's file and field.
+                const std::string where = suite.origin + ": cases." + name + ".baseline: ";
+                if (dynamic_cast<const IoError*>(&e)) throw IoError(where + e.what());
+                throw ValueError(where + e.what());
+            }
             baselines.emplace_back(std::nullopt);
         }
     }
@@ -153,7 +159,8 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
                 b->profile.samples.size() != runs[k].profile.samples.size();
             if (changed) {
                 std::string what = !b ? "new baseline"
-                    : rep.pass        ? "profile within tolerance"
+                    : rep.identical   ? "profile identical"
+                    : rep.pass        ? "profile within tolerance (largest |ΔF| " + sci(rep.maxDeltaN) + " N)"
                                       : "profile changed (largest |ΔF| " + sci(rep.maxDeltaN) + " N)";
                 if (b && !rep.inputDiffs.empty())
                     what += "; inputs: " + rep.inputDiffs.front() +
@@ -164,6 +171,10 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
                 writes.addStream(
                     baselinePath(suite.baselinesDir, c.name), [doc](std::ostream& out) { out << baselineText(doc); });
             }
+        } else if (rep.pass && !o.plotDir.empty()) {
+            // A plot left by an earlier run of a case that passes now would say it fails.
+            std::error_code ec;
+            fs::remove(o.plotDir / (c.name + ".png"), ec);
         } else if (!rep.pass && !o.plotDir.empty()) {
             std::vector<Sample> ref;
             std::string refName = "baseline";
@@ -178,7 +189,10 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
                 fs::create_directories(o.plotDir);
                 const std::string png = (o.plotDir / (c.name + ".png")).string();
                 std::string why;
-                if (plotCase(rep, runs[k], ref, refName, png, why)) rep.png = png;
+                if (plotCase(rep, runs[k], ref, refName, png, why))
+                    rep.png = png;
+                else
+                    rep.plotProblem = why;
             }
         }
         result.cases.push_back(std::move(rep));
