@@ -644,12 +644,23 @@ std::optional<ClosedForm> closedForm(
             boundTerm += (2 * jump + 2 * b0) * step;
         cf.rule = "physics.md §7 R5 (sphere in a slab)";
     }
+    // R1 and R5 take the layers as unbounded; the phantoms are blocks ±w wide in
+    // x and z (§7), cut on the voxels within a voxel diagonal of that. A tilted
+    // or oblique path may leave the block sideways: from there the tip (the
+    // shaft's farthest point from the entry) is not compared.
+    const double halfWidth = kind == "slab" ? volume::SlabParams{}.halfWidthMm : volume::SphereParams{}.halfWidthMm;
+    const double inside = halfWidth - std::sqrt(3.0) * h;
     for (const Sample& smp : samples) {
         const double s = smp.depthMm;
         const double b = integral(s - needle, s);
         const haptic::DampingSplit split = haptic::splitDamping(damping, device, b, v0);
         const double f = split.viscousN + split.frictionN;
         cf.modelN.push_back(f);
+        const Vec3d tip = *entry + s * u;
+        if (std::abs(tip.x()) > inside || std::abs(tip.z()) > inside) {
+            cf.toleranceN.push_back(std::numeric_limits<double>::infinity());
+            continue;
+        }
         // R1: exact traversal to 1e-9 relative; the rest as bounded above.
         cf.toleranceN.push_back(lipschitz * boundTerm + 1e-9 * std::abs(f) + 1e-9);
     }

@@ -102,6 +102,9 @@ TEST(RegressSuite, DamagedSuitesAreRefusedNamingFileCaseAndField)
     expectSuiteRefused(
         std::string(kHeader) + R"({"name": "a", "scene": "kyung"}, {"name": "a", "scene": "conci"}]})", "duplicate");
     expectSuiteRefused(std::string(kHeader) + R"({"name": "A/b", "scene": "kyung"}]})", "name");
+    expectSuiteRefused( // the slab phantom's range
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung", "volume": {"phantom": "slab", "tilt_deg": 78}}]})",
+        "cases.a.volume.tilt_deg: must be a number of degrees within ±75");
 }
 
 TEST(RegressSuite, UnknownSceneAndTissueAreRefusedBeforeAnythingRuns)
@@ -164,6 +167,36 @@ TEST(RegressClosedForm, SlabProfileMatchesHandEvaluatedR1)
     const auto cf = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
     ASSERT_TRUE(cf);
     EXPECT_NE(cf->rule.find("R1"), std::string::npos);
+}
+
+/// R1 takes the layers as unbounded, the slab phantom is 40 mm wide (§7): down
+/// the normal of layers tilted 75°, the tip leaves the block sideways after
+/// 20/sin 75° ≈ 20.7 mm. Up to a voxel diagonal before that the run matches R1;
+/// past it the closed form does not claim the profile.
+TEST(RegressClosedForm, TiltedSlabIsComparedOnlyWhileTheTipIsInsideTheBlock)
+{
+    const Suite s = parseSuite(std::string(kHeader) + R"({"name": "t", "scene": "kyung",
+        "volume": {"phantom": "slab", "tilt_deg": 75, "spacing_mm": 1}}]})",
+        "my-suite.json", ".");
+    Runner runner(s, {0}, {});
+    const CaseRun run = runner.run().at(0);
+    const auto cf = closedForm(s.cases[0], {}, run.inputs, run.profile.samples);
+    ASSERT_TRUE(cf);
+    const double inside = (20.0 - std::sqrt(3.0) * 1.0) / std::sin(75.0 * kPi / 180.0); // [mm] of path
+    int compared = 0, beyond = 0;
+    for (std::size_t i = 0; i < run.profile.samples.size(); ++i) {
+        const double d = run.profile.samples[i].depthMm;
+        if (d > inside + 1e-9) {
+            EXPECT_FALSE(std::isfinite(cf->toleranceN[i])) << "compared at " << d << " mm, outside the block";
+            ++beyond;
+            continue;
+        }
+        ASSERT_TRUE(std::isfinite(cf->toleranceN[i])) << d;
+        EXPECT_NEAR(run.profile.samples[i].modelN, cf->modelN[i], cf->toleranceN[i]) << "at " << d << " mm";
+        ++compared;
+    }
+    EXPECT_GT(compared, 50);
+    EXPECT_GT(beyond, 10);
 }
 
 TEST(RegressClosedForm, EditedBetaInTheRecordMovesTheClosedForm)
