@@ -25,6 +25,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <set>
 
@@ -227,21 +228,30 @@ Profile profileOf(const haptic::InsertionResult& r, double stepMm)
     Profile p;
     std::uint64_t h = fnv1a(nullptr, 0);
     double travelled = 0, sinceLast = stepMm; // the first tick is kept
+    const double inf = std::numeric_limits<double>::infinity();
+    const Envelope empty{inf, -inf, inf, -inf, inf, -inf};
+    Envelope e = empty;
     for (std::size_t i = 0; i < r.rows.size(); ++i) {
         const haptic::InsertionRow& row = r.rows[i];
         const double bits[6] = {row.depthMm, row.axialN, row.force.x(), row.force.y(), row.force.z(), row.plungerN};
         h = fnv1a(bits, sizeof bits, h);
+        const double rendered = row.force.norm();
+        e = {std::min(e.modelMin, row.axialN), std::max(e.modelMax, row.axialN), std::min(e.renderedMin, rendered),
+            std::max(e.renderedMax, rendered), std::min(e.plungerMin, row.plungerN),
+            std::max(e.plungerMax, row.plungerN)};
         if (i > 0) {
             const double step = std::abs(row.depthMm - r.rows[i - 1].depthMm);
             travelled += step;
             sinceLast += step;
         }
         if (sinceLast >= stepMm * (1 - 1e-9) || i + 1 == r.rows.size()) {
-            p.samples.push_back({row.depthMm, row.axialN, row.force.norm(), row.plungerN});
+            p.samples.push_back({row.depthMm, row.axialN, rendered, row.plungerN});
+            p.envelope.push_back(e);
+            e = empty;
             sinceLast = 0;
         }
     }
-    for (const haptic::Event& e : r.events) p.events.push_back({haptic::eventName(e.type), e.depthMm});
+    for (const haptic::Event& ev : r.events) p.events.push_back({haptic::eventName(ev.type), ev.depthMm});
     p.peakModelN = r.summary.peakModelN;
     p.peakRenderedN = r.summary.peakRenderedN;
     p.digest = hexDigest(h);

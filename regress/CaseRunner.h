@@ -31,9 +31,19 @@ struct EventRecord {
     double depthMm = 0;
 };
 
+/// @brief The extremes of every tick a sample stands for: those after the
+/// previous sample, up to and including its own. A change the trainee feels
+/// between two samples (a transient, a one-tick spike) moves them.
+struct Envelope {
+    double modelMin = 0, modelMax = 0;       ///< [N]
+    double renderedMin = 0, renderedMax = 0; ///< [N]
+    double plungerMin = 0, plungerMax = 0;   ///< [N]
+};
+
 /// @brief What a case produced (or what its baseline recorded).
 struct Profile {
-    std::vector<Sample> samples; ///< every sample_mm of travel, and the last tick
+    std::vector<Sample> samples;    ///< every sample_mm of travel, and the last tick
+    std::vector<Envelope> envelope; ///< one per sample (empty in a baseline written before it existed)
     std::vector<EventRecord> events;
     double peakModelN = 0, peakRenderedN = 0;
     std::string digest; ///< FNV-1a of every tick's depth and forces, bit for bit (hex)

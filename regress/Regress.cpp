@@ -156,12 +156,14 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
         if (o.update) {
             const Baseline* b = baselines[k] ? &*baselines[k] : nullptr;
             const bool changed = !b || !rep.identical || !rep.inputDiffs.empty() || !rep.eventDiffs.empty() ||
-                b->profile.samples.size() != runs[k].profile.samples.size();
+                b->profile.samples.size() != runs[k].profile.samples.size() ||
+                b->profile.envelope.size() != runs[k].profile.envelope.size();
             if (changed) {
-                std::string what = !b ? "new baseline"
-                    : rep.identical   ? "profile identical"
-                    : rep.pass        ? "profile within tolerance (largest |ΔF| " + sci(rep.maxDeltaN) + " N)"
-                                      : "profile changed (largest |ΔF| " + sci(rep.maxDeltaN) + " N)";
+                std::string what = !b                              ? "new baseline"
+                    : rep.identical && b->profile.envelope.empty() ? "profile identical; envelope between samples added"
+                    : rep.identical                                ? "profile identical"
+                    : rep.pass ? "profile within tolerance (largest |ΔF| " + sci(rep.maxDeltaN) + " N)"
+                               : "profile changed (largest |ΔF| " + sci(rep.maxDeltaN) + " N)";
                 if (b && !rep.inputDiffs.empty())
                     what += "; inputs: " + rep.inputDiffs.front() +
                         (rep.inputDiffs.size() > 1 ? " and " + std::to_string(rep.inputDiffs.size() - 1) + " more"

@@ -522,6 +522,59 @@ TEST_F(RegressBaselines, UpdateWritesBaselinesThatTheNextRunPasses)
     EXPECT_TRUE(runRegression(s, o).updated.empty()) << "nothing changed, nothing rewritten";
 }
 
+/// Each stored sample stands for the ticks since the one before: their extremes
+/// are kept and compared, so a change the trainee feels between two samples
+/// fails too. A baseline written before the envelope existed is still read; one
+/// with only part of it is refused.
+TEST_F(RegressBaselines, TicksBetweenSamplesAreComparedThroughTheirExtremes)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"senac-average"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const Profile& p = run.profile;
+    ASSERT_EQ(p.envelope.size(), p.samples.size());
+    for (std::size_t i = 0; i < p.samples.size(); ++i) {
+        EXPECT_LE(p.envelope[i].modelMin, p.samples[i].modelN);
+        EXPECT_GE(p.envelope[i].modelMax, p.samples[i].modelN);
+        EXPECT_LE(p.envelope[i].renderedMin, p.samples[i].renderedN);
+        EXPECT_GE(p.envelope[i].renderedMax, p.samples[i].renderedN);
+    }
+    const Case& c = s.cases[sel[0]];
+    Baseline b{"senac-average.json", run.inputs, p};
+    EXPECT_TRUE(compareCase(c, run, b).pass);
+
+    // One tick between the samples at 9.8 and 10 mm rendered differently.
+    std::size_t k = 0;
+    while (k < p.samples.size() && p.samples[k].depthMm < 10.0 - 1e-9) ++k;
+    ASSERT_LT(k, p.samples.size());
+    b.profile.envelope[k].renderedMax += 1e-6;
+    const CaseReport r = compareCase(c, run, b);
+    EXPECT_FALSE(r.pass);
+    ASSERT_TRUE(r.first);
+    EXPECT_NEAR(r.first->depthMm, p.samples[k - 1].depthMm, 1e-12);
+    EXPECT_NE(r.first->against.find("a tick between 9.80 and 10.00 mm"), std::string::npos) << r.first->against;
+
+    nlohmann::json doc = baselineJson(c, run);
+    doc["profile"].erase("model_min_N");
+    doc["profile"].erase("model_max_N");
+    doc["profile"].erase("rendered_min_N");
+    doc["profile"].erase("rendered_max_N");
+    doc["profile"].erase("plunger_min_N");
+    const std::string partial = baselineText(doc);
+    try {
+        (void)parseBaseline(partial, "old.json");
+        ADD_FAILURE() << "a baseline with part of the envelope was read";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("old.json: profile: give all six envelope columns"), std::string::npos)
+            << e.what();
+    }
+    doc["profile"].erase("plunger_max_N");
+    const Baseline old = parseBaseline(baselineText(doc), "old.json");
+    EXPECT_TRUE(old.profile.envelope.empty());
+    EXPECT_TRUE(compareCase(c, run, old).pass) << "a baseline without the envelope compares its samples";
+}
+
 TEST_F(RegressBaselines, StaleBaselineIsReportedWithItsDifferences)
 {
     Suite s = suiteWith(R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}})");
