@@ -307,7 +307,7 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
         bool preloaded = false;        // its box is in a pop's preload: its own, or one that lands past its face
     };
     std::vector<Layer> layers;
-    std::vector<std::string> tenting{"skin", "dura"}; // the scene's default (docs/scenes.md)
+    std::vector<std::string> tenting{"skin", "dura"}; // without a list: [S19] tents the derma and the dura (§2.1)
     if (const std::string t = in.text("scene.tenting"); !t.empty()) {
         const nlohmann::json j = nlohmann::json::parse(t, nullptr, false);
         if (!j.is_array()) return std::nullopt;
