@@ -25,6 +25,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <set>
 
@@ -56,13 +57,18 @@ std::string vecText(const Vec3d& v)
 }
 
 /// A scene file flattened into "scene.terms.damping.cap_N" keys; its prose
-/// (name, description, sources) shapes nothing and is left out.
+/// (name, description, sources) shapes nothing and is left out. An object
+/// without parameters is recorded as "{}": `"lock": {}` turns a term on.
 void flattenScene(const Json& j, const std::string& prefix, Inputs& out)
 {
     for (const auto& [k, v] : j.items()) {
         if (k == "description" || k == "source" || k == "name" || k == "schema") continue;
         const std::string key = prefix + "." + k;
-        if (v.is_object()) {
+        bool bare = v.is_object(); // no parameters, only prose
+        for (const auto& [k2, v2] : v.items()) bare = bare && (k2 == "description" || k2 == "source" || k2 == "name");
+        if (bare) {
+            putText(out, key, "{}");
+        } else if (v.is_object()) {
             flattenScene(v, key, out);
         } else if (v.is_number()) {
             putNumber(out, key, v.get<double>(), "");
@@ -222,21 +228,30 @@ Profile profileOf(const haptic::InsertionResult& r, double stepMm)
     Profile p;
     std::uint64_t h = fnv1a(nullptr, 0);
     double travelled = 0, sinceLast = stepMm; // the first tick is kept
+    const double inf = std::numeric_limits<double>::infinity();
+    const Envelope empty{inf, -inf, inf, -inf, inf, -inf};
+    Envelope e = empty;
     for (std::size_t i = 0; i < r.rows.size(); ++i) {
         const haptic::InsertionRow& row = r.rows[i];
         const double bits[6] = {row.depthMm, row.axialN, row.force.x(), row.force.y(), row.force.z(), row.plungerN};
         h = fnv1a(bits, sizeof bits, h);
+        const double rendered = row.force.norm();
+        e = {std::min(e.modelMin, row.axialN), std::max(e.modelMax, row.axialN), std::min(e.renderedMin, rendered),
+            std::max(e.renderedMax, rendered), std::min(e.plungerMin, row.plungerN),
+            std::max(e.plungerMax, row.plungerN)};
         if (i > 0) {
             const double step = std::abs(row.depthMm - r.rows[i - 1].depthMm);
             travelled += step;
             sinceLast += step;
         }
         if (sinceLast >= stepMm * (1 - 1e-9) || i + 1 == r.rows.size()) {
-            p.samples.push_back({row.depthMm, row.axialN, row.force.norm(), row.plungerN});
+            p.samples.push_back({row.depthMm, row.axialN, rendered, row.plungerN});
+            p.envelope.push_back(e);
+            e = empty;
             sinceLast = 0;
         }
     }
-    for (const haptic::Event& e : r.events) p.events.push_back({haptic::eventName(e.type), e.depthMm});
+    for (const haptic::Event& ev : r.events) p.events.push_back({haptic::eventName(ev.type), ev.depthMm});
     p.peakModelN = r.summary.peakModelN;
     p.peakRenderedN = r.summary.peakRenderedN;
     p.digest = hexDigest(h);
@@ -281,14 +296,21 @@ namespace {
     throw ValueError(s.origin + ": cases." + c.name + "." + field + ": " + why);
 }
 
+/// The file a case's scene comes from: DIR/NAME.json from --scenes when it
+/// exists, else the built-in NAME or the file the case names.
+std::string sceneRef(const Case& c, const fs::path& scenesDir)
+{
+    if (!scenesDir.empty() && c.scene.find('/') == std::string::npos) {
+        const fs::path edited = scenesDir / (c.scene + ".json");
+        if (fs::exists(edited)) return edited.string();
+    }
+    return c.scene;
+}
+
 /// A scene NAME, DIR/NAME.json from --scenes when it exists, or a file.
 std::pair<haptic::Scene, Json> resolveScene(const Suite& s, const Case& c, const fs::path& scenesDir)
 {
-    std::string ref = c.scene;
-    if (!scenesDir.empty() && ref.find('/') == std::string::npos) {
-        const fs::path edited = scenesDir / (ref + ".json");
-        if (fs::exists(edited)) ref = edited.string();
-    }
+    const std::string ref = sceneRef(c, scenesDir);
     try {
         for (const auto& [name, text] : haptic::builtinSceneFiles()) {
             if (name == ref) return {haptic::parseScene(text, "builtin:" + name), Json::parse(text)};
@@ -405,11 +427,28 @@ Runner::Runner(const Suite& suite, std::vector<std::size_t> selected, const RunO
             try {
                 slot = std::make_unique<volume::TissueTable>(volume::TissueTable::load(tableFile));
             } catch (const Error& e) {
+                if (!options.tissues.empty()) throw ValueError("--tissues: " + std::string(e.what()));
                 caseFail(suite, c, "tissues", e.what());
             }
         }
         p.table = tableFile.empty() ? &volume::TissueTable::builtin() : slot.get();
         std::tie(p.scene, p.sceneJson) = resolveScene(suite, c, options.scenesDir);
+        // A scene naming a tissue the table does not have would change nothing,
+        // silently: a misspelt override would look like an edit that moves no force.
+        const std::string sceneFile = sceneRef(c, options.scenesDir);
+        for (const auto& [name, unused] : p.scene.recipe.overrides) {
+            if (!p.table->find(name))
+                caseFail(suite, c, "scene",
+                    sceneFile + ": overrides." + name + ": unknown tissue '" + name + "' (not in " + p.table->origin() +
+                        ")");
+        }
+        if (p.scene.recipe.model == haptic::LayerModel::Senac) { // the only model that tents by name
+            for (const std::string& name : p.scene.recipe.tenting) {
+                if (!p.table->find(name))
+                    caseFail(suite, c, "scene",
+                        sceneFile + ": tenting: unknown tissue '" + name + "' (not in " + p.table->origin() + ")");
+            }
+        }
         if (!p.scene.terms.damping.on && c.strategy != "servo" && c.strategy != "exact-voxel")
             caseFail(suite, c, "strategy",
                 "scene '" + p.scene.name +

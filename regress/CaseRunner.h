@@ -31,9 +31,19 @@ struct EventRecord {
     double depthMm = 0;
 };
 
+/// @brief The extremes of every tick a sample stands for: those after the
+/// previous sample, up to and including its own. A change the trainee feels
+/// between two samples (a transient, a one-tick spike) moves them.
+struct Envelope {
+    double modelMin = 0, modelMax = 0;       ///< [N]
+    double renderedMin = 0, renderedMax = 0; ///< [N]
+    double plungerMin = 0, plungerMax = 0;   ///< [N]
+};
+
 /// @brief What a case produced (or what its baseline recorded).
 struct Profile {
-    std::vector<Sample> samples; ///< every sample_mm of travel, and the last tick
+    std::vector<Sample> samples;    ///< every sample_mm of travel, and the last tick
+    std::vector<Envelope> envelope; ///< one per sample (empty in a baseline written before it existed)
     std::vector<EventRecord> events;
     double peakModelN = 0, peakRenderedN = 0;
     std::string digest; ///< FNV-1a of every tick's depth and forces, bit for bit (hex)
@@ -55,11 +65,22 @@ struct Band {
     double startMm = 0, endMm = 0;
 };
 
+/// @brief An event a closed form places: its kind (haptic::eventName) and depth.
+struct ExpectedEvent {
+    std::string event;
+    double depthMm = 0;
+    double toleranceMm = 0; ///< the rule's own: the tick grid decides where it lands
+};
+
 /// @brief The closed form of physics.md §7 a case is checked against, per sample.
 struct ClosedForm {
     std::string rule;               ///< e.g. "physics.md §7 R1 (layered damping slab)"
     std::vector<double> modelN;     ///< the closed form at each sample's depth [N]
     std::vector<double> toleranceN; ///< allowed |ΔF| at each sample [N], from the rule's bound
+    /// Events the rule places (R4: each pop), compared with the run's events of
+    /// that kind shallower than @ref eventsUpToMm, in order.
+    std::vector<ExpectedEvent> events;
+    double eventsUpToMm = 0;
 };
 
 struct CaseRun {
@@ -107,7 +128,8 @@ private:
 /// @brief The closed form for a case, if physics.md §7 has one for it (the
 /// damping slab R1, tilted or not, and the sphere in a slab R5, under a model
 /// whose only axial term is voxel damping; the [LP] stack R2 and the Conci
-/// profile R3 for their scenes' fixed tables), evaluated at @p samples with the
+/// profile R3 for their scenes' fixed tables; the Sénac nested boxes R4 on the
+/// lumbar phantom's midline), evaluated at @p samples with the
 /// tissue and scene values in @p recorded (the baseline's record, so that an
 /// edited value fails here too) — missing keys fall back to @p current.
 std::optional<ClosedForm> closedForm(

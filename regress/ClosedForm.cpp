@@ -3,7 +3,8 @@
 /// @brief The analytic regression phantoms of physics.md §7 as references of a
 /// regression case: R1 (layered damping slab, tilted or not) and R5 (sphere in a
 /// slab), for a model whose only axial term is Kyung's voxel damping (§1.2 Eq. 5);
-/// R2 (the [LP] stack) and R3 (the Conci profile) for their scenes' fixed tables.
+/// R2 (the [LP] stack) and R3 (the Conci profile) for their scenes' fixed tables;
+/// R4 (the Sénac nested boxes) for the Sénac scenes on the lumbar phantom.
 
 #include "regress/CaseRunner.h"
 
@@ -72,6 +73,31 @@ bool dampingOnly(const Lookup& in)
     return damping;
 }
 
+/// The recorded BMI of a lumbar phantom: a run records it as text ("none" without one).
+std::optional<double> recordedBmi(const Lookup& in)
+{
+    if (auto bmi = in.number("phantom.bmi")) return bmi;
+    const std::string text = in.text("phantom.bmi");
+    char* end = nullptr;
+    const double x = std::strtod(text.c_str(), &end);
+    if (!text.empty() && end == text.c_str() + text.size()) return x;
+    return std::nullopt;
+}
+
+/// A scene term is on in the record (else in the current inputs): recorded as its
+/// value ("true", "false", "{}" for an object without parameters) or by its
+/// parameters ("scene.terms.lor.time_constant_ms").
+bool termOn(const Lookup& in, const std::string& name)
+{
+    const Inputs& from = in.recorded.empty() ? in.current : in.recorded;
+    const std::string key = "scene.terms." + name;
+    for (auto it = from.lower_bound(key); it != from.end() && it->first.rfind(key, 0) == 0; ++it) {
+        if (it->first == key) return it->second.text != "false";
+        if (it->first[key.size()] == '.') return true;
+    }
+    return false;
+}
+
 /// physics.md §7 R2: the [LP] stack of §4, Table I reproduced from the document
 /// (not from the code's table), at constant speed v > Δv:
 /// f = k·x (x into the tip's layer) + C (the tip's layer) + Σ b_i·l_i·v.
@@ -129,13 +155,7 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
         return std::nullopt;
     const double v = *speed->second.number;
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
-    std::optional<double> bmi = in.number("phantom.bmi"); // a run records it as text ("none" without)
-    if (!bmi) {
-        const std::string text = in.text("phantom.bmi");
-        char* end = nullptr;
-        const double x = std::strtod(text.c_str(), &end);
-        if (!text.empty() && end == text.c_str() + text.size()) bmi = x;
-    }
+    const std::optional<double> bmi = recordedBmi(in);
     const double scale = bmi ? 10.0 * (2.52 + 0.11 * *bmi) / 40.9 : 1.0; // §3.3: s = SED/40.9 mm
     const std::string tip = in.text("scene.needle.tip");
     const double slope = tip == "bevel" ? 0.85 : tip == "triangular" ? 0.70 : 1.0; // §3.3
@@ -186,6 +206,335 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
     return cf;
 }
 
+/// physics.md §7 R4: the Sénac model of §2.1 with the constants of §2.2, on the
+/// lumbar phantom's midline, rendered as §6.2 renders it. Derived here from the
+/// documents and the recorded values, not from the code's layer table:
+/// - the layers (§7's lumbar phantom): skin and ligaments from the table's
+///   thicknesses, fat = derma − skin and the epidural space from [S19] Table I
+///   (§2.3), dura and CSF from the table; for a BMI everything above the
+///   epidural space scaled by SED/(its sum), SED = 10·(2.52 + 0.11·BMI) mm
+///   (§3.3). A voxel takes the tissue at its centre and faces lie on multiples
+///   of the spacing h (§7): each plane at depth D moves to the face h·⌈D/h − ½⌉;
+/// - tenting (Eq. 4): each tenting tissue of the scene is pushed from where the
+///   tip meets it (its face, or the last pop if that lies deeper): a1·z + a2·z²,
+///   a1 = F_p/(2z_p), a2 = F_p/(2z_p²) (§2.2), z_p the scene's tent depth, else
+///   F_p/(2k); it pops at z_p, and the layers below are pushed ahead until then;
+/// - cutting (Eq. 3): the nested boxes, T(d) = Σ F_layer over the layers entered,
+///   while ‖v‖ > ε. §6.2 renders T as the slip threshold of a proxy of stiffness
+///   k_c that is preloaded at each pop (the step of R4) and sticks when a box is
+///   entered later, the force climbing at k_c per mm of travel until it reaches
+///   the new sum: for forward motion F(d) = min over the travel s since the last
+///   pop P of [T(s) + k_c·(d − s)], with T(P) the preloaded sum;
+/// - friction (Eq. 1's third term, §2.1): v·Σ b·l over the shaft in the layers
+///   entered, and a tenting layer's pushed span (the tip is inside its dimple).
+std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+{
+    // Where the rule applies: a constant-speed insertion down the midline of an
+    // unturned lumbar phantom, a Sénac scene without other axial terms (Kyung's
+    // damping §1.2, [LP]'s Coulomb C §4), forces at the gauge the table was measured with.
+    const auto currentText = [&](const std::string& key) {
+        auto it = in.current.find(key);
+        return it == in.current.end() ? std::string() : it->second.text;
+    };
+    const auto entry = vecOf(currentText("case.entry")), target = vecOf(currentText("case.target"));
+    const auto rotation = vecOf(in.text("phantom.rotation_deg"));
+    const auto spacing = vecOf(in.text("phantom.spacing_mm"));
+    const std::optional<double> speed = in.number("case.speed_mm_per_s");
+    if (!c.script.empty() || in.text("scene.model") != "senac" || in.text("scene.layers") != "labels" ||
+        in.text("phantom.kind") != "lumbar" || termOn(in, "damping") || termOn(in, "karnopp") || !entry || !target ||
+        !rotation || !spacing || !speed)
+        return std::nullopt;
+    if (entry->norm() != 0.0 || target->x() != 0.0 || target->z() != 0.0 || !(target->y() < 0.0) ||
+        rotation->norm() != 0.0)
+        return std::nullopt;
+    const double v = *speed;
+    constexpr double kEpsilonMmPerS = 0.2;          // §2.2 ε
+    if (!(v > kEpsilonMmPerS)) return std::nullopt; // below ε Eq. 3 is 0, the proxy holds: no closed form
+    if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
+        return std::nullopt; // §3.3's d/d_ref scaling of every force: not part of R4
+    const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
+    const double needle = in.number("scene.needle.length_mm").value_or(90.0); // §3.3: the default needle, 90 mm
+    const double kc = in.number("scene.terms.coupling_N_per_mm").value_or(0.0) > 0.0
+        ? *in.number("scene.terms.coupling_N_per_mm")
+        : in.number("device.max_stiffness_N_per_mm").value_or(0.0); // §6.2: k_c, else the device's maximum
+    if (!(kc > 0.0) || !(rate > 0.0)) return std::nullopt;
+    const double tick = v / rate; // travel per servo tick [mm]
+    const bool tipOn = termOn(in, "tip"), cuttingOn = termOn(in, "cutting"), frictionOn = termOn(in, "viscous");
+
+    // The midline layers (§7 lumbar phantom, §2.3 Table I, §3.3).
+    struct TableI {
+        const char* preset;
+        double dermaMm, epiduralMm;
+    };
+    static const TableI kTableI[] = {{"average", 10.0, 6.0}, {"overweight", 30.0, 4.0}, {"calcified", 10.0, 4.0}};
+    const std::string preset = in.text("phantom.preset");
+    const TableI* row = nullptr;
+    for (const TableI& r : kTableI) {
+        if (preset == r.preset) row = &r;
+    }
+    if (!row) return std::nullopt;
+    const char* const kNames[] = {"skin", "fat", "supraspinous_ligament", "interspinous_ligament", "ligamentum_flavum",
+        "epidural_space", "dura", "csf"};
+    double thickness[8];
+    for (const int i : {0, 2, 3, 4, 6, 7}) {
+        const auto t = in.number(std::string(kNames[i]) + ".thickness");
+        if (!t || !(*t > 0.0)) return std::nullopt;
+        thickness[i] = *t;
+    }
+    thickness[1] = row->dermaMm - thickness[0];
+    thickness[5] = row->epiduralMm;
+    if (!(thickness[1] > 0.0)) return std::nullopt;
+    if (const auto bmi = recordedBmi(in)) {
+        const double above = thickness[0] + thickness[1] + thickness[2] + thickness[3] + thickness[4];
+        const double scale = 10.0 * (2.52 + 0.11 * *bmi) / above;
+        for (int i = 0; i < 5; ++i) thickness[i] *= scale;
+    }
+    const double h = spacing->y();
+    const auto face = [h](double depth) {
+        const double x = depth / h - 0.5;
+        const double n =
+            std::abs(x - std::round(x)) < 1e-9 ? std::round(x) : std::ceil(x); // a centre on the plane: below
+        return h * n;
+    };
+
+    struct Layer {
+        std::string name;
+        double top, bottom; // voxelised [mm]
+        double cutN = 0, bNsPerMm2 = 0;
+        bool tents = false;
+        double a1 = 0, a2 = 0, zp = 0;
+        double contact = 0, entry = 0; // where the tip meets it; where it is entered (its pop, if it tents)
+        bool preloaded = false;        // its box is in a pop's preload: its own, or one that lands past its face
+    };
+    std::vector<Layer> layers;
+    std::vector<std::string> tenting{"skin", "dura"}; // without a list: [S19] tents the derma and the dura (§2.1)
+    if (const std::string t = in.text("scene.tenting"); !t.empty()) {
+        const nlohmann::json j = nlohmann::json::parse(t, nullptr, false);
+        if (!j.is_array()) return std::nullopt;
+        tenting.clear();
+        for (const auto& n : j) {
+            if (n.is_string()) tenting.push_back(n.get<std::string>());
+        }
+    }
+    double plane = 0;
+    for (int i = 0; i < 8; ++i) {
+        Layer l;
+        l.name = kNames[i];
+        l.top = face(plane);
+        plane += thickness[i];
+        l.bottom = face(plane);
+        if (!(l.bottom > l.top)) continue; // thinner than a voxel: not on the grid
+        const std::string t = l.name + ".", o = "scene.overrides." + l.name + ".";
+        l.cutN = in.number(o + "cutting_force_N").value_or(in.number(t + "cutting_force").value_or(0.0));
+        l.bNsPerMm2 = in.number(t + "friction_viscous").value_or(0.0);
+        const double fp = in.number(o + "puncture_force_N").value_or(in.number(t + "puncture_force").value_or(0.0));
+        const double k = in.number(o + "elasticity_N_per_mm").value_or(in.number(t + "elasticity").value_or(0.0));
+        if (std::find(tenting.begin(), tenting.end(), l.name) != tenting.end() && fp > 0.0) {
+            const auto zp = in.number(o + "tent_depth_mm");
+            if (!zp && !(k > 0.0)) return std::nullopt;
+            l.tents = true;
+            l.zp = zp ? *zp : fp / (2.0 * k);
+            l.a1 = fp / (2.0 * l.zp);
+            l.a2 = fp / (2.0 * l.zp * l.zp);
+        }
+        layers.push_back(l);
+    }
+    if (layers.empty()) return std::nullopt;
+    const double compareEnd = layers.back().bottom; // §7 gives the phantom no further along the midline
+
+    // Where the tip meets and enters each layer; the pops.
+    double lastPop = -std::numeric_limits<double>::infinity();
+    std::vector<double> pops;
+    for (Layer& l : layers) {
+        l.contact = std::max(l.top, lastPop);
+        l.preloaded = l.tents || l.top <= lastPop;
+        if (l.tents) {
+            lastPop = l.contact + l.zp;
+            pops.push_back(lastPop);
+            l.entry = lastPop;
+        } else {
+            l.entry = l.contact;
+        }
+    }
+    // Which tick a floating-point depth lands in is rounding: a box whose face lies
+    // within a tick of a pop may be entered in the pop's tick (in the preload) or
+    // the next (it ramps in). Both are R4 under §6.2; each segment between pops
+    // takes the reading nearer the run. kPopTie: the pop's own slack.
+    constexpr double kPopTie = 2e-9;  // [mm] twice the state machine's 1e-9 mm "reached"
+    const double window = 1.5 * tick; // a tick's travel either side, as R2 and R3
+    struct Tie {
+        std::size_t layer, pop;
+    };
+    std::vector<Tie> ties;
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        if (layers[i].tents) continue;
+        for (std::size_t k = 0; k < pops.size(); ++k) {
+            if (layers[i].top >= pops[k] - kPopTie && layers[i].top <= pops[k] + window) ties.push_back({i, k});
+        }
+    }
+    // A tenting layer met within a tick of an earlier pop starts where that tick
+    // lands: its stage moves by up to a tick.
+    std::vector<bool> contactUncertain(layers.size(), false);
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        for (const double p : pops) {
+            if (layers[i].tents && p < layers[i].entry && layers[i].top >= p - kPopTie && layers[i].top <= p + window)
+                contactUncertain[i] = true;
+        }
+    }
+
+    struct Eval {
+        double f = 0;
+        bool ramping = false;
+        double slackN = 0; // a contact's uncertainty carried into the force
+    };
+    // preloaded[t]: the tie t's box is in its pop's preload.
+    const auto evaluate = [&](double d, const std::vector<bool>& preloaded) {
+        Eval e;
+        // The box entry of each layer under this reading.
+        std::vector<double> entered(layers.size());
+        std::vector<bool> inPreload(layers.size(), false);
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            entered[i] = layers[i].entry;
+            inPreload[i] = layers[i].preloaded;
+        }
+        for (std::size_t t = 0; t < ties.size(); ++t) {
+            const Layer& l = layers[ties[t].layer];
+            const double p = pops[ties[t].pop];
+            entered[ties[t].layer] = preloaded[t] ? p : std::max(l.top, p);
+            inPreload[ties[t].layer] = preloaded[t];
+        }
+        // Tenting stage and friction.
+        double lengthB = 0; // Σ b·l over the shaft [N·s/mm]
+        const double shaftStart = d - needle;
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            const Layer& l = layers[i];
+            if (l.tents && d >= l.contact && d < l.entry) {
+                const double z = d - l.contact;
+                if (tipOn) e.f += l.a1 * z + l.a2 * z * z;
+                lengthB += l.bNsPerMm2 * (d - std::max(l.contact, shaftStart));
+                if (contactUncertain[i]) e.slackN += ((tipOn ? l.a1 + 2 * l.a2 * l.zp : 0.0) + v * l.bNsPerMm2) * tick;
+            } else if (d >= entered[i]) {
+                lengthB += l.bNsPerMm2 * overlap(shaftStart, d, l.top, l.bottom);
+            }
+        }
+        if (frictionOn) e.f += v * lengthB;
+        if (!cuttingOn) return e;
+        // The proxy: preloaded at the last pop, then sticking and slipping.
+        double lastP = -std::numeric_limits<double>::infinity();
+        for (const double p : pops) {
+            if (p <= d) lastP = p;
+        }
+        const auto before = [&](std::size_t j) { // the sum just before box j is entered
+            double sum = 0;
+            for (std::size_t i = 0; i < layers.size(); ++i) {
+                if (entered[i] < entered[j] || (entered[i] == entered[j] && inPreload[i] && !inPreload[j]))
+                    sum += layers[i].cutN;
+            }
+            return sum;
+        };
+        double total = 0, preload = 0;
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            if (entered[i] <= d) total += layers[i].cutN;
+            if (entered[i] < lastP || (entered[i] == lastP && inPreload[i])) preload += layers[i].cutN;
+        }
+        double f = total;
+        if (std::isfinite(lastP)) f = std::min(f, preload + kc * (d - lastP));
+        for (std::size_t j = 0; j < layers.size(); ++j) {
+            if (entered[j] > d || entered[j] < lastP || (entered[j] == lastP && inPreload[j]) || layers[j].cutN == 0.0)
+                continue;
+            f = std::min(f, before(j) + kc * (d - entered[j]));
+        }
+        e.ramping = f < total;
+        e.f += f;
+        return e;
+    };
+
+    // R4 states the profile exactly: float rounding only (10⁻¹² relative, with a
+    // 10⁻¹² N floor for zero force). Within a ramp the sampled proxy starts
+    // sticking at the last tick before the box's face, up to one tick before the
+    // continuous form: k_c·v/rate more (0.004 N for 2 N/mm at 2 mm/s and 1 kHz).
+    constexpr double kRounding = 1e-12;
+    const double rampTick = kc * tick;
+    const double lastDepth = samples.empty() ? 0.0 : samples.back().depthMm;
+    const auto toleranceAt = [&](double d, const Eval& e) {
+        if (d >= compareEnd) return std::numeric_limits<double>::infinity(); // beyond the phantom §7 describes
+        for (std::size_t k = 0; k < pops.size(); ++k) {
+            double w = window;
+            for (std::size_t i = 0; i < layers.size(); ++i) {
+                if (contactUncertain[i] && layers[i].entry == pops[k]) w += tick;
+            }
+            if (std::abs(d - pops[k]) <= w) return std::numeric_limits<double>::infinity(); // rounding picks the tick
+        }
+        return kRounding * std::abs(e.f) + kRounding + (e.ramping ? rampTick : 0.0) + e.slackN;
+    };
+
+    ClosedForm cf;
+    cf.rule = "physics.md §7 R4 (Sénac nested boxes, §6.2 proxy)";
+    cf.modelN.assign(samples.size(), 0.0);
+    cf.toleranceN.assign(samples.size(), 0.0);
+    // Each segment between pops takes the reading of its ties nearer the run.
+    std::vector<bool> reading(ties.size(), true);
+    for (std::size_t seg = 0; seg <= pops.size(); ++seg) {
+        const double lo = seg == 0 ? -std::numeric_limits<double>::infinity() : pops[seg - 1];
+        const double hi = seg < pops.size() ? pops[seg] : std::numeric_limits<double>::infinity();
+        std::vector<std::size_t> mine; // the ties of the pop that opens this segment
+        for (std::size_t t = 0; t < ties.size(); ++t) {
+            if (seg > 0 && ties[t].pop == seg - 1) mine.push_back(t);
+        }
+        // The ties are entered in depth order: in the preload, a prefix of them.
+        std::sort(mine.begin(), mine.end(),
+            [&](std::size_t a, std::size_t b) { return layers[ties[a].layer].top < layers[ties[b].layer].top; });
+        // The readings differ only from the pop until the tied boxes' ramps end:
+        // judged there by the largest |ΔF| (not against the tolerance, which a
+        // ramp widens), the half-open reading (every tie in the preload) first.
+        std::vector<std::vector<bool>> options;
+        for (std::size_t m = mine.size() + 1; m-- > 0;) {
+            std::vector<bool> r = reading;
+            for (std::size_t q = 0; q < mine.size(); ++q) r[mine[q]] = q < m;
+            options.push_back(r);
+        }
+        std::vector<double> worst(options.size(), 0.0);
+        for (const Sample& smp : samples) {
+            if (options.size() < 2 || smp.depthMm < lo || smp.depthMm >= hi) continue;
+            std::vector<Eval> e;
+            double fLo = std::numeric_limits<double>::infinity(), fHi = -fLo;
+            for (const auto& r : options) {
+                e.push_back(evaluate(smp.depthMm, r));
+                fLo = std::min(fLo, e.back().f), fHi = std::max(fHi, e.back().f);
+            }
+            if (!(fHi - fLo > kRounding * (std::abs(fHi) + 1))) continue;
+            if (!std::isfinite(toleranceAt(smp.depthMm, e[0]))) continue;
+            for (std::size_t q = 0; q < options.size(); ++q)
+                worst[q] = std::max(worst[q], std::abs(smp.modelN - e[q].f));
+        }
+        std::size_t best = 0;
+        for (std::size_t q = 1; q < options.size(); ++q) {
+            if (worst[q] < worst[best]) best = q;
+        }
+        reading = options[best];
+        for (std::size_t i = 0; i < samples.size(); ++i) {
+            const double d = samples[i].depthMm;
+            if (d < lo || d >= hi) continue;
+            const Eval e = evaluate(d, reading);
+            cf.modelN[i] = e.f;
+            cf.toleranceN[i] = toleranceAt(d, e);
+        }
+    }
+    // R4's pops (the skin at 10 mm in the shipped scenes): the first tick at or past
+    // each, so within a tick's travel.
+    cf.eventsUpToMm = std::min(compareEnd, lastDepth);
+    bool clear = true;
+    for (const double p : pops) clear = clear && std::abs(p - cf.eventsUpToMm) > window;
+    if (clear) {
+        for (const double p : pops) {
+            if (p < cf.eventsUpToMm) cf.events.push_back({"pop", p, window});
+        }
+    } else {
+        cf.eventsUpToMm = 0; // a pop within a tick of the end: rounding decides whether it happens
+    }
+    return cf;
+}
+
 } // namespace
 
 std::optional<ClosedForm> closedForm(
@@ -195,6 +544,7 @@ std::optional<ClosedForm> closedForm(
     if (in.text("scene.model") == "lumbar-puncture" && in.text("scene.layers") == "table")
         return lumbarPunctureStack(c, in, samples);
     if (in.text("scene.model") == "conci" && in.text("scene.layers") == "table") return conciProfile(c, in, samples);
+    if (in.text("scene.model") == "senac") return senacProfile(c, in, samples);
     const std::string kind = c.volume.kind;
     if ((kind != "slab" && kind != "sphere") || !c.script.empty() || !dampingOnly(in)) return std::nullopt;
     const auto entry = vecOf(in.current.at("case.entry").text), target = vecOf(in.current.at("case.target").text);
@@ -294,12 +644,23 @@ std::optional<ClosedForm> closedForm(
             boundTerm += (2 * jump + 2 * b0) * step;
         cf.rule = "physics.md §7 R5 (sphere in a slab)";
     }
+    // R1 and R5 take the layers as unbounded; the phantoms are blocks ±w wide in
+    // x and z (§7), cut on the voxels within a voxel diagonal of that. A tilted
+    // or oblique path may leave the block sideways: from there the tip (the
+    // shaft's farthest point from the entry) is not compared.
+    const double halfWidth = kind == "slab" ? volume::SlabParams{}.halfWidthMm : volume::SphereParams{}.halfWidthMm;
+    const double inside = halfWidth - std::sqrt(3.0) * h;
     for (const Sample& smp : samples) {
         const double s = smp.depthMm;
         const double b = integral(s - needle, s);
         const haptic::DampingSplit split = haptic::splitDamping(damping, device, b, v0);
         const double f = split.viscousN + split.frictionN;
         cf.modelN.push_back(f);
+        const Vec3d tip = *entry + s * u;
+        if (std::abs(tip.x()) > inside || std::abs(tip.z()) > inside) {
+            cf.toleranceN.push_back(std::numeric_limits<double>::infinity());
+            continue;
+        }
         // R1: exact traversal to 1e-9 relative; the rest as bounded above.
         cf.toleranceN.push_back(lipschitz * boundTerm + 1e-9 * std::abs(f) + 1e-9);
     }

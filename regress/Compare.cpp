@@ -42,6 +42,10 @@ Sample sampleAt(const std::vector<Sample>& ref, double depth)
         a.plungerN + w * (b.plungerN - a.plungerN)};
 }
 
+/// The envelope's columns in a baseline: the extremes of the ticks each sample stands for.
+const char* const kEnvelopeKeys[6] = {
+    "model_min_N", "model_max_N", "rendered_min_N", "rendered_max_N", "plunger_min_N", "plunger_max_N"};
+
 std::vector<double> numbers(const JsonFields::Json& j, JsonFields& f, const std::string& key)
 {
     if (!j.is_array()) f.fail(key, "must be a list of numbers");
@@ -77,13 +81,21 @@ nlohmann::json baselineJson(const Case& c, const CaseRun& run)
         rendered.push_back(s.renderedN);
         plunger.push_back(s.plungerN);
     }
+    Json env[6] = {Json::array(), Json::array(), Json::array(), Json::array(), Json::array(), Json::array()};
+    for (const Envelope& e : run.profile.envelope) {
+        const double v[6] = {e.modelMin, e.modelMax, e.renderedMin, e.renderedMax, e.plungerMin, e.plungerMax};
+        for (int k = 0; k < 6; ++k) env[k].push_back(v[k]);
+    }
     Json events = Json::array();
     for (const EventRecord& e : run.profile.events) events.push_back({{"event", e.event}, {"depth_mm", e.depthMm}});
     return {{"schema", "voxhap-regress-baseline/1"}, {"case", c.name},
         {"note", "reference output of `voxhap regress`; regenerate with `voxhap regress --update`"}, {"inputs", inputs},
         {"digest", run.profile.digest}, {"peak_model_N", run.profile.peakModelN},
         {"peak_rendered_N", run.profile.peakRenderedN}, {"events", events},
-        {"profile", {{"depth_mm", depth}, {"model_N", model}, {"rendered_N", rendered}, {"plunger_N", plunger}}}};
+        {"profile",
+            {{"depth_mm", depth}, {"model_N", model}, {"rendered_N", rendered}, {"plunger_N", plunger},
+                {kEnvelopeKeys[0], env[0]}, {kEnvelopeKeys[1], env[1]}, {kEnvelopeKeys[2], env[2]},
+                {kEnvelopeKeys[3], env[3]}, {kEnvelopeKeys[4], env[4]}, {kEnvelopeKeys[5], env[5]}}}};
 }
 
 std::string baselineText(const nlohmann::json& doc)
@@ -157,6 +169,18 @@ Baseline baselineFromJson(const Json& doc, const std::string& origin)
             p.fail("", "depth_mm, model_N, rendered_N and plunger_N must be non-empty lists of one length");
         for (std::size_t i = 0; i < depth.size(); ++i)
             b.profile.samples.push_back({depth[i], model[i], rendered[i], plunger[i]});
+        // The envelope: all six columns or none (a baseline written before it existed).
+        std::vector<double> env[6];
+        int present = 0;
+        for (int k = 0; k < 6; ++k) {
+            if (!p.has(kEnvelopeKeys[k])) continue;
+            ++present;
+            env[k] = numbers(p.raw(kEnvelopeKeys[k]), p, kEnvelopeKeys[k]);
+            if (env[k].size() != depth.size()) p.fail(kEnvelopeKeys[k], "must have one value per depth_mm");
+        }
+        if (present != 0 && present != 6) p.fail("", "give all six envelope columns (*_min_N, *_max_N) or none");
+        for (std::size_t i = 0; present && i < depth.size(); ++i)
+            b.profile.envelope.push_back({env[0][i], env[1][i], env[2][i], env[3][i], env[4][i], env[5][i]});
         return b;
     });
 }
@@ -224,6 +248,26 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
                 if (d > allowed) note(now[i].depthMm, d, allowed, "baseline");
             }
         }
+        // Between the samples: the extremes of the ticks each sample stands for.
+        const auto& envWas = baseline->profile.envelope;
+        const auto& envIs = run.profile.envelope;
+        if (sameGrid && envWas.size() == now.size() && envIs.size() == now.size()) {
+            for (std::size_t i = 0; i < now.size(); ++i) {
+                const Envelope& a = envWas[i];
+                const Envelope& b = envIs[i];
+                const std::pair<double, double> pairs[6] = {{b.modelMin, a.modelMin}, {b.modelMax, a.modelMax},
+                    {b.renderedMin, a.renderedMin}, {b.renderedMax, a.renderedMax}, {b.plungerMin, a.plungerMin},
+                    {b.plungerMax, a.plungerMax}};
+                const double from = i > 0 ? now[i - 1].depthMm : now[i].depthMm;
+                for (const auto& [is, was] : pairs) {
+                    const double d = std::abs(is - was), allowed = tol.absN + tol.rel * std::abs(was);
+                    if (d > r.maxDeltaN) r.maxDeltaN = d, r.maxDeltaDepthMm = now[i].depthMm;
+                    if (d > allowed)
+                        note(from, d, allowed,
+                            "baseline (a tick between " + fixed(from, 2) + " and " + fixed(now[i].depthMm, 2) + " mm)");
+                }
+            }
+        }
         // Events: the count of each kind exactly, and the depth of each.
         std::map<std::string, std::vector<double>> was, is;
         for (const EventRecord& e : baseline->profile.events) was[e.event].push_back(e.depthMm);
@@ -275,6 +319,30 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
             if (d > cf->toleranceN[i]) note(now[i].depthMm, d, cf->toleranceN[i], cf->rule);
         }
         r.closedFormMaxDeltaN = worst;
+        // The events the rule places (R4's pops), in order, within the rule's slack.
+        std::map<std::string, std::vector<double>> want, got;
+        for (const ExpectedEvent& e : cf->events) want[e.event].push_back(e.depthMm);
+        for (const EventRecord& e : run.profile.events) {
+            if (want.count(e.event) && e.depthMm < cf->eventsUpToMm) got[e.event].push_back(e.depthMm);
+        }
+        for (const auto& [kind, depths] : want) {
+            const auto& is = got[kind];
+            if (is.size() != depths.size()) {
+                r.eventDiffs.push_back(kind + " count " + std::to_string(depths.size()) + " (" + cf->rule + ") → " +
+                    std::to_string(is.size()));
+                note(std::min(depths.empty() ? 1e300 : depths.front(), is.empty() ? 1e300 : is.front()), 0.0, 0.0,
+                    cf->rule + " (" + kind + " count)");
+            }
+        }
+        std::map<std::string, std::size_t> seen;
+        for (const ExpectedEvent& e : cf->events) {
+            const std::size_t k = seen[e.event]++;
+            const auto& is = got[e.event];
+            if (k >= is.size() || std::abs(is[k] - e.depthMm) <= e.toleranceMm) continue;
+            r.eventDiffs.push_back(e.event + " #" + std::to_string(k + 1) + " depth " + fixed(e.depthMm, 3) + " (" +
+                cf->rule + ") → " + fixed(is[k], 3) + " mm");
+            note(std::min(e.depthMm, is[k]), 0.0, 0.0, cf->rule + " (" + e.event + " moved)");
+        }
     }
     r.pass = baseline && !r.first && r.eventDiffs.empty() && r.peakDiffs.empty();
     return r;

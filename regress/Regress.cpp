@@ -81,6 +81,7 @@ std::vector<std::string> explanation(const CaseReport& c)
         for (const auto& d : c.inputDiffs) lines.push_back("input: " + d);
     }
     if (!c.png.empty()) lines.push_back("plot: " + c.png);
+    if (!c.plotProblem.empty()) lines.push_back("plot: not drawn: " + c.plotProblem);
     return lines;
 }
 
@@ -132,8 +133,13 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
             } else {
                 baselines.push_back(readBaseline(baselinePath(suite.baselinesDir, name)));
             }
-        } catch (const Error&) {
-            if (!o.update) throw;
+        } catch (const Error& e) {
+            if (!o.update) {
+                // One line naming the suite, the case and the baseline's file and field.
+                const std::string where = suite.origin + ": cases." + name + ".baseline: ";
+                if (dynamic_cast<const IoError*>(&e)) throw IoError(where + e.what());
+                throw ValueError(where + e.what());
+            }
             baselines.emplace_back(std::nullopt);
         }
     }
@@ -150,11 +156,14 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
         if (o.update) {
             const Baseline* b = baselines[k] ? &*baselines[k] : nullptr;
             const bool changed = !b || !rep.identical || !rep.inputDiffs.empty() || !rep.eventDiffs.empty() ||
-                b->profile.samples.size() != runs[k].profile.samples.size();
+                b->profile.samples.size() != runs[k].profile.samples.size() ||
+                b->profile.envelope.size() != runs[k].profile.envelope.size();
             if (changed) {
-                std::string what = !b ? "new baseline"
-                    : rep.pass        ? "profile within tolerance"
-                                      : "profile changed (largest |ΔF| " + sci(rep.maxDeltaN) + " N)";
+                std::string what = !b                              ? "new baseline"
+                    : rep.identical && b->profile.envelope.empty() ? "profile identical; envelope between samples added"
+                    : rep.identical                                ? "profile identical"
+                    : rep.pass ? "profile within tolerance (largest |ΔF| " + sci(rep.maxDeltaN) + " N)"
+                               : "profile changed (largest |ΔF| " + sci(rep.maxDeltaN) + " N)";
                 if (b && !rep.inputDiffs.empty())
                     what += "; inputs: " + rep.inputDiffs.front() +
                         (rep.inputDiffs.size() > 1 ? " and " + std::to_string(rep.inputDiffs.size() - 1) + " more"
@@ -164,6 +173,10 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
                 writes.addStream(
                     baselinePath(suite.baselinesDir, c.name), [doc](std::ostream& out) { out << baselineText(doc); });
             }
+        } else if (rep.pass && !o.plotDir.empty()) {
+            // A plot left by an earlier run of a case that passes now would say it fails.
+            std::error_code ec;
+            fs::remove(o.plotDir / (c.name + ".png"), ec);
         } else if (!rep.pass && !o.plotDir.empty()) {
             std::vector<Sample> ref;
             std::string refName = "baseline";
@@ -178,7 +191,10 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
                 fs::create_directories(o.plotDir);
                 const std::string png = (o.plotDir / (c.name + ".png")).string();
                 std::string why;
-                if (plotCase(rep, runs[k], ref, refName, png, why)) rep.png = png;
+                if (plotCase(rep, runs[k], ref, refName, png, why))
+                    rep.png = png;
+                else
+                    rep.plotProblem = why;
             }
         }
         result.cases.push_back(std::move(rep));

@@ -53,8 +53,8 @@ VolumeSpec parseVolume(Fields& c)
     if (phantom == "slab") {
         if (v.has("tilt_deg")) { // may be negative, which JsonFields::number refuses
             const Json& t = v.raw("tilt_deg");
-            if (!t.is_number() || !(std::abs(t.get<double>()) < 80.0))
-                v.fail("tilt_deg", "must be a number of degrees within ±80");
+            if (!t.is_number() || !(std::abs(t.get<double>()) <= 75.0)) // the slab phantom's range (§7)
+                v.fail("tilt_deg", "must be a number of degrees within ±75");
             s.tiltDeg = t.get<double>();
         }
         if (v.has("layers")) {

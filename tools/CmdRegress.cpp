@@ -16,8 +16,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
+
+#include <unistd.h>
 
 namespace voxhap::tools {
 
@@ -32,6 +35,16 @@ struct RegressCliOptions {
 int run(const RegressCliOptions& o)
 {
     regress::RegressResult result;
+    // The JUnit file's folder is checked before the suite runs: a report that
+    // cannot be written is bad input (exit 2), not a regression found late.
+    if (!o.junit.empty()) {
+        const std::filesystem::path dir = std::filesystem::path(o.junit).parent_path();
+        if (::access((dir.empty() ? std::filesystem::path(".") : dir).c_str(), W_OK) != 0) {
+            std::cerr << "voxhap regress: error: --junit " << o.junit << ": the folder "
+                      << (dir.empty() ? std::string(".") : dir.string()) << " does not exist or is not writable\n";
+            return kExitUsage;
+        }
+    }
     try {
         const regress::Suite suite = o.suite.empty() ? regress::builtinSuite() : regress::loadSuite(o.suite);
         regress::RegressOptions ro;
@@ -49,7 +62,12 @@ int run(const RegressCliOptions& o)
     }
     if (!o.junit.empty()) {
         const std::string xml = regress::junitXml(result);
-        writeStreamAtomically(o.junit, [&](std::ostream& out) { out << xml; });
+        try {
+            writeStreamAtomically(o.junit, [&](std::ostream& out) { out << xml; });
+        } catch (const Error& e) {
+            std::cerr << "voxhap regress: error: --junit " << e.what() << '\n';
+            return kExitUsage;
+        }
     }
     if (o.json)
         std::cout << regress::reportJson(result).dump(2) << '\n';

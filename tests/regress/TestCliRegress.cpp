@@ -93,6 +93,11 @@ TEST_F(CliRegress, EditedSceneInScenesDirFailsOnlyItsCasesAndDrawsThePlot)
     ASSERT_TRUE(fs::exists(png)) << r.out;
     EXPECT_EQ(voxhap::test::slurp(png).substr(1, 3), "PNG");
     EXPECT_FALSE(fs::exists(mDir / "voxhap-regress" / "senac-calcified.png")) << "a passing case was plotted";
+    // With the edit undone the case passes, and its plot from the run before goes.
+    fs::remove(mDir / "scenes" / "senac-average.json");
+    const auto again = run("regress --scenes scenes --only senac-average");
+    EXPECT_EQ(again.exitCode, 0) << again.out << again.err;
+    EXPECT_FALSE(fs::exists(png)) << "a stale plot says a passing case fails";
 }
 
 /// Item 8: a case without a baseline is a regression (exit 1) and nothing is
@@ -131,6 +136,16 @@ TEST_F(CliRegress, DamagedSuiteIsRefusedInOneLineWithExitTwo)
     std::ofstream(mDir / "unknown.json") << R"({"schema": "voxhap-regress/1", "cases": [{"name": "a", "scene": "x"}]})";
     voxhap::test::expectUsageError(run("regress unknown.json"), "unknown.json: cases.a.scene: ");
     voxhap::test::expectUsageError(run("regress --only no-such-case"), "--only 'no-such-case': matches no case");
+    // A report that cannot be written is refused before the suite runs.
+    voxhap::test::expectUsageError(
+        run("regress --only kyung --junit no-such-folder/report.xml"), "--junit no-such-folder/report.xml: ");
+    // A scene override of a tissue the table does not know (a misspelling) would move nothing.
+    fs::create_directories(mDir / "scenes");
+    Json scene = Json::parse(voxhap::test::slurp(VOXHAP_SOURCE_DIR "/data/scenes/senac-average.json"));
+    scene["overrides"]["skn"] = {{"puncture_force_N", 2.1}};
+    std::ofstream(mDir / "scenes" / "senac-average.json") << scene.dump(1);
+    voxhap::test::expectUsageError(run("regress --scenes scenes --only senac-average"),
+        "cases.senac-average.scene: scenes/senac-average.json: overrides.skn: unknown tissue 'skn'");
 }
 
 } // namespace

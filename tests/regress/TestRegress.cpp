@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestRegress.cpp
-/// @brief The regression engine (issue 29): suite validation, the closed form
-/// against a hand evaluation of physics.md §7 R1, determinism across thread
+/// @brief The regression engine (issue 29): suite validation, the closed forms
+/// against hand evaluations of physics.md §7 R1–R4, determinism across thread
 /// counts and runs, baselines written and read back, stale baselines.
 
 #include "regress/Compare.h"
@@ -102,6 +102,9 @@ TEST(RegressSuite, DamagedSuitesAreRefusedNamingFileCaseAndField)
     expectSuiteRefused(
         std::string(kHeader) + R"({"name": "a", "scene": "kyung"}, {"name": "a", "scene": "conci"}]})", "duplicate");
     expectSuiteRefused(std::string(kHeader) + R"({"name": "A/b", "scene": "kyung"}]})", "name");
+    expectSuiteRefused( // the slab phantom's range
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung", "volume": {"phantom": "slab", "tilt_deg": 78}}]})",
+        "cases.a.volume.tilt_deg: must be a number of degrees within ±75");
 }
 
 TEST(RegressSuite, UnknownSceneAndTissueAreRefusedBeforeAnythingRuns)
@@ -164,6 +167,36 @@ TEST(RegressClosedForm, SlabProfileMatchesHandEvaluatedR1)
     const auto cf = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
     ASSERT_TRUE(cf);
     EXPECT_NE(cf->rule.find("R1"), std::string::npos);
+}
+
+/// R1 takes the layers as unbounded, the slab phantom is 40 mm wide (§7): down
+/// the normal of layers tilted 75°, the tip leaves the block sideways after
+/// 20/sin 75° ≈ 20.7 mm. Up to a voxel diagonal before that the run matches R1;
+/// past it the closed form does not claim the profile.
+TEST(RegressClosedForm, TiltedSlabIsComparedOnlyWhileTheTipIsInsideTheBlock)
+{
+    const Suite s = parseSuite(std::string(kHeader) + R"({"name": "t", "scene": "kyung",
+        "volume": {"phantom": "slab", "tilt_deg": 75, "spacing_mm": 1}}]})",
+        "my-suite.json", ".");
+    Runner runner(s, {0}, {});
+    const CaseRun run = runner.run().at(0);
+    const auto cf = closedForm(s.cases[0], {}, run.inputs, run.profile.samples);
+    ASSERT_TRUE(cf);
+    const double inside = (20.0 - std::sqrt(3.0) * 1.0) / std::sin(75.0 * kPi / 180.0); // [mm] of path
+    int compared = 0, beyond = 0;
+    for (std::size_t i = 0; i < run.profile.samples.size(); ++i) {
+        const double d = run.profile.samples[i].depthMm;
+        if (d > inside + 1e-9) {
+            EXPECT_FALSE(std::isfinite(cf->toleranceN[i])) << "compared at " << d << " mm, outside the block";
+            ++beyond;
+            continue;
+        }
+        ASSERT_TRUE(std::isfinite(cf->toleranceN[i])) << d;
+        EXPECT_NEAR(run.profile.samples[i].modelN, cf->modelN[i], cf->toleranceN[i]) << "at " << d << " mm";
+        ++compared;
+    }
+    EXPECT_GT(compared, 50);
+    EXPECT_GT(beyond, 10);
 }
 
 TEST(RegressClosedForm, EditedBetaInTheRecordMovesTheClosedForm)
@@ -267,6 +300,134 @@ TEST(RegressClosedForm, EditedBmiInTheRecordFailsTheConciCase)
     EXPECT_TRUE(found) << "no sample at 5 mm";
 }
 
+/// physics.md §7 R4 by hand on the shipped senac-average case (lumbar phantom,
+/// 0.5 mm voxels, 2 mm/s, 1 kHz, k_c = the Virtuose's 2 N/mm): the derma tents
+/// with F_p = 2 N at z_p = 10 mm (§2.2: a1 = 0.10 N/mm, a2 = 0.010 N/mm²); at
+/// the pop the tip is on the supraspinous ligament's face (10 mm), so the
+/// preload is skin 2 + supraspinous 4 = 6 N; the interspinous box (4 N, from
+/// 13 mm) and the flavum's (6 N, from 28 mm) ramp in at 2 N/mm; 16 N in the
+/// flavum (§2.3). Shaft friction v·Σ b·l with the table's b (N·s/m² → N·s/mm²).
+TEST(RegressClosedForm, SenacProfileMatchesHandEvaluatedR4)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"senac-average"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const double v = 2.0;
+    const double bSkin = 2.1e-6, bFat = 1.0e-6, bLig = 3.0e-6, bFlavum = 3.3e-6; // [N·s/mm²]
+    const auto friction = [&](double d) { // the shaft is longer than every depth here: each layer's chord
+        const auto chord = [&](double top, double bottom) { return std::clamp(d, top, bottom) - top; };
+        return v *
+            (bSkin * chord(0, 2) + bFat * chord(2, 10) + bLig * (chord(10, 13) + chord(13, 28)) +
+                bFlavum * chord(28, 35.5));
+    };
+    struct Point {
+        double depth, force, ramp; // ramp: within a ramp, the sampled proxy's one tick
+    };
+    const double rampTick = 2.0 * v / 1000.0; // k_c·v/rate
+    const Point points[] = {
+        {5.0, 0.1 * 5 + 0.01 * 25 + v * bSkin * 5, 0}, // tenting: the pushed span rubs too
+        {9.5, 0.1 * 9.5 + 0.01 * 9.5 * 9.5 + v * bSkin * 9.5, 0},
+        {12.0, 6.0 + friction(12.0), 0},
+        {14.0, 6.0 + 2.0 * (14.0 - 13.0) + friction(14.0), rampTick},
+        {20.0, 10.0 + friction(20.0), 0},
+        {30.0, 10.0 + 2.0 * (30.0 - 28.0) + friction(30.0), rampTick},
+        {33.0, 16.0 + friction(33.0), 0},
+    };
+    std::vector<Sample> at;
+    for (const Point& p : points) at.push_back({p.depth, 0, 0, 0});
+    const auto cf = closedForm(s.cases[sel[0]], {}, run.inputs, at);
+    ASSERT_TRUE(cf);
+    EXPECT_NE(cf->rule.find("R4"), std::string::npos) << cf->rule;
+    const double rounding = 1e-12; // R4's 10⁻¹² relative
+    for (std::size_t i = 0; i < at.size(); ++i) {
+        const Point& p = points[i];
+        EXPECT_NEAR(cf->modelN[i], p.force, rounding * p.force + p.ramp) << "at " << p.depth << " mm";
+        // Compared as tightly as R4 says: rounding, and a tick of proxy within a ramp.
+        EXPECT_LE(cf->toleranceN[i], rounding * (p.force + 1) + p.ramp + 1e-15) << "at " << p.depth << " mm";
+    }
+    ASSERT_EQ(cf->events.size(), 1u);
+    EXPECT_EQ(cf->events[0].event, "pop");
+    EXPECT_DOUBLE_EQ(cf->events[0].depthMm, 10.0);
+
+    // The run itself: every compared sample within the rule's tolerance, the
+    // ramps included, and the pop where R4 puts it.
+    const auto full = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
+    ASSERT_TRUE(full);
+    int compared = 0;
+    for (std::size_t i = 0; i < run.profile.samples.size(); ++i) {
+        if (!std::isfinite(full->toleranceN[i])) continue;
+        EXPECT_NEAR(run.profile.samples[i].modelN, full->modelN[i], full->toleranceN[i])
+            << "at " << run.profile.samples[i].depthMm << " mm";
+        ++compared;
+    }
+    EXPECT_GT(compared, 200);
+    const CaseReport rep = compareCase(s.cases[sel[0]], run, std::nullopt);
+    EXPECT_TRUE(rep.eventDiffs.empty()) << ::testing::PrintToString(rep.eventDiffs);
+    EXPECT_FALSE(rep.first) << rep.first->depthMm << " " << rep.first->against;
+}
+
+/// The tip reaches the supraspinous face in the tick of the skin's pop: whether
+/// that tick counts as inside (the box in the preload, a step to 6 N) or the
+/// next one (it ramps in from 2 N) is float rounding. The closed form takes the
+/// reading nearer the run for that stretch; a profile with neither fails.
+TEST(RegressClosedForm, SenacBoxOnThePopTickIsReadEitherWay)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"senac-average"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const double fSkin = 2.0 * 2.1e-6 * 2; // the skin's 2 mm of shaft friction at 2 mm/s
+    const auto profile = [&](double f11, double f12) {
+        return std::vector<Sample>{
+            {9.0, 0.1 * 9 + 0.01 * 81 + 2.0 * 2.1e-6 * 9, 0, 0}, {11.0, f11, 0, 0}, {11.5, f12, 0, 0}};
+    };
+    const auto friction = [&](double d) { return fSkin + 2.0 * (1e-6 * 8 + 3e-6 * (d - 10)); };
+    const auto worst = [&](const std::vector<Sample>& p) {
+        const auto cf = closedForm(s.cases[sel[0]], {}, run.inputs, p);
+        EXPECT_TRUE(cf);
+        double w = 0;
+        for (std::size_t i = 0; cf && i < p.size(); ++i)
+            w = std::max(w, std::abs(p[i].modelN - cf->modelN[i]) / cf->toleranceN[i]);
+        return w;
+    };
+    // Step: 6 N. Ramp: 2 + 2·(d − 10) N.
+    EXPECT_LE(worst(profile(6.0 + friction(11.0), 6.0 + friction(11.5))), 1.0);
+    EXPECT_LE(worst(profile(4.0 + friction(11.0), 5.0 + friction(11.5))), 1.0);
+    EXPECT_GT(worst(profile(5.0 + friction(11.0), 5.5 + friction(11.5))), 1.0);
+}
+
+/// The closed form is evaluated with the baseline's record: a cutting force or
+/// tent depth changed since fails R4 where it shows, and the pop is placed by
+/// the recorded tent depth.
+TEST(RegressClosedForm, EditedSenacValuesInTheRecordFailR4)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"senac-average"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const Case& c = s.cases[sel[0]];
+
+    Inputs recorded = run.inputs;
+    recorded["interspinous_ligament.cutting_force"].number = 4.0 * 1.03;
+    CaseReport rep = compareCase(c, run, Baseline{"senac-average.json", recorded, run.profile});
+    ASSERT_TRUE(rep.first);
+    EXPECT_NE(rep.first->against.find("R4"), std::string::npos) << rep.first->against;
+    // The ramp from 13 mm reaches the present 10 N at 15 mm; the next sample, at
+    // 15.2 mm, is 0.12 N short of the record's 10.12 N.
+    EXPECT_NEAR(rep.first->depthMm, 15.2, 1e-9);
+    EXPECT_EQ(rep.first->tissue, "interspinous_ligament");
+
+    recorded = run.inputs;
+    recorded["scene.overrides.skin.tent_depth_mm"].number = 10.3;
+    rep = compareCase(c, run, Baseline{"senac-average.json", recorded, run.profile});
+    ASSERT_TRUE(rep.first);
+    EXPECT_LT(rep.first->depthMm, 0.5) << "a1, a2 follow z_p: the tenting differs from the first sample";
+    const auto moved = std::find_if(rep.eventDiffs.begin(), rep.eventDiffs.end(),
+        [](const std::string& d) { return d.find("pop #1 depth 10.300") != std::string::npos; });
+    EXPECT_NE(moved, rep.eventDiffs.end()) << ::testing::PrintToString(rep.eventDiffs);
+}
+
 /// An installed voxhap runs the built-in suite from the copy compiled in: it
 /// is the source tree's, byte for byte, and its baselines read the same.
 TEST(RegressBuiltin, CompiledInSuiteAndBaselinesAreTheSourceTrees)
@@ -361,6 +522,59 @@ TEST_F(RegressBaselines, UpdateWritesBaselinesThatTheNextRunPasses)
     EXPECT_TRUE(runRegression(s, o).updated.empty()) << "nothing changed, nothing rewritten";
 }
 
+/// Each stored sample stands for the ticks since the one before: their extremes
+/// are kept and compared, so a change the trainee feels between two samples
+/// fails too. A baseline written before the envelope existed is still read; one
+/// with only part of it is refused.
+TEST_F(RegressBaselines, TicksBetweenSamplesAreComparedThroughTheirExtremes)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"senac-average"});
+    Runner runner(s, sel, {});
+    const CaseRun run = runner.run().at(0);
+    const Profile& p = run.profile;
+    ASSERT_EQ(p.envelope.size(), p.samples.size());
+    for (std::size_t i = 0; i < p.samples.size(); ++i) {
+        EXPECT_LE(p.envelope[i].modelMin, p.samples[i].modelN);
+        EXPECT_GE(p.envelope[i].modelMax, p.samples[i].modelN);
+        EXPECT_LE(p.envelope[i].renderedMin, p.samples[i].renderedN);
+        EXPECT_GE(p.envelope[i].renderedMax, p.samples[i].renderedN);
+    }
+    const Case& c = s.cases[sel[0]];
+    Baseline b{"senac-average.json", run.inputs, p};
+    EXPECT_TRUE(compareCase(c, run, b).pass);
+
+    // One tick between the samples at 9.8 and 10 mm rendered differently.
+    std::size_t k = 0;
+    while (k < p.samples.size() && p.samples[k].depthMm < 10.0 - 1e-9) ++k;
+    ASSERT_LT(k, p.samples.size());
+    b.profile.envelope[k].renderedMax += 1e-6;
+    const CaseReport r = compareCase(c, run, b);
+    EXPECT_FALSE(r.pass);
+    ASSERT_TRUE(r.first);
+    EXPECT_NEAR(r.first->depthMm, p.samples[k - 1].depthMm, 1e-12);
+    EXPECT_NE(r.first->against.find("a tick between 9.80 and 10.00 mm"), std::string::npos) << r.first->against;
+
+    nlohmann::json doc = baselineJson(c, run);
+    doc["profile"].erase("model_min_N");
+    doc["profile"].erase("model_max_N");
+    doc["profile"].erase("rendered_min_N");
+    doc["profile"].erase("rendered_max_N");
+    doc["profile"].erase("plunger_min_N");
+    const std::string partial = baselineText(doc);
+    try {
+        (void)parseBaseline(partial, "old.json");
+        ADD_FAILURE() << "a baseline with part of the envelope was read";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("old.json: profile: give all six envelope columns"), std::string::npos)
+            << e.what();
+    }
+    doc["profile"].erase("plunger_max_N");
+    const Baseline old = parseBaseline(baselineText(doc), "old.json");
+    EXPECT_TRUE(old.profile.envelope.empty());
+    EXPECT_TRUE(compareCase(c, run, old).pass) << "a baseline without the envelope compares its samples";
+}
+
 TEST_F(RegressBaselines, StaleBaselineIsReportedWithItsDifferences)
 {
     Suite s = suiteWith(R"({"name": "slab", "scene": "kyung", "volume": {"phantom": "slab", "spacing_mm": 1}})");
@@ -398,7 +612,10 @@ TEST_F(RegressBaselines, TruncatedBaselineIsRefusedNamingTheFile)
         runRegression(s, o);
         ADD_FAILURE() << "a truncated baseline was read";
     } catch (const ValueError& e) {
-        EXPECT_NE(std::string(e.what()).find("slab.json"), std::string::npos) << e.what();
+        const std::string m = e.what();
+        EXPECT_NE(m.find("suite.json: cases.slab.baseline: "), std::string::npos) << m;
+        EXPECT_NE(m.find("slab.json: not valid JSON"), std::string::npos) << m;
+        EXPECT_EQ(m.find('\n'), std::string::npos) << m;
     }
     o.update = true; // --update replaces it
     EXPECT_EQ(runRegression(s, o).updated.size(), 1u);
