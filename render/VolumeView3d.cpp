@@ -261,7 +261,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
             opacity->AddPoint(style.window.level - 0.5 * style.window.width, 0.0);
             opacity->AddPoint(style.window.level + 0.5 * style.window.width, kCriticalOpacity);
         }
-        property->ShadeOn();
+        if (style.shade) property->ShadeOn();
         break;
     case BlendMode::Grey:
         // Opacity follows the grey ramp (a soft-tissue haze), then on CT rises to
@@ -273,7 +273,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         if (d.channel == ScalarChannel::Hu) {
             opacity->AddPoint(std::max(kBoneHu, style.window.level + 0.5 * style.window.width + 1.0), kBoneOpacity);
         }
-        property->ShadeOn();
+        if (style.shade) property->ShadeOn();
         break;
     case BlendMode::Mip:
         mapper->SetBlendModeToMaximumIntensity();

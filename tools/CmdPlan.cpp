@@ -146,6 +146,8 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             // more than the whole plan's budget (README "Planning").
             req.views.push_back(render::ViewKind::ThreeD);
             req.quality3d = render::RenderQuality::Moving;
+            req.shade3d = false; // an overview beside the slices: no per-voxel normals
+            req.criticalSurfaces = false;
         } else {
             f.why3d = display->why();
         }
