@@ -84,7 +84,10 @@ struct TrajectoryProfile::Impl {
         value.push_back(b);
         label.push_back(l);
         bound.push_back(boundPart);
-        if (labels && slotOfLabel[std::size_t(l)] < 0) slotOfLabel[std::size_t(l)] = slotCount++;
+        if (labels && slotOfLabel[std::size_t(l)] < 0) {
+            labelOfSlot[std::size_t(slotCount)] = l;
+            slotOfLabel[std::size_t(l)] = slotCount++;
+        }
     }
 
     /// Largest |β(w) − β(v)| over the 26 neighbours w of voxel v.
@@ -236,6 +239,7 @@ struct TrajectoryProfile::Impl {
     double bucketsPerMm = 1.0; ///< 1/bucketWidth: runAt runs at servo rate, a multiply instead of a divide
     std::size_t maxRuns = 0;
     std::array<int, kMaxLabels> slotOfLabel{};
+    std::array<int, kMaxLabels> labelOfSlot{}; ///< the labels on the line, in slot order
     int slotCount = 0;
     std::vector<double> cumLength; // [(run) * slots + slot]: length in the slot's label before the run
     std::vector<double> nextStart; // [(run) * slots + slot]: start of the first run at or after it with that label
@@ -351,10 +355,10 @@ void TrajectoryProfile::fillLabels(
     const Impl& m = *mImpl;
     out.labelsValid = true;
     const auto S = std::size_t(m.slotCount);
-    for (int l = 0; l < kMaxLabels; ++l) {
-        const int slot = m.slotOfLabel[std::size_t(l)];
-        if (slot < 0) continue;
-        const auto j = std::size_t(slot);
+    // Only the labels the line meets (the others keep reset()'s zero length and
+    // no hit): a handful, where a loop over every label was 64 steps per tick.
+    for (std::size_t j = 0; j < S; ++j) {
+        const int l = m.labelOfSlot[j];
         const auto lengthTo = [&](double x, std::size_t k) {
             return m.cumLength[k * S + j] + (m.label[k] == l ? x - m.start[k] : 0.0);
         };
