@@ -350,6 +350,8 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
         }
 
         // The configurations. Integrators are built once; labels off: the damping force only.
+        // Each keeps one result struct, as the servo does (NeedleForceModel's): a fresh one
+        // per batch zeroes 1 KiB of label arrays, which is not the strategy's cost.
         std::vector<Config> configs;
         std::vector<std::shared_ptr<haptic::ShaftIntegrator>> keep;
         const auto add = [&](std::string label, std::string reading, haptic::IntegratorOptions io) {
@@ -357,11 +359,11 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
             std::shared_ptr<haptic::ShaftIntegrator> integ = haptic::makeIntegrator(field, io);
             keep.push_back(integ);
             configs.push_back({std::move(label), std::move(reading),
-                [integ](const std::vector<Segment>& path, std::vector<double>& out) {
-                    ShaftIntegral r;
+                [integ, r = std::make_shared<ShaftIntegral>()](
+                    const std::vector<Segment>& path, std::vector<double>& out) {
                     for (std::size_t i = 0; i < path.size(); ++i) {
-                        integ->integrate(path[i], r);
-                        out[i] = r.dampingIntegral;
+                        integ->integrate(path[i], *r);
+                        out[i] = r->dampingIntegral;
                     }
                 }});
         };
@@ -387,11 +389,11 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
             std::ostringstream label;
             label << "profile tol " << tol << " mm";
             configs.push_back({label.str(), "voxel",
-                [profile](const std::vector<Segment>& path, std::vector<double>& out) {
-                    ShaftIntegral r;
+                [profile, r = std::make_shared<ShaftIntegral>()](
+                    const std::vector<Segment>& path, std::vector<double>& out) {
                     for (std::size_t i = 0; i < path.size(); ++i) {
-                        profile->integrate(path[i], r);
-                        out[i] = r.dampingIntegral;
+                        profile->integrate(path[i], *r);
+                        out[i] = r->dampingIntegral;
                     }
                 },
                 [profile](const std::vector<Segment>& path) {
