@@ -27,6 +27,8 @@ public:
     double integrate(const haptic::Segment& s) noexcept;
 
 private:
+    template <bool Finite> double integrateAs(const haptic::Segment& s) noexcept;
+
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };

@@ -53,12 +53,26 @@ struct FidelityRow {
     double triRmsN = 0, triP99N = 0, triMaxN = 0; ///< against the exact trilinear reading
 };
 
+/// @brief Per workload, the ratios and checks the targets are judged by, measured in one run.
+struct WorkloadSummary {
+    std::string workload;
+    double marchOverExact = 0;    ///< dense trilinear march at 1/4 voxel over exact voxel (median times)
+    double marchOverProfile = 0;  ///< the same march over the locked profile
+    double exactOverPeer = 0;     ///< exact voxel over the two-level OpenVDB block DDA peer
+    double profileDeviationN = 0; ///< largest |profile − exact voxel| on the locked paths at the options' speed [N]
+    double sumsRelativeDifference = 0; ///< largest |peer − exact| / |exact|
+    /// Largest relative error of each against the plane-crossing sum in long double, and
+    /// the largest error as a share of β_max·length (the sum's scale; tiny sums inflate the former).
+    double exactRelativeError = 0, peerRelativeError = 0, exactScaledError = 0, peerScaledError = 0;
+};
+
 struct SamplerReport {
     std::string machine; ///< CPU model and core count
     SamplerBenchOptions options;
     std::vector<SamplerRow> rows;
-    std::vector<FidelityRow> fidelity; ///< path-based error statistics
-    std::vector<std::string> notes;    ///< ratios and targets, measured in this run
+    std::vector<FidelityRow> fidelity;    ///< path-based error statistics
+    std::vector<WorkloadSummary> summary; ///< per workload: ratios and checks
+    std::vector<std::string> notes;       ///< ratios and targets, measured in this run
 };
 
 /// @brief Run the benchmark; @p progress receives one line per stage.

@@ -134,7 +134,8 @@ Action registerBench(CLI::App& app)
                     "100 mm tilted 0-60 degrees. With --ct and --mr also a real CT (segmented, damping per label)\n"
                     "and a T1-weighted MR (damping from T1 voxel by voxel), shafts from the skin along random\n"
                     "directions through the body. Ratios are measured in one run, configurations interleaved;\n"
-                    "the peer row is a two-level OpenVDB block DDA on the same grids and segments.");
+                    "the peer row is a two-level OpenVDB block DDA on the same grids and segments, and both\n"
+                    "sums are checked against a plane-crossing sum in long double (no walk).");
     sampler->add_flag("--quick", o->quick, "Fewer paths, depths and rounds (seconds instead of a minute)");
     sampler->add_option("--paths", o->sampler.paths, "Shaft directions per workload (default 48)")
         ->check(CLI::Range(1, 10000));

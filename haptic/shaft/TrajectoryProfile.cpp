@@ -44,6 +44,7 @@ struct TrajectoryProfile::Impl {
     {
         const auto buckets = std::size_t(std::ceil(maxLength / bucketWidth)) + 2;
         start.reserve(maxRuns);
+        after.reserve(maxRuns);
         cumulative.reserve(maxRuns + 1);
         value.reserve(maxRuns);
         label.reserve(maxRuns);
@@ -58,6 +59,7 @@ struct TrajectoryProfile::Impl {
     void clear() noexcept
     {
         start.clear();
+        after.clear();
         cumulative.clear();
         value.clear();
         label.clear();
@@ -82,7 +84,10 @@ struct TrajectoryProfile::Impl {
         value.push_back(b);
         label.push_back(l);
         bound.push_back(boundPart);
-        if (labels && slotOfLabel[std::size_t(l)] < 0) slotOfLabel[std::size_t(l)] = slotCount++;
+        if (labels && slotOfLabel[std::size_t(l)] < 0) {
+            labelOfSlot[std::size_t(slotCount)] = l;
+            slotOfLabel[std::size_t(l)] = slotCount++;
+        }
     }
 
     /// Largest |β(w) − β(v)| over the 26 neighbours w of voxel v.
@@ -188,6 +193,8 @@ struct TrajectoryProfile::Impl {
                 nextStart[k * S + std::size_t(slotOfLabel[std::size_t(label[k])])] = start[k];
             }
         }
+        after.resize(runs);
+        for (std::size_t k = 0; k < runs; ++k) after[k] = k + 1 < runs ? start[k + 1] : kNotHit;
         const auto buckets = std::size_t(std::ceil(maxLength / bucketWidth)) + 1;
         bucketRun.resize(buckets);
         std::size_t k = 0;
@@ -198,12 +205,18 @@ struct TrajectoryProfile::Impl {
         }
     }
 
-    /// The run holding arc length s in [0, maxLength]: O(1), a few steps past the bucket's first run.
-    std::size_t runAt(double s) const noexcept
+    /// The run holding arc length s in [0, maxLength]: O(1), a few steps past the
+    /// bucket's first run. The first step is taken without a branch (whether s
+    /// lies in the bucket's first run or a later one is data-dependent; the
+    /// buckets are half a voxel, so a second step is rare); after[] ends in +inf.
+    [[gnu::always_inline]] std::size_t runAt(double s) const noexcept
     {
-        const auto j = std::min(bucketRun.size() - 1, std::size_t(std::max(0.0, s) * bucketsPerMm));
+        // Through a signed conversion: the unsigned one tests for 2^63 first.
+        const auto j =
+            std::min(bucketRun.size() - 1, std::size_t(std::int64_t(detail::walk::maxOf(0.0, s) * bucketsPerMm)));
         std::size_t k = bucketRun[j];
-        while (k + 1 < start.size() && start[k + 1] <= s) ++k;
+        k += std::size_t(after[k] <= s);
+        while (after[k] <= s) ++k;
         return k;
     }
     double integralTo(double s, std::size_t k) const noexcept { return cumulative[k] + value[k] * (s - start[k]); }
@@ -219,12 +232,14 @@ struct TrajectoryProfile::Impl {
     double originIndex[3] = {0, 0, 0}, rate[3] = {0, 0, 0}, reachIndex[3] = {0, 0, 0};
 
     std::vector<double> start, cumulative, value, bound;
+    std::vector<double> after; ///< start of the next run; kNotHit (+inf) after the last
     std::vector<int> label;
     std::vector<std::uint32_t> bucketRun;
     double bucketWidth = 1.0;
     double bucketsPerMm = 1.0; ///< 1/bucketWidth: runAt runs at servo rate, a multiply instead of a divide
     std::size_t maxRuns = 0;
     std::array<int, kMaxLabels> slotOfLabel{};
+    std::array<int, kMaxLabels> labelOfSlot{}; ///< the labels on the line, in slot order
     int slotCount = 0;
     std::vector<double> cumLength; // [(run) * slots + slot]: length in the slot's label before the run
     std::vector<double> nextStart; // [(run) * slots + slot]: start of the first run at or after it with that label
@@ -274,7 +289,7 @@ struct LinePlace {
     bool covered = false;
 };
 
-inline LinePlace placeOnLine(
+[[gnu::always_inline]] inline LinePlace placeOnLine(
     const Vec3d& origin, const Vec3d& u, const Segment& s, double tolerance, double maxLength) noexcept
 {
     LinePlace p;
@@ -301,35 +316,49 @@ void TrajectoryProfile::integrate(const Segment& s, ShaftIntegral& out) noexcept
     Impl& m = *mImpl;
     out.reset(m.labels); // the label arrays only when this profile fills them
     const double length = (s.tip - s.entry).norm();
-    if (!std::isfinite(length) || !s.entry.allFinite()) return;
+    LinePlace place = placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength);
+    // A non-finite entry makes place.se non-finite, a non-finite tip the length.
+    if (!std::isfinite(length) || !std::isfinite(place.se)) return;
     out.lengthMm = length;
     if (!(length > 0.0)) return;
-    if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
-        const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
-        out.labelsValid = m.labels;
-        detail::chordPass(direct, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
-        return;
-    }
-    LinePlace place;
-    if (m.locked && s.tip.allFinite()) place = placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength);
-    if (!place.covered) {
-        if (!lock(s.entry, s.tip - s.entry)) return;
+    if (!m.locked || !place.covered || length > mMaxLength) [[unlikely]] {
+        // The rare paths out of line, so that the servo's path keeps its registers.
+        if (!integrateOffLine(s, length, out)) return;
         place = placeOnLine(m.origin, m.u, s, mTolerance, mMaxLength);
     }
-    const double se = std::clamp(place.se, 0.0, mMaxLength);
-    const double st = std::clamp(place.st, se, mMaxLength);
+    using detail::walk::maxOf, detail::walk::minOf; // minsd and maxsd, where std::clamp branches
+    const double se = minOf(maxOf(place.se, 0.0), mMaxLength);
+    const double st = minOf(maxOf(place.st, se), mMaxLength);
     const double projected = st - se;
     // The shaft is ℓ' long where the line piece is ℓ: scale by ℓ'/ℓ (1 on the line).
     const double scale = projected > 0.0 ? length / projected : 0.0;
     const std::size_t ke = m.runAt(se), kt = m.runAt(st);
     out.dampingIntegral = scale * (m.integralTo(st, kt) - m.integralTo(se, ke));
-    if (!m.labels) return;
+    if (m.labels) fillLabels(se, st, ke, kt, scale, out);
+}
+
+bool TrajectoryProfile::integrateOffLine(const Segment& s, double length, ShaftIntegral& out) noexcept
+{
+    Impl& m = *mImpl;
+    if (length > mMaxLength) { // beyond the profile's reach: one exact traversal, no line kept
+        const detail::IndexSegment direct = detail::toIndex(*m.xform, s, 0.5);
+        out.labelsValid = m.labels;
+        detail::chordPass(direct, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
+        return false;
+    }
+    return lock(s.entry, s.tip - s.entry);
+}
+
+void TrajectoryProfile::fillLabels(
+    double se, double st, std::size_t ke, std::size_t kt, double scale, ShaftIntegral& out) const noexcept
+{
+    const Impl& m = *mImpl;
     out.labelsValid = true;
     const auto S = std::size_t(m.slotCount);
-    for (int l = 0; l < kMaxLabels; ++l) {
-        const int slot = m.slotOfLabel[std::size_t(l)];
-        if (slot < 0) continue;
-        const auto j = std::size_t(slot);
+    // Only the labels the line meets (the others keep reset()'s zero length and
+    // no hit): a handful, where a loop over every label was 64 steps per tick.
+    for (std::size_t j = 0; j < S; ++j) {
+        const int l = m.labelOfSlot[j];
         const auto lengthTo = [&](double x, std::size_t k) {
             return m.cumLength[k * S + j] + (m.label[k] == l ? x - m.start[k] : 0.0);
         };

@@ -62,6 +62,13 @@ public:
     double toleranceMm() const { return mTolerance; }
 
 private:
+    /// integrate()'s rare paths: a shaft beyond the profile's reach (integrated
+    /// directly; returns false) or off the line (relocked; false if that fails).
+    [[gnu::noinline]] bool integrateOffLine(const Segment& s, double length, ShaftIntegral& out) noexcept;
+    /// The label lengths and first hits between arc lengths se and st (runs ke, kt).
+    [[gnu::noinline]] void fillLabels(
+        double se, double st, std::size_t ke, std::size_t kt, double scale, ShaftIntegral& out) const noexcept;
+
     struct Impl;
     std::unique_ptr<Impl> mImpl;
     double mTolerance;

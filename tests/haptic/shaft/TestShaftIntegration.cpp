@@ -8,6 +8,7 @@
 
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/shaft/TrajectoryProfile.h"
+#include "haptic/shaft/detail/VoxelWalk.h"
 
 #include <Eigen/Geometry>
 
@@ -326,9 +327,11 @@ namespace voxhap::haptic {
 namespace {
 
 /// A grid that mixes every kind of block the exact walk meets: leaves of
-/// random values (some voxels inactive, some NaN), 8³ tiles (runs of them),
-/// a 128³ tile and background, on anisotropic voxels.
-volume::FloatGrid::Ptr mixedBlockGrid(std::mt19937& rng)
+/// random values (some voxels inactive, some NaN if @p withNaN), 8³ tiles
+/// (runs of them), a 128³ tile and background, on anisotropic voxels; leaves
+/// and tiles on both sides of index 0 (the walk's leaf and node arithmetic on
+/// negative coordinates) and across the boundaries of 128³ nodes.
+volume::FloatGrid::Ptr mixedBlockGrid(std::mt19937& rng, bool withNaN)
 {
     auto g = volume::FloatGrid::create(0.0f);
     openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
@@ -338,7 +341,7 @@ volume::FloatGrid::Ptr mixedBlockGrid(std::mt19937& rng)
     std::uniform_real_distribution<float> value(0.001f, 0.02f);
     std::uniform_int_distribution<int> kind(0, 9);
     auto acc = g->getAccessor();
-    for (int bx = 0; bx < 128; bx += 8) {
+    for (int bx = -64; bx < 128; bx += 8) {
         for (int by = 0; by < 128; by += 8) {
             for (int bz = 0; bz < 128; bz += 8) {
                 const int k = kind(rng);
@@ -347,7 +350,7 @@ volume::FloatGrid::Ptr mixedBlockGrid(std::mt19937& rng)
                         const openvdb::Coord c(bx + (i >> 6), by + ((i >> 3) & 7), bz + (i & 7));
                         const int v = kind(rng);
                         if (v == 0) continue; // inactive background inside a leaf
-                        acc.setValue(c, v == 1 && i % 97 == 0 ? std::nanf("") : value(rng));
+                        acc.setValue(c, withNaN && v == 1 && i % 97 == 0 ? std::nanf("") : value(rng));
                     }
                 } else if (k < 8) { // an 8³ tile (long runs: six in ten blocks)
                     g->tree().addTile(1, openvdb::Coord(bx, by, bz), value(rng), true);
@@ -385,36 +388,54 @@ double planeCrossingSum(const volume::FloatGrid& g, const Segment& s)
 
 /// The walk's three regimes (voxel steps in leaves, block steps over runs of
 /// 8³ tiles, one jump over a 128³ tile) and its switches between them, on
-/// random shafts, shafts along an index axis and shafts in an index plane.
+/// random shafts, shafts along an index axis and shafts in an index plane;
+/// through the integrator and through the damping walk with either of its
+/// lane types (detail::walk::ScalarPair, and the SSE2 pair where there is
+/// one), on a grid with NaN voxels and on one without (the walk skips its
+/// finiteness test there).
 TEST(ExactVoxelWalk, EqualsThePlaneCrossingSumOnLeavesTilesAndBackground)
 {
-    std::mt19937 rng(20261125);
-    const auto grid = mixedBlockGrid(rng);
-    const MaterialField field(grid, nullptr, volume::TissueTable::builtin());
-    const auto exact = makeIntegrator(field, {Strategy::ExactVoxel, 0.1, false});
-    std::uniform_real_distribution<double> pos(-20.0, 200.0);
-    std::normal_distribution<double> gauss(0.0, 1.0);
-    const openvdb::math::Transform& xf = grid->transform();
-    const auto world = [&](double i, double j, double k) {
-        return volume::fromVdb(xf.indexToWorld(openvdb::Vec3d(i, j, k)));
-    };
-    int checked = 0;
-    for (int n = 0; n < 600; ++n) {
-        Segment s;
-        s.entry = world(pos(rng), pos(rng) * 0.6, pos(rng) * 0.6);
-        Vec3d d(gauss(rng), gauss(rng), gauss(rng));
-        if (n % 3 == 1) d = Vec3d::Unit(n % 9 / 3) * (n % 2 ? 1.0 : -1.0); // along an index axis
-        if (n % 3 == 2) d[n % 9 / 3] = 0.0;                                // in an index plane
-        s.tip = s.entry + 150.0 * d.normalized();
-        ShaftIntegral out;
-        exact->integrate(s, out);
-        const double expected = planeCrossingSum(*grid, s);
-        // Both sum the same chords; they differ by round-off in the crossing times
-        // (kExactRelative), and a zero expected sum must come out zero.
-        EXPECT_NEAR(out.dampingIntegral, expected, test::kExactRelative * std::max(expected, 1e-12)) << "shaft " << n;
-        checked += expected > 0.0;
+    for (const bool withNaN : {true, false}) {
+        std::mt19937 rng(20261125);
+        const auto grid = mixedBlockGrid(rng, withNaN);
+        const MaterialField field(grid, nullptr, volume::TissueTable::builtin());
+        const auto exact = makeIntegrator(field, {Strategy::ExactVoxel, 0.1, false});
+        detail::WalkCursor<volume::FloatGrid::TreeType> cursor(grid->tree());
+        ASSERT_EQ(cursor.allFinite, !withNaN);
+        const detail::AffineIndexMap indexMap(grid->transform());
+        openvdb::Vec3d lo, hi;
+        detail::activeBox(*grid, 0.0, lo, hi);
+        std::uniform_real_distribution<double> pos(-20.0, 200.0), posX(-90.0, 200.0);
+        std::normal_distribution<double> gauss(0.0, 1.0);
+        const openvdb::math::Transform& xf = grid->transform();
+        const auto world = [&](double i, double j, double k) {
+            return volume::fromVdb(xf.indexToWorld(openvdb::Vec3d(i, j, k)));
+        };
+        int checked = 0, negative = 0;
+        for (int n = 0; n < 600; ++n) {
+            Segment s;
+            s.entry = world(posX(rng), pos(rng) * 0.6, pos(rng) * 0.6);
+            Vec3d d(gauss(rng), gauss(rng), gauss(rng));
+            if (n % 3 == 1) d = Vec3d::Unit(n % 9 / 3) * (n % 2 ? 1.0 : -1.0); // along an index axis
+            if (n % 3 == 2) d[n % 9 / 3] = 0.0;                                // in an index plane
+            s.tip = s.entry + 150.0 * d.normalized();
+            ShaftIntegral out;
+            exact->integrate(s, out);
+            const double expected = planeCrossingSum(*grid, s);
+            // Both sum the same chords; they differ by round-off in the crossing times
+            // (kExactRelative), and a zero expected sum must come out zero.
+            const double tolerance = test::kExactRelative * std::max(expected, 1e-12);
+            EXPECT_NEAR(out.dampingIntegral, expected, tolerance) << "shaft " << n;
+            const detail::IndexSegment is = detail::toIndex(indexMap, s, 0.5);
+            const double scalar = detail::sumVoxels<decltype(cursor), detail::walk::ScalarPair>(is, lo, hi, cursor);
+            EXPECT_NEAR(scalar * is.lengthMm, expected, tolerance) << "shaft " << n << ", scalar lanes";
+            EXPECT_NEAR(detail::sumVoxels(is, lo, hi, cursor) * is.lengthMm, expected, tolerance) << "shaft " << n;
+            checked += expected > 0.0;
+            negative += expected > 0.0 && std::min(is.a[0], is.a[0] + is.d[0]) < 0.0;
+        }
+        EXPECT_GT(checked, 300); // most shafts cross something: the comparison is not vacuous
+        EXPECT_GT(negative, 50); // and many reach the blocks at negative x
     }
-    EXPECT_GT(checked, 300); // most shafts cross something: the comparison is not vacuous
 }
 
 } // namespace

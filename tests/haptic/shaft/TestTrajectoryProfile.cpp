@@ -193,6 +193,24 @@ TEST_F(Profile, DegenerateInputGivesZero)
     EXPECT_EQ(out.dampingIntegral, 0.0);
     profile.integrate({p, Vec3d(std::nan(""), 0, 0)}, out);
     EXPECT_EQ(out.dampingIntegral, 0.0);
+    // Locked, a non-finite entry or tip gives zero too (integrate() finds a
+    // non-finite entry from its projection on the line: every axis, either sign).
+    ASSERT_TRUE(profile.lock(p, Vec3d(0, -1, 0)));
+    const double inf = std::numeric_limits<double>::infinity();
+    for (int axis = 0; axis < 3; ++axis) {
+        for (const double bad : {std::nan(""), inf, -inf}) {
+            Vec3d wrong = p;
+            wrong[axis] = bad;
+            profile.integrate({wrong, p + Vec3d(0, -10, 0)}, out);
+            EXPECT_EQ(out.dampingIntegral, 0.0) << "entry, axis " << axis << " value " << bad;
+            EXPECT_EQ(out.lengthMm, 0.0);
+            profile.integrate({p, wrong}, out);
+            EXPECT_EQ(out.dampingIntegral, 0.0) << "tip, axis " << axis << " value " << bad;
+            EXPECT_EQ(out.lengthMm, 0.0);
+        }
+    }
+    profile.integrate({p, p + Vec3d(0, -10, 0)}, out); // and the line still answers
+    EXPECT_GT(out.dampingIntegral, 0.0);
     EXPECT_FALSE(profile.lock(p, Vec3d::Zero()));
     EXPECT_THROW(TrajectoryProfile(*fixture->field, 1.0, 150.0, true), ValueError); // tolerance >= h/2
 }
