@@ -22,15 +22,17 @@ namespace {
 using voxhap::fuzz::finding;
 using voxhap::haptic::ServoRecord;
 
-/// Lines after the header, as std::getline splits them.
+/// Lines after the header, as std::getline splits them, less the comment lines
+/// (starting with '#', like session.csv's closing line) that the reader skips.
 std::size_t linesAfterHeader(std::string_view text)
 {
-    std::size_t lines = 0;
+    std::size_t lines = 0, comments = 0;
     for (std::size_t at = 0; at < text.size(); ++lines) {
         const std::size_t end = text.find('\n', at);
+        if (lines > 0 && text[at] == '#') ++comments;
         at = end == std::string_view::npos ? text.size() : end + 1;
     }
-    return lines == 0 ? 0 : lines - 1;
+    return lines == 0 ? 0 : lines - 1 - comments;
 }
 
 void checkPoses(const std::vector<ServoRecord>& poses, std::string_view text)
