@@ -634,9 +634,12 @@ inline double sumVoxels(
     constexpr double kNever = std::numeric_limits<double>::max();
     constexpr unsigned kStride[3] = {64u, 8u, 1u};
     walk::Axis ax[3];
+    // Most shafts start inside the box (t0 = 0, p = a): a predicted branch lets the
+    // walk's set-up start before the clip's divisions are done.
+    const bool fromEntry = t0 == 0.0;
     for (int i = 0; i < 3; ++i) {
         walk::Axis& w = ax[i];
-        const double p = s.a[i] + s.d[i] * t0;
+        const double p = fromEntry ? s.a[i] : s.a[i] + s.d[i] * t0;
         w.c = int(std::floor(p));
         w.absD = std::abs(s.d[i]);
         if (s.d[i] == 0.0) {
