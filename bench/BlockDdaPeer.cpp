@@ -28,23 +28,11 @@ struct BlockDdaPeer::Impl {
         lo = bb.min().asVec3d();
         hi = bb.max().asVec3d() + openvdb::Vec3d(1.0);
         empty = bb.empty();
-        // Whether the walk can meet a non-finite value at all (voxels, tiles,
-        // background): if not, it need not test each one. Any user may check
-        // this once per grid, so the peer does too.
-        finite = std::isfinite(grid->background());
-        for (auto leaf = grid->tree().cbeginLeaf(); leaf && finite; ++leaf) {
-            const float* v = leaf->buffer().data();
-            for (openvdb::Index i = 0; i < LeafT::SIZE; ++i) finite = finite && std::isfinite(v[i]);
-        }
-        auto tile = grid->tree().cbeginValueAll();
-        tile.setMaxDepth(decltype(tile)::LEAF_DEPTH - 1);
-        for (; tile && finite; ++tile) finite = std::isfinite(*tile);
     }
     volume::FloatGrid::ConstPtr grid;
     openvdb::tree::ValueAccessor<const TreeT> acc;
     openvdb::Vec3d lo, hi;
     bool empty = true;
-    bool finite = false;
     openvdb::math::AffineMap affine; ///< the grid's (affine) map by value: no virtual calls per point
 };
 
@@ -59,15 +47,7 @@ BlockDdaPeer::~BlockDdaPeer() = default;
 
 double BlockDdaPeer::integrate(const haptic::Segment& s) noexcept
 {
-    return mImpl->finite ? integrateAs<true>(s) : integrateAs<false>(s);
-}
-
-template <bool Finite> double BlockDdaPeer::integrateAs(const haptic::Segment& s) noexcept
-{
     Impl& m = *mImpl;
-    const auto add = [](double& sum, float v, double chord) {
-        if (Finite || std::isfinite(v)) sum += double(v) * chord;
-    };
     const double length = (s.tip - s.entry).norm();
     if (m.empty || !(length > 0.0) || !std::isfinite(length)) return 0.0;
     const openvdb::Vec3d a = m.affine.applyInverseMap(volume::toVdb(s.entry)) + openvdb::Vec3d(0.5);
@@ -100,10 +80,14 @@ template <bool Finite> double BlockDdaPeer::integrateAs(const haptic::Segment& s
             openvdb::math::DDA<RayT, 0> voxel(ray, ta, tb);
             do {
                 const double va = voxel.time(), vb = voxel.next();
-                if (vb > va) add(sum, data[LeafT::coordToOffset(voxel.voxel())], vb - va);
+                if (vb > va) {
+                    const float v = data[LeafT::coordToOffset(voxel.voxel())];
+                    if (std::isfinite(v)) sum += double(v) * (vb - va);
+                }
             } while (voxel.step());
         } else {
-            add(sum, m.acc.getValue(block.voxel()), tb - ta);
+            const float v = m.acc.getValue(block.voxel());
+            if (std::isfinite(v)) sum += double(v) * (tb - ta);
         }
     } while (block.step());
     return sum * length;

@@ -27,8 +27,6 @@ public:
     double integrate(const haptic::Segment& s) noexcept;
 
 private:
-    template <bool Finite> double integrateAs(const haptic::Segment& s) noexcept;
-
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };

@@ -424,6 +424,19 @@ double sumAlong(Axis x, Axis y, Axis z, double t, double t1, Cursor& cursor) noe
                 return Block{lo, w.next + double(k) * w.delta, 8.0 * w.delta};
             };
             Block bx = block(x), by = block(y), bz = block(z);
+            // Inside the cursor's node a block step is a step of its table index, as in
+            // the leaf loop below; out of it, the cursor finds what is there.
+            const typename Cursor::NodeT* const node = cursor.node;
+            constexpr unsigned kTs[3] = {256u, 16u, 1u};
+            const auto leavesLeft = [](const Axis& w) {
+                const int l = (w.c >> 3) & 15;
+                return w.step > 0 ? 15 - l : w.step < 0 ? l : 16;
+            };
+            int nodeLeft[3] = {leavesLeft(x), leavesLeft(y), leavesLeft(z)};
+            const unsigned ts[3] = {x.step < 0 ? 0u - kTs[0] : kTs[0], y.step < 0 ? 0u - kTs[1] : kTs[1],
+                z.step < 0 ? 0u - kTs[2] : kTs[2]};
+            unsigned n = unsigned((((x.c >> 3) & 15) << 8) | (((y.c >> 3) & 15) << 4) | ((z.c >> 3) & 15));
+            double value = counted(cursor.constant);
             int axis = 0;
             for (;;) {
                 const bool ya = by.next < bx.next;
@@ -432,14 +445,24 @@ double sumAlong(Axis x, Axis y, Axis z, double t, double t1, Cursor& cursor) noe
                 axis = za ? 2 : int(ya);
                 const double tn = za ? bz.next : m01;
                 const double tb = minOf(tn, t1);
-                if (tb > t) sum += counted(cursor.constant) * (tb - t);
+                if (tb > t) sum += value * (tb - t);
                 if (!(tn < t1)) return sum;
                 t = tn;
                 Block& bb = axis == 0 ? bx : axis == 1 ? by : bz;
                 bb.next += bb.delta;
                 bb.b += 8 * (axis == 0 ? x.step : axis == 1 ? y.step : z.step);
-                cursor.at(openvdb::Coord(bx.b, by.b, bz.b));
-                if (cursor.dim == 0) break;
+                if (nodeLeft[axis] == 0) {
+                    cursor.at(openvdb::Coord(bx.b, by.b, bz.b));
+                    break;
+                }
+                --nodeLeft[axis];
+                n += ts[axis];
+                if (node->isChildMaskOn(n)) { // a leaf, left as cursor.at() leaves it
+                    cursor.data = node->getTable()[n].getChild()->buffer().data();
+                    cursor.dim = 0;
+                    break;
+                }
+                value = counted(node->getTable()[n].getValue());
             }
             // Entered block b through its face on `axis` at time t: the voxel there,
             // and on the other axes the voxel whose far face is the first of the
@@ -611,9 +634,12 @@ inline double sumVoxels(
     constexpr double kNever = std::numeric_limits<double>::max();
     constexpr unsigned kStride[3] = {64u, 8u, 1u};
     walk::Axis ax[3];
+    // Most shafts start inside the box (t0 = 0, p = a): a predicted branch lets the
+    // walk's set-up start before the clip's divisions are done.
+    const bool fromEntry = t0 == 0.0;
     for (int i = 0; i < 3; ++i) {
         walk::Axis& w = ax[i];
-        const double p = s.a[i] + s.d[i] * t0;
+        const double p = fromEntry ? s.a[i] : s.a[i] + s.d[i] * t0;
         w.c = int(std::floor(p));
         w.absD = std::abs(s.d[i]);
         if (s.d[i] == 0.0) {
