@@ -4,6 +4,7 @@
 
 #include "core/Errors.h"
 
+#include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>

@@ -14,6 +14,7 @@
 #include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>

@@ -9,11 +9,12 @@
 #include "render/Display.h"
 #include "render/ViewerWindow.h"
 
+// gtest before Xlib: Xlib.h defines None, which gtest declares as a struct.
+#include <gtest/gtest.h>
+
 #include <X11/Xlib.h>
 #include <X11/Xutil.h>
 #include <X11/keysym.h>
-
-#include <gtest/gtest.h>
 
 #include <bit>
 #include <chrono>
