@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Regenerates every picture of docs/guide.md with the voxhap that was built, so
+# the guide shows what this version of voxhap makes.
+#
+#   docs/guide/make-pictures.sh                 write docs/guide/img/*.png
+#   docs/guide/make-pictures.sh --out DIR       write them to DIR instead
+#   docs/guide/make-pictures.sh --ct DIR        the patient CT (default ../shared/data/ct-abdomen-tcia/dicom)
+#   docs/guide/make-pictures.sh --list          print the pictures' names and exit
+#
+# Environment: VOXHAP_BUILD_DIR (default ./build). Needs the CT of the
+# planning chapter; every other picture comes from built-in phantoms and
+# scenes. About a minute on 2 cores. Pictures are written only when every
+# step succeeded: a failed step leaves the old pictures in place.
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+build_dir=${VOXHAP_BUILD_DIR:-$here/build}
+out=$here/docs/guide/img
+ct=$here/../shared/data/ct-abdomen-tcia/dicom
+
+# The pictures, in the order the guide shows them. tests/docs checks that this
+# list and the guide's image links are the same set.
+pictures=(
+  plan-views.png          # voxhap plan: slices through the target and the 3D overview, paths drawn
+  plan-force-depth.png    # voxhap plan: the predicted force along the best path
+  viewer.png              # voxhap view: the planning viewer, 3D pane turned
+  simulate-force-depth.png  # voxhap simulate: an epidural insertion through the Senac model
+  serve-session.png       # voxhap serve: a simulated trainee's hand stops at the loss of resistance
+  regress-failure.png     # voxhap regress: a tissue edit caught, where and by how much
+  bench-sampler.png       # voxhap bench sampler: runtime against error, Pareto front
+)
+
+while (($#)); do
+  case $1 in
+    --out) out=$2; shift 2 ;;
+    --ct) ct=$2; shift 2 ;;
+    --list) printf '%s\n' "${pictures[@]}"; exit 0 ;;
+    -h|--help) sed -n '3,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "make-pictures: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+
+voxhap=$build_dir/bin/voxhap
+[ -x "$voxhap" ] || { echo "make-pictures: no $voxhap; run tools/setup.sh first" >&2; exit 2; }
+[ -d "$ct" ] || { echo "make-pictures: no CT folder '$ct' (--ct DIR)" >&2; exit 2; }
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+step() { echo "make-pictures: $*" >&2; }
+
+step "plan a biopsy path on the CT"
+"$voxhap" plan "$ct" --target 4,128,296 --allow-bone --out plan >plan.txt
+cp plan/views.png plan-views.png
+cp plan/force-depth.png plan-force-depth.png
+
+step "the planning viewer with the plan, 3D pane turned"
+printf 'drag 3d 60 -20\nrelease\n' >turn.txt
+"$voxhap" view "$ct" --plan plan/paths.mrk.json --script turn.txt --snapshot viewer.png >/dev/null
+
+step "a simulated epidural insertion"
+"$voxhap" simulate --scene senac-average --out sim >/dev/null
+cp sim/force-depth.png simulate-force-depth.png
+
+step "a simulated trainee's hand in the servo loop (20 s in real time)"
+"$voxhap" serve --scene senac-average --duration 20 --out serve >/dev/null
+"$voxhap" plot serve/session.csv --out serve-session.png >/dev/null
+
+step "a regression run after raising the ligamentum flavum's cutting force by 20 %"
+python3 - "$here/data/tissues.json" edited-tissues.json <<'EOF'
+import json, sys
+table = json.load(open(sys.argv[1]))
+for t in table["tissues"]:
+    if t["name"] == "ligamentum_flavum":
+        t["cutting_force"]["value"] *= 1.2
+json.dump(table, open(sys.argv[2], "w"), indent=1)
+EOF
+# Exit 1 is the expected outcome here: the edit must fail the cases it touches.
+set +e
+"$voxhap" regress --tissues edited-tissues.json --only senac-average --plots regress >regress.txt
+rc=$?
+set -e
+[ "$rc" -eq 1 ] || { echo "make-pictures: regress exited $rc, expected 1 (the edit caught)" >&2; exit 1; }
+cp regress/senac-average.png regress-failure.png
+
+step "the shaft-integration benchmark (quick)"
+"$voxhap" bench sampler --quick --png bench-sampler.png >/dev/null
+
+mkdir -p "$out"
+for p in "${pictures[@]}"; do
+  [ -s "$p" ] || { echo "make-pictures: $p was not made" >&2; exit 1; }
+done
+for p in "${pictures[@]}"; do
+  cp "$p" "$out/.$p.tmp" && mv "$out/.$p.tmp" "$out/$p"
+done
+step "wrote ${#pictures[@]} pictures to $out"
