@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Report.h
-/// @brief The planning report as JSON ("voxhap-plan-report/1", README "Planning"):
+/// @brief The planning report as JSON ("voxhap-plan-report/1", docs/reference.md "Planning"):
 ///
 /// @code
 /// {"schema": "voxhap-plan-report/1",

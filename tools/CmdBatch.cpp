@@ -427,7 +427,7 @@ Action registerBatch(CLI::App& app)
     CLI::App* cmd = app.add_subcommand("batch",
         "Run a cohort of plan, simulate and segment jobs from a manifest, one job per process and index (SLURM array "
         "jobs, Kubernetes Indexed Jobs); `batch merge` writes the cohort table");
-    cmd->add_option("manifest", o->manifest, "Manifest JSON (schema voxhap-batch/1; README \"Cohorts\")");
+    cmd->add_option("manifest", o->manifest, "Manifest JSON (schema voxhap-batch/1; examples/cohort/README.md)");
     cmd->add_option("--index", o->index,
            "Run only this job (0-based); default: SLURM_ARRAY_TASK_ID, else JOB_COMPLETION_INDEX, else every job")
         ->check(CLI::Range(0, 100000000));

@@ -143,7 +143,7 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
         if (display->available()) {
             // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
             // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
-            // more than the whole plan's budget (README "Planning").
+            // more than the whole plan's budget (docs/reference.md "Planning").
             req.views.push_back(render::ViewKind::ThreeD);
             req.quality3d = render::RenderQuality::Moving;
             req.shade3d = false; // an overview beside the slices: no per-voxel normals

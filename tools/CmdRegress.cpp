@@ -3,7 +3,7 @@
 /// @brief `voxhap regress [SUITE]`: regression tests of force profiles on phantom
 /// volumes against baselines and closed forms (regress/Regress.h).
 ///
-/// Exit codes are regress's own (README "Regression testing a simulator"):
+/// Exit codes are regress's own (docs/reference.md "Regression testing a simulator"):
 /// 0 every case passed (or --update wrote the baselines), 1 a regression,
 /// 2 a bad suite, baseline or other input, in one line naming the file, the
 /// case and the field.

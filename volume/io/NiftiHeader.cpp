@@ -72,7 +72,7 @@ struct NiftiRawHeader {
 /// niftilib reads a header with a wrong magic as ANALYZE 7.5 (or worse, as
 /// NIfTI after "fixing" it), replaces an impossible vox_offset by 352 and a
 /// non-positive voxel size by 1 mm: check those fields ourselves, from the raw
-/// bytes, and refuse what is wrong instead (README "Refused header fields").
+/// bytes, and refuse what is wrong instead (docs/reference.md "Refused header fields").
 NiftiRawHeader checkRawHeader(const std::filesystem::path& file, const std::string& name, bool pair)
 {
     std::string n = file.filename().string();

@@ -157,7 +157,7 @@ TEST_F(Nifti, BadFilesAreRefusedNamingTheField)
 }
 
 /// NIfTI-1 §"3 methods": a file may carry a qform and an sform that disagree.
-/// voxhap's documented precedence (NiftiFile.h, README "Loading real data") is
+/// voxhap's documented precedence (NiftiFile.h, docs/reference.md "Loading real data") is
 /// the sform when sform_code > 0, else the qform when qform_code > 0.
 class NiftiFrames : public Nifti {
 protected:
