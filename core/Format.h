@@ -7,7 +7,8 @@
 
 namespace voxhap {
 
-/// @brief @p value with exactly @p digits decimals ("12.35"), as std::fixed prints it.
+/// @brief @p value with exactly @p digits decimals ("12.35"), as std::fixed prints it,
+/// except that a value that rounds to zero prints without a sign ("0.0", never "-0.0").
 std::string fixed(double value, int digits = 1);
 
 } // namespace voxhap

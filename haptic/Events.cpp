@@ -29,6 +29,8 @@ const char* eventName(EventType t)
         return "withdrawn";
     case EventType::Fault:
         return "fault";
+    case EventType::ForceLimited:
+        return "force_limited";
     }
     return "?";
 }

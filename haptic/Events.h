@@ -21,6 +21,7 @@ enum class EventType : std::uint8_t {
     CriticalClear,    ///< no longer touching it
     Withdrawn,        ///< the tip left the body: the state resets
     Fault,            ///< a non-finite input or force: zero force, latched (§6.4)
+    ForceLimited,     ///< the device's peak or I²t limit starts cutting the force (§6.3)
 };
 
 const char* eventName(EventType t);

@@ -250,10 +250,15 @@ TrajectoryReport Planner::finish(
                     fmt(mOptions.minClearanceMm) + " mm)"});
         }
     }
-    if (r.peakForceN > mScene.device.maxForceN) {
+    // The device renders the model's force times the scene's force_scale (issue 23 item 6):
+    // its limit is the model's divided by the scale.
+    const double scale = mScene.terms.renderScale;
+    const double modelLimitN = mScene.device.maxForceN / scale;
+    if (r.peakForceN > modelLimitN) {
         r.warnings.push_back({"force_above_device_limit",
-            "predicted peak " + fmt(r.peakForceN, 2) + " N at " + fmt(r.peakDepthMm) + " mm exceeds the " +
-                mScene.device.name + "'s " + fmt(mScene.device.maxForceN, 2) + " N"});
+            "predicted peak " + fmt(r.peakForceN, 2) + " N at " + fmt(r.peakDepthMm) + " mm" +
+                (scale != 1.0 ? " (" + fmt(r.peakForceN * scale, 2) + " N at the scene's force scale)" : "") +
+                " exceeds the " + mScene.device.name + "'s " + fmt(mScene.device.maxForceN, 2) + " N"});
     }
     if (r.lengthMm > mScene.needle.lengthMm) {
         r.warnings.push_back({"needle_too_short",
@@ -264,7 +269,8 @@ TrajectoryReport Planner::finish(
             std::to_string(r.boneObstacles) + " bone crossing(s) before the target, the first at " +
                 fmt(r.firstBoneMm) + " mm"});
     }
-    r.risk = riskScore(r, mScene.needle.lengthMm, mScene.device.maxForceN, mOptions.marginMm);
+    r.risk =
+        riskScore(r, mScene.needle.lengthMm, mScene.device.maxForceN / mScene.terms.renderScale, mOptions.marginMm);
     return r;
 }
 

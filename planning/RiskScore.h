@@ -22,6 +22,8 @@
 namespace voxhap::planning {
 
 /// @brief Fill report.risk from the report's fields. @p needleMm, @p deviceMaxN, @p marginMm > 0.
+/// @p deviceMaxN is the device's peak in the model's terms: divided by the scene's
+/// force_scale, which the device's force is the model's times.
 RiskTerms riskScore(const TrajectoryReport& report, double needleMm, double deviceMaxN, double marginMm);
 
 } // namespace voxhap::planning

@@ -132,8 +132,9 @@ int run(const DemoOptions& o)
     // surface whatever the tick spacing, within the contact's stiffness range.
     constexpr double kPastContactMm = 1.0;
     const double depth = std::isfinite(best.contactMm) ? best.contactMm + kPastContactMm : best.lengthMm;
-    const haptic::InsertionResult r = haptic::runInsertion(
-        *forceModel, haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, scene.speedMmPerS), scene.rateHz);
+    const haptic::InsertionResult r = haptic::runInsertion(*forceModel,
+        haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, scene.speedMmPerS), scene.rateHz,
+        scene.success, inst.target());
     const SimulationFiles sim = writeSimulation(r, inst, (fs::path(o.outDir) / "insertion").string(), true);
     const double seconds = since(start);
 

@@ -147,7 +147,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
 
     // The session goes to disk as it runs (bounded memory at any rate and length);
     // it replaces an earlier one in the output folder only when it is complete.
-    haptic::SessionRecorder session(o.out, model->layers(), model->path().direction);
+    haptic::SessionRecorder session(o.out, model->layers(), model->path().direction, scene.success, inst.target());
     const bool live = stderrIsTerminal() && !o.common.json;
     const auto t0 = std::chrono::steady_clock::now();
     const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
@@ -182,11 +182,15 @@ int run(const ServeOptions& o, const CLI::App& cmd)
 
     const haptic::TraineeMetrics m = session.metrics();
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
-    nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success_dura_intact", m.success},
-        {"bone_contacts", m.boneContacts}, {"pops", m.pops}, {"insertion_angle_deg", opt(m.insertionAngleDeg)},
-        {"speed_mean_mm_per_s", m.speedMeanMmPerS}, {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2},
-        {"epidural_overshoot_mm", opt(m.overshootMm)}, {"syrrate_per_m", opt(m.syrrate)}, {"duration_s", m.durationS},
-        {"ticks", loop.ticks()}, {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
+    nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success", m.success},
+        {"success_rule", haptic::successRuleName(m.outcome.rule)}, {"success_reason", m.outcome.reason},
+        {"success_dura_intact", m.duraIntact}, {"target_distance_mm", opt(m.outcome.targetDistanceMm)},
+        {"csf_reached", m.outcome.csfReached}, {"critical_breach", m.outcome.criticalBreach},
+        {"force_limited", m.forceLimits}, {"bone_contacts", m.boneContacts}, {"pops", m.pops},
+        {"insertion_angle_deg", opt(m.insertionAngleDeg)}, {"speed_mean_mm_per_s", m.speedMeanMmPerS},
+        {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2}, {"epidural_overshoot_mm", opt(m.overshootMm)},
+        {"syrrate_per_m", opt(m.syrrate)}, {"duration_s", m.durationS}, {"ticks", loop.ticks()},
+        {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
         {"tick_compute_ns",
             {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
                 {"max", loop.maxComputeNs()}}},
@@ -207,8 +211,14 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     std::cout << "voxhap serve: " << scene.name << ", device " << device->name() << ", " << loop.ticks() << " ticks in "
               << std::fixed << std::setprecision(1) << wall << " s"
               << (InterruptGuard::interrupted() ? " (interrupted)" : "") << "\n"
-              << "  dura            " << (m.success ? "intact (success)" : "punctured") << "\n"
+              << "  success         " << (m.success ? "yes" : "no") << " (" << haptic::successRuleName(m.outcome.rule)
+              << "): " << m.outcome.reason << "\n"
+              << "  dura            " << (m.duraIntact ? "intact" : "punctured") << "\n"
               << "  pops            " << m.pops << ", bone contacts " << m.boneContacts << "\n"
+              << "  force limited   "
+              << (m.forceLimits > 0 ? std::to_string(m.forceLimits) + " times by the device's peak or I²t limit"
+                                    : std::string("never"))
+              << "\n"
               << "  speed           " << std::setprecision(2) << m.speedMeanMmPerS << " mm/s mean, variance "
               << m.speedVarianceMm2PerS2 << " mm²/s²\n";
     if (m.overshootMm) std::cout << "  epidural travel " << *m.overshootMm << " mm\n";

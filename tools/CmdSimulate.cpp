@@ -74,7 +74,7 @@ int run(const SimulateOptions& o, const CLI::App& cmd)
     if (script.duration() * rate > 5e7) throw UsageError("--rate and the insertion give more than 5e7 ticks");
 
     auto model = inst.makeModel();
-    const haptic::InsertionResult r = haptic::runInsertion(*model, script, rate);
+    const haptic::InsertionResult r = haptic::runInsertion(*model, script, rate, scene.success, inst.target());
 
     const SimulationFiles files = writeSimulation(r, inst, o.out, !o.noPlot);
     if (o.common.json) {

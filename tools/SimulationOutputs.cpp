@@ -25,7 +25,12 @@ nlohmann::json summaryJson(
         events.push_back(
             {{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
     }
-    return {{"scene", scene.name}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
+    const haptic::ProcedureOutcome& o = r.outcome;
+    const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
+    return {{"scene", scene.name}, {"success", o.success}, {"success_rule", haptic::successRuleName(o.rule)},
+        {"success_reason", o.reason}, {"target_distance_mm", opt(o.targetDistanceMm)}, {"force_limited", s.forceLimits},
+        {"force_limited_first_mm", depth(s.firstLimitMm)}, {"force_limited_ticks", s.limitedTicks},
+        {"force_limited_max_cut_N", s.maxLimitedN}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
         {"loss_of_resistance_mm", depth(s.lorMm)}, {"dura_puncture_mm", depth(s.duraMm)},
         {"bone_contact_mm", depth(s.boneMm)}, {"critical_breach_mm", depth(s.breachMm)},
         {"peak_model_force_N", s.peakModelN}, {"peak_rendered_force_N", s.peakRenderedN},

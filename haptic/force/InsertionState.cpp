@@ -82,7 +82,8 @@ void InsertionState::pop(int i, double d, double z, double t, EventBuffer& ev) n
     mLastPopMm = d;
     ev.push({EventType::Pop, t, d, i});
     if (!mSkinEntered) ev.push({EventType::SkinEntry, t, d, i}), mSkinEntered = true;
-    if (l.role == LayerRole::Dura || (l.role == LayerRole::Epidural && l.name.find("dura") != std::string::npos)) {
+    // Conci's merged "epidural_dura" row ends at the dura (§3.2); "epidural_space" does not.
+    if (l.role == LayerRole::Dura || (l.role == LayerRole::Epidural && l.name.find("_dura") != std::string::npos)) {
         ev.push({EventType::DuraPuncture, t, d, i});
     }
 }

@@ -31,6 +31,18 @@ NeedleForceModel::NeedleForceModel(ForceModelSetup setup)
         throw ValueError("needle path: origin and direction must be finite and the direction non-zero");
     }
     mPath.direction = mPath.direction / n;
+    if (!std::isfinite(mTerms.renderScale) || !(mTerms.renderScale > 0.0))
+        throw ValueError("force model: the force scale must be positive and finite");
+    // Kyung's gravity compensation F_G = −m·g (physics.md §1.1 Eq. 1): the device holds up
+    // its handle, so F_G points against gravity.
+    const Vec3d down(mDevice.down[0], mDevice.down[1], mDevice.down[2]);
+    if (!std::isfinite(mDevice.handleMassKg) || mDevice.handleMassKg < 0.0)
+        throw ValueError("device: handle_mass_kg must be finite and not negative");
+    if (mDevice.handleMassKg > 0.0) {
+        if (!down.allFinite() || !(down.norm() > 0.0))
+            throw ValueError("device: the direction of gravity must be finite and non-zero");
+        mGravity = -mDevice.handleMassKg * kStandardGravityMPerS2 * down.normalized();
+    }
     if (mTerms.damping.on && !mIntegrator) throw ValueError("force model: voxel damping needs a shaft integrator");
     mIntegral.reset();
 }
@@ -45,19 +57,33 @@ void NeedleForceModel::reset() noexcept
     mIntegral.reset();
     mInContact = false;
     mCritical = false;
+    mLimited = false;
     mLockAnchor = Vec3d::Zero();
     mLastDirection = 1;
     mLastTimeS = 0;
 }
 
+bool tipInBone(const TipState& tip, const std::vector<Layer>& layers) noexcept
+{
+    if (tip.boneLayer >= 0) return true;
+    const int current = tip.currentLayer();
+    return current >= 0 && std::size_t(current) < layers.size() && layers[std::size_t(current)].role == LayerRole::Bone;
+}
+
 double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept
 {
     const int current = tip.currentLayer();
-    if (!terms.cutting || current < 0) return 0.0;
-    double f = tip.cuttingSumN; // §2.1 Eq. 3, nested boxes
-    if (tip.pushLayer < 0 && tip.inLayer >= 0)
-        f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm);                   // §3.1
-    if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN; // §4 Eq. 3
+    if (current < 0) return 0.0;
+    double f = 0.0;
+    if (terms.cutting) {
+        f += tip.cuttingSumN; // §2.1 Eq. 3, nested boxes
+        if (tip.pushLayer < 0 && tip.inLayer >= 0)
+            f += layers[std::size_t(tip.inLayer)].plateauN(tip.plateauDepthMm);                   // §3.1
+        if (std::abs(v) >= terms.karnoppDeltaVMmPerS) f += layers[std::size_t(current)].coulombN; // §4 Eq. 3
+    }
+    // [LP] bone texture (§4): f = −c·sgn(v) for |v| > 0, else 0. A Coulomb-type term:
+    // the proxy gives it the sign of the motion (§6.2).
+    if (terms.boneTexture.on && v != 0.0 && tipInBone(tip, layers)) f += terms.boneTexture.cN;
     return f;
 }
 
@@ -105,7 +131,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     }
     if (mSafety.faulted()) {
         out.force = out.modelForce = Vec3d::Zero();
-        out.axialN = out.plungerN = 0.0;
+        out.axialN = out.plungerN = out.limitedN = 0.0;
         out.fault = true;
         return;
     }
@@ -187,6 +213,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         lateral -= k * (lateralOf(in.tip - mPath.origin, u) - mLockAnchor);
     }
     f.lateral = lateral;
+    f.gravity = mGravity;
 
     if (mTerms.lor.on)
         out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
@@ -198,13 +225,21 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         mCritical = critical;
     }
     out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
-    out.modelForce = critical ? Vec3d::Zero() : Vec3d(-out.axialN * u + lateral);
+    // §1.1 Eq. 1: F = F_R + F_C + F_G. A critical structure zeroes the tissue's forces;
+    // F_G only holds up the handle, so it stays.
+    const Vec3d tissue = critical ? Vec3d::Zero() : Vec3d(-out.axialN * u + lateral);
+    out.modelForce = tissue + mGravity;
     out.critical = critical;
     out.speedMmPerS = v;
     out.tip = tip;
 
-    // 4. Safety.
-    out.force = mSafety.apply(out.modelForce, hub, dt);
+    // 4. Safety, on the scaled tissue force; F_G passes beside the passivity observer
+    // (the handle's weight does the opposite work) but within the device's limits.
+    out.force = mSafety.apply(mTerms.renderScale * tissue, hub, dt, mGravity);
+    out.limitedN = mSafety.limitedN();
+    const bool limited = out.limitedN > 0.0;
+    if (limited && !mLimited) out.events.push({EventType::ForceLimited, t, d, current});
+    mLimited = limited;
     if (mSafety.faulted()) {
         out.events.push({EventType::Fault, t, d, current});
         out.fault = true;

@@ -55,8 +55,17 @@ struct ForceTerms {
         bool on = false; ///< syringe plunger channel (§2.3)
         LorParams params;
     } lor;
+    struct BoneTexture {
+        bool on = false; ///< [LP] bone texture f = −c·sgn(v) while the tip is in bone (§4), through the proxy (§6.2)
+        double cN = 0.3; ///< c [N]: not given in [LP]; 0.3 N [chosen, physics.md §4]
+    } boneTexture;
     bool critical = true;        ///< touching a critical structure zeroes the force (§1.1)
     double couplingNPerMm = 0.0; ///< stick-slip proxy stiffness; 0: the device's maximum stiffness (§6.2)
+    /// Uniform scale on the tissue forces sent to the device (the scene's
+    /// force_scale): every term alike, so the contrasts between layers survive,
+    /// while the device's I²t budget lasts to bone contact (issue 23 item 6). The
+    /// model's own figures (axialN, modelForce) stay unscaled; F_G is not scaled.
+    double renderScale = 1.0;
 };
 
 /// @brief The device's reading at one tick.
@@ -72,12 +81,17 @@ struct NeedleInput {
 struct ForceBreakdown {
     double elastic = 0, proxy = 0, viscous = 0, damping = 0, bone = 0, transient = 0, keepDirection = 0;
     Vec3d lateral{0, 0, 0}; ///< pivot correction, lock and bone sticking [N]
+    Vec3d gravity{0, 0, 0}; ///< Kyung's F_G = −m·g holding up the handle (§1.1 Eq. 1) [N]
 };
 
 struct NeedleOutput {
     Vec3d force{0, 0, 0};      ///< rendered, after safety [N]
-    Vec3d modelForce{0, 0, 0}; ///< before safety [N]
-    double axialN = 0;         ///< model resistance along the path [N], + outward
+    Vec3d modelForce{0, 0, 0}; ///< the model's F_R + F_C + F_G (§1.1 Eq. 1), before the render scale and safety [N]
+    /// How much the device's peak and I²t limits cut from the scaled demand this
+    /// tick [N] (0: not limited). A tick where this turns positive raises a
+    /// ForceLimited event.
+    double limitedN = 0;
+    double axialN = 0; ///< model resistance along the path [N], + outward
     ForceBreakdown terms;
     double plungerN = 0;    ///< syringe plunger force [N]
     double speedMmPerS = 0; ///< along the path [mm/s]
@@ -98,6 +112,10 @@ struct NeedlePath {
 /// puncture (§3.1) and the layer's C while |v| >= Δv (§4 Eq. 3). Shared by the
 /// servo model and the planner's prediction; noexcept, no allocation.
 double tipSlipForceN(const ForceTerms& terms, const TipState& tip, const std::vector<Layer>& layers, double v) noexcept;
+
+/// @brief The tip is in bone: on a rigid layer (contact, §1.3) or inside a layer
+/// whose role is bone (the [LP] table's elastic bone row, §4).
+bool tipInBone(const TipState& tip, const std::vector<Layer>& layers) noexcept;
 
 /// @brief Kyung's voxel damping (§1.2 Eq. 5) for damping integral @p b
 /// [N·s/mm] at speed @p v: what the device can render as viscous force, the
@@ -163,7 +181,9 @@ private:
     bool mInContact = false;
     /// Trajectory lock: the tip's offset from the path where it entered the skin (§2.1).
     Vec3d mLockAnchor{0, 0, 0};
+    Vec3d mGravity{0, 0, 0}; ///< F_G = −m·g (§1.1), constant
     bool mCritical = false;
+    bool mLimited = false; ///< the device limits cut the last tick's demand
     int mLastDirection = 1;
     double mLastTimeS = 0;
 };

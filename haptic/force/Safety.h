@@ -35,24 +35,32 @@ public:
 
     /// @brief The force to render for the model's @p force with the device at @p devicePoint
     /// [mm] after @p dtS. Non-finite input latches the fault; a faulted stream renders zero.
-    Vec3d apply(const Vec3d& force, const Vec3d& devicePoint, double dtS) noexcept;
+    /// @p bias is a conservative force added after the passivity observer and before the
+    /// limits: Kyung's gravity compensation F_G (physics.md §1.1), whose work the handle's
+    /// weight takes back, so the observer must not count it.
+    Vec3d apply(const Vec3d& force, const Vec3d& devicePoint, double dtS, const Vec3d& bias = Vec3d::Zero()) noexcept;
     /// @brief Latch the fault from outside (a non-finite device input).
     void latchFault() noexcept { mFault = true, mLast = Vec3d::Zero(); }
     void clearFault() noexcept { mFault = false; }
     bool faulted() const noexcept { return mFault; }
     /// @brief Σ F·Δx delivered to the user so far [N·mm]: positive means energy generated.
     double observedEnergyNmm() const noexcept { return mEnergy; }
+    /// @brief How much the peak and I²t limits cut from the last demand [N]: 0 when they
+    /// did not act (the rise limit and the passivity controller are not counted).
+    double limitedN() const noexcept { return mLimitedN; }
     void reset() noexcept;
     const SafetyParams& params() const noexcept { return mP; }
 
 private:
     SafetyParams mP;
     Vec3d mLast = Vec3d::Zero();
+    Vec3d mLastActive = Vec3d::Zero(); ///< mLast without the bias: what the observer counts
     Vec3d mLastPoint = Vec3d::Zero();
     bool mHavePoint = false;
     bool mFault = false;
     double mEnergy = 0.0;
     double mHeat = 0.0;
+    double mLimitedN = 0.0;
 };
 
 /// @brief @p f scaled to magnitude at most @p limit, keeping its direction.

@@ -78,17 +78,20 @@ Layer baseLayer(const volume::Tissue& t, double start, double end)
     return l;
 }
 
-/// §2.1 Eq. 1, 3–4 with the §2.2 [chosen] a1, a2: tenting where the recipe says, cutting
-/// everywhere, and shaft friction (Okamura's third term, which [S19] left out) as the
-/// tissue table's viscous b.
-void applySenac(Layer& l, const volume::Tissue& t, const LayerRecipe& r)
+TissueOverride overrideOf(const volume::Tissue& t, const LayerRecipe& r)
+{
+    const auto ov = r.overrides.find(t.name);
+    return ov == r.overrides.end() ? TissueOverride{} : ov->second;
+}
+
+/// §2.1 Eq. 4 with the §2.2 [chosen] a1, a2, on the tissues the recipe names: the
+/// elastic stage a1·z + a2·z² up to the puncture force (Sénac's derma and dura;
+/// Kyung's skin, which [K01] §1.1 deforms before it gives way).
+void applyTenting(Layer& l, const volume::Tissue& t, const LayerRecipe& r)
 {
     if (l.rigid || l.role == LayerRole::Air) return;
-    const auto ov = r.overrides.find(t.name);
-    const TissueOverride o = ov == r.overrides.end() ? TissueOverride{} : ov->second;
-    l.cuttingForceN = o.cuttingForceN.value_or(value(t.cuttingForce)) * r.forceScale;
-    l.viscousNsPerMm2 = value(t.frictionViscous);
     if (std::find(r.tenting.begin(), r.tenting.end(), t.name) == r.tenting.end()) return;
+    const TissueOverride o = overrideOf(t, r);
     const double fp = o.punctureForceN.value_or(value(t.punctureForce)) * r.forceScale;
     const double k = o.elasticityNPerMm.value_or(value(t.elasticity));
     if (!(fp > 0.0)) return;
@@ -102,16 +105,29 @@ void applySenac(Layer& l, const volume::Tissue& t, const LayerRecipe& r)
     l.punctureForceN = fp;
 }
 
+/// §2.1 Eq. 1, 3–4: tenting where the recipe says, cutting everywhere, and shaft
+/// friction (Okamura's third term, which [S19] left out) as the tissue table's viscous b.
+void applySenac(Layer& l, const volume::Tissue& t, const LayerRecipe& r)
+{
+    if (l.rigid || l.role == LayerRole::Air) return;
+    const TissueOverride o = overrideOf(t, r);
+    l.cuttingForceN = o.cuttingForceN.value_or(value(t.cuttingForce)) * r.forceScale;
+    l.viscousNsPerMm2 = value(t.frictionViscous);
+    applyTenting(l, t, r);
+}
+
 /// §4: f_tip = −k·x within each layer (x from the layer's start, so the layer "pops"
-/// at its end), viscous b·v·l and Coulomb C.
-void applyLumbarPuncture(Layer& l, double k, double b, double c)
+/// at its end), viscous b·v·l and Coulomb C. The tip's forces, k·x and C, scale with
+/// the needle's diameter, @p scale = d/d_ref (§3.3, Needle.h); the shaft's viscous
+/// b·v·l is Sénac's shaft friction, which the tissue table gives unscaled.
+void applyLumbarPuncture(Layer& l, double k, double b, double c, double scale)
 {
     if (l.rigid) return;
     l.viscousNsPerMm2 = b;
-    l.coulombN = c;
+    l.coulombN = c * scale;
     if (k > 0.0) {
         l.tents = true;
-        l.elastic = {0.0, k, 0.0, 0.0};
+        l.elastic = {0.0, k * scale, 0.0, 0.0};
         l.punctureDepthMm = l.thicknessMm();
     }
 }
@@ -144,11 +160,11 @@ std::vector<Layer> conciFromLayers(
             if (tissues[i]->punctureForce) nextPuncture = tissues[i]->punctureForce->value * r.forceScale;
             break;
         }
-        if (!tissues[i]->punctureForce) {
-            throw ValueError("conci layers: tissue '" + l.name + "' has no puncture_force in the tissue table");
-        }
-        seeds.push_back({l.name, tissues[i]->punctureForce->value * r.forceScale, l.thicknessMm(),
-            depthTriggered(l.role, l.name), true});
+        // A tissue without a puncture force (soft_tissue, a lesion of an imported
+        // segmentation) takes the default of LayerTables.h instead of stopping the scene.
+        const double p = tissues[i]->punctureForce ? tissues[i]->punctureForce->value : kConciDefaultPunctureN;
+        if (!(p > 0.0)) continue; // a fluid (CSF: 0 N) has no elastic stage to fit: entered at once, no plateau
+        seeds.push_back({l.name, p * r.forceScale, l.thicknessMm(), depthTriggered(l.role, l.name), true});
         which.push_back(i);
     }
     if (seeds.empty()) return layers;
@@ -170,8 +186,10 @@ std::vector<Layer> layersFromRuns(
             throw ValueError("layers: label " + std::to_string(run.label) + " on the path is not in the tissue table");
         Layer l = baseLayer(*t, run.startMm, run.endMm);
         if (r.model == LayerModel::Senac) applySenac(l, *t, r);
+        if (r.model == LayerModel::Kyung) applyTenting(l, *t, r); // [K01] §1.1: only the named tissues
         if (r.model == LayerModel::LumbarPuncture) {
-            applyLumbarPuncture(l, value(t->elasticity), value(t->frictionViscous), value(t->frictionCoulomb));
+            applyLumbarPuncture(
+                l, value(t->elasticity), value(t->frictionViscous), value(t->frictionCoulomb), r.forceScale);
         }
         layers.push_back(std::move(l));
         tissues.push_back(t);
@@ -196,7 +214,8 @@ std::vector<Layer> fixedLayers(
             l.startMm = start;
             l.endMm = row.endMm - 5.0;
             l.lorResistance = lorResistance(l.role);
-            applyLumbarPuncture(l, row.kNPerM * 1e-3, row.bNsPerM2 * 1e-6, row.cN); // N/m → N/mm, N·s/m² → N·s/mm²
+            // N/m → N/mm, N·s/m² → N·s/mm²; k and C at the needle's gauge (§3.3 d/d_ref)
+            applyLumbarPuncture(l, row.kNPerM * 1e-3, row.bNsPerM2 * 1e-6, row.cN, r.forceScale);
             start = l.endMm;
             layers.push_back(std::move(l));
         }
@@ -204,7 +223,11 @@ std::vector<Layer> fixedLayers(
     }
     case LayerModel::Conci: {
         const double scale = bmi ? conciBmiScale(*bmi) : 1.0;
-        for (const ConciLayer& c : fitConci(conciSeeds(), scale, r.tip, kConciBonePunctureN)) {
+        // Every force of the fit is linear in the seeds' puncture forces: scaling them by
+        // the needle's d/d_ref (§3.3, Needle.h) scales the whole profile.
+        std::vector<ConciSeed> seeds = conciSeeds();
+        for (ConciSeed& sd : seeds) sd.punctureForceN *= r.forceScale;
+        for (const ConciLayer& c : fitConci(seeds, scale, r.tip, kConciBonePunctureN * r.forceScale)) {
             Layer l;
             l.name = c.name;
             l.role = roleFromName(c.name, false, false);

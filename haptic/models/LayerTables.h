@@ -43,24 +43,36 @@ struct TissueOverride {
 /// @brief How layers get their parameters.
 struct LayerRecipe {
     LayerModel model = LayerModel::Senac;
-    /// Sénac: the tissues with a tenting stage ([S19]: the derma; the dura's puncture
-    /// force is Table I's F_dura).
+    /// The tissues with a tenting stage (§2.1 Eq. 4, §2.2 constants). Sénac: [S19]'s
+    /// derma, and the dura, whose puncture force is Table I's F_dura. Kyung: only
+    /// what the scene names ([K01] §1.1 deforms the skin before it gives way); the
+    /// scene parser clears this default for a kyung scene without a "tenting" list.
     std::vector<std::string> tenting{"skin", "dura"};
     /// Sénac: push depth at puncture z_p [mm] where no override names one:
     /// z_p = F_p/(2·k) with k the tissue's elasticity, so that a1 = k [chosen].
     std::map<std::string, TissueOverride> overrides; ///< by tissue name
-    double forceScale = 1.0;                         ///< needle gauge factor on puncture and cutting forces (Needle.h)
-    TipType tip = TipType::Coned;                    ///< Conci slope multiplier (§3.3)
+    double forceScale =
+        1.0; ///< needle gauge factor d/d_ref on the tip's forces (Needle.h, §3.3): every model, both layer sources
+    TipType tip = TipType::Coned; ///< Conci slope multiplier (§3.3)
 };
 
-/// @brief Layers from label runs: parameters from the tissue table by label.
-/// @throw ValueError if a label is not in the table, or (Conci) a tissue lacks its puncture force
+/// @brief Conci from labels: the puncture force of a tissue the table gives none
+/// (soft_tissue, an imported lesion) [N]. [C-ui]'s muscle row, 4.354 N (physics.md
+/// §3.2): the generic soft tissue of the seed data [chosen].
+inline constexpr double kConciDefaultPunctureN = 4.354;
+
+/// @brief Layers from label runs: parameters from the tissue table by label. Conci:
+/// a tissue without a puncture force takes kConciDefaultPunctureN; lumbar puncture:
+/// a tissue without elasticity, viscosity or Coulomb friction has none (0).
+/// @throw ValueError if a label is not in the table
 std::vector<Layer> layersFromRuns(
     const std::vector<LabelRun>& runs, const volume::TissueTable& table, const LayerRecipe& recipe);
 
 /// @brief The papers' tables, with the skin surface at depth 0:
-/// - LumbarPuncture: [LP] Table I exactly (its "out of skin" row becomes air at −5..0 mm);
-/// - Conci: the §3.2 fitted table, thicknesses scaled for @p bmi (§3.3) when given;
+/// - LumbarPuncture: [LP] Table I exactly (its "out of skin" row becomes air at −5..0 mm),
+///   k and C scaled by the recipe's forceScale (1 at the reference gauge);
+/// - Conci: the §3.2 fitted table, thicknesses scaled for @p bmi (§3.3) when given,
+///   forces by the recipe's forceScale;
 /// - Senac: [S19] Table I for @p preset (derma and epidural lengths, F_dura) with the
 ///   tissue table's other thicknesses and forces (the lumbar phantom's layout);
 /// - Kyung: none (the model reads voxels): throws.

@@ -51,6 +51,21 @@ DeviceLimits parseDevice(Fields& top)
         l.maxContinuousForceN = d.within("max_continuous_force_N", l.maxContinuousForceN, 0.0, 100.0, "N", true);
         l.maxStiffnessNPerMm = d.within("max_stiffness_N_per_mm", l.maxStiffnessNPerMm, 0.0, 20.0, "N/mm", true);
         l.maxDampingNsPerMm = d.within("max_damping_Ns_per_mm", l.maxDampingNsPerMm, 0.0, 1.0, "N·s/mm", true);
+        // Kyung's F_G = −m·g (physics.md §1.1): a handle of a few hundred grams; 10 kg leaves margin.
+        l.handleMassKg = d.within("handle_mass_kg", l.handleMassKg, 0.0, 10.0, "kg");
+        if (d.has("down")) {
+            const Json& v = d.raw("down");
+            const auto bad = [&d] { d.fail("down", "must be a direction [x, y, z] (world LPS), finite and non-zero"); };
+            if (!v.is_array() || v.size() != 3) bad();
+            double n2 = 0.0;
+            for (std::size_t i = 0; i < 3; ++i) {
+                if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) bad();
+                l.down[i] = v[i].get<double>();
+                n2 += l.down[i] * l.down[i];
+            }
+            if (!(n2 > 0.0) || !std::isfinite(n2)) bad();
+            for (double& c : l.down) c /= std::sqrt(n2);
+        }
         d.string("source", "");
         // The I²t limiter (physics.md §6.3) holds the continuous force below the peak.
         if (l.maxContinuousForceN > l.maxForceN)
@@ -107,6 +122,10 @@ void parseTerms(Fields& top, ForceTerms& t)
             l.within("time_constant_ms", t.lor.params.timeConstantS * 1e3, 0.0, 10000.0, "ms", true) * 1e-3;
         t.lor.params.blockedForceN = l.within("blocked_force_N", t.lor.params.blockedForceN, 0.0, 100.0, "N");
     }
+    if ((t.boneTexture.on = terms.term("bone_texture")) && terms.isObject("bone_texture")) {
+        // [LP] bone texture −c·sgn(v) (physics.md §4); c is [chosen] 0.3 N there.
+        t.boneTexture.cN = terms.sub("bone_texture").within("c_N", t.boneTexture.cN, 0.0, 10.0, "N");
+    }
     t.critical = terms.term("critical");
     if (terms.has("coupling_N_per_mm"))
         t.couplingNPerMm = terms.within("coupling_N_per_mm", 0.0, 0.0, 20.0, "N/mm", true);
@@ -127,6 +146,29 @@ void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
         f.string("source", "");
         r.overrides[name] = to;
     }
+}
+
+/// The scene's "success" block (Procedure.h), else the model's procedure's rule.
+SuccessCriteria parseSuccess(Fields& top, LayerModel model)
+{
+    SuccessCriteria c;
+    c.rule = model == LayerModel::Kyung       ? SuccessRule::ReachTarget
+        : model == LayerModel::LumbarPuncture ? SuccessRule::ReachCsf
+                                              : SuccessRule::DuraIntact;
+    if (!top.has("success")) return c;
+    Fields f = top.sub("success");
+    if (f.has("rule")) {
+        try {
+            c.rule = parseSuccessRule(f.string("rule", ""));
+        } catch (const ValueError& e) {
+            f.fail("rule", e.what());
+        }
+    }
+    if (f.has("radius_mm") && c.rule != SuccessRule::ReachTarget)
+        f.fail("radius_mm", "applies to the reach_target rule only");
+    c.radiusMm = f.within("radius_mm", c.radiusMm, 0.0, 100.0, "mm", true);
+    f.string("source", "");
+    return c;
 }
 
 /// @p message with control characters escaped: names quoted from the file ("a\nb") stay on one line.
@@ -192,8 +234,15 @@ Scene readScene(const std::string& text, const std::string& origin)
             s.recipe.tenting.push_back(n.get<std::string>());
         }
     }
+    // Kyung's skin tents only where the scene names it ([K01] §1.1: 20 mm skin deformation
+    // before puncture); Sénac's default list is [S19]'s derma and dura.
+    if (s.recipe.model == LayerModel::Kyung && !top.has("tenting")) s.recipe.tenting.clear();
     parseOverrides(top, origin, s.recipe);
     parseTerms(top, s.terms);
+    // A uniform scale of the rendered tissue force (issue 23 item 6): contrasts survive,
+    // the device's I²t budget lasts. (0, 10]: a scale beyond 10 is a typo.
+    s.terms.renderScale = top.within("force_scale", 1.0, 0.0, 10.0, "", true);
+    s.success = parseSuccess(top, s.recipe.model);
     if (top.has("needle")) {
         Fields n = top.sub("needle");
         const auto gauge = [&n](const char* key, int def) { // 20.5 would read as 20, and 1e10 fits no int

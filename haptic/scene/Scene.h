@@ -11,6 +11,7 @@
 #include "haptic/materials/MaterialField.h"
 #include "haptic/Needle.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/Procedure.h"
 #include "volume/Volume.h"
 
 #include <filesystem>
@@ -40,6 +41,9 @@ struct Scene {
     ForceTerms terms;
     Needle needle;
     DeviceLimits device;
+    /// What success is (Procedure.h); without a "success" block, by model: kyung
+    /// reach_target (5 mm), lumbar-puncture reach_csf, senac and conci dura_intact.
+    SuccessCriteria success;
     double speedMmPerS = 10.0;     ///< default constant insertion speed
     double rateHz = 1000.0;        ///< servo rate of the simulation
     double approachMm = 5.0;       ///< the tip starts this far outside the entry point

@@ -5,6 +5,7 @@
 #include "core/AtomicFile.h"
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
+#include "core/Format.h"
 
 #include <algorithm>
 #include <cmath>
@@ -74,7 +75,8 @@ double InsertionScript::speedAt(double t) const
     return (knots[i].second - knots[i - 1].second) / (knots[i].first - knots[i - 1].first);
 }
 
-InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz)
+InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz,
+    const SuccessCriteria& success, std::optional<Vec3d> target)
 {
     if (!(rateHz > 0.0) || !std::isfinite(rateHz)) throw ValueError("insertion: rate must be positive");
     InsertionResult r;
@@ -84,6 +86,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
     const NeedlePath& path = model.path();
     NeedleOutput out;
     InsertionSummary& s = r.summary;
+    OutcomeTracker outcome(success, model.layers(), target);
     for (long n = 0; n < ticks; ++n) {
         const double t = std::min(double(n) * dt, script.duration());
         NeedleInput in;
@@ -108,6 +111,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
         row.eventCount = out.events.size();
         for (const Event& e : out.events) {
             r.events.push_back(e);
+            outcome.addEvent(e);
             switch (e.type) {
             case EventType::SkinEntry:
                 s.skinEntryMm = std::min(s.skinEntryMm, e.depthMm);
@@ -130,10 +134,15 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
             case EventType::Fault:
                 ++s.faults;
                 break;
+            case EventType::ForceLimited:
+                ++s.forceLimits, s.firstLimitMm = std::min(s.firstLimitMm, e.depthMm);
+                break;
             default:
                 break;
             }
         }
+        outcome.addTip(in.tip, row.layer);
+        if (out.limitedN > 0.0) ++s.limitedTicks, s.maxLimitedN = std::max(s.maxLimitedN, out.limitedN);
         s.peakModelN = std::max(s.peakModelN, out.modelForce.norm());
         s.peakRenderedN = std::max(s.peakRenderedN, out.force.norm());
         s.peakPlungerN = std::max(s.peakPlungerN, out.plungerN);
@@ -141,6 +150,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
     }
     s.finalDepthMm = r.rows.empty() ? 0.0 : r.rows.back().depthMm;
     s.durationS = script.duration();
+    r.outcome = outcome.result();
     return r;
 }
 
@@ -166,18 +176,22 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
     const InsertionSummary& s = r.summary;
     std::ostringstream o;
     o << std::fixed << std::setprecision(1);
+    // Depths through fixed(): a surface met at -1e-15 mm prints "0.0", never "-0.0".
     const auto at = [&](const char* what, double d) {
         o << "  " << std::left << std::setw(20) << what;
         if (std::isfinite(d))
-            o << "at " << d << " mm\n";
+            o << "at " << fixed(d) << " mm\n";
         else
             o << "none\n";
     };
     at("skin puncture", s.skinEntryMm);
     o << "  " << std::left << std::setw(20) << "pops" << s.pops;
+    bool firstPop = true;
     for (const Event& e : r.events) {
-        if (e.type == EventType::Pop)
-            o << (&e == &r.events.front() ? " " : "  ") << layers[std::size_t(e.layer)].name << " " << e.depthMm;
+        if (e.type == EventType::Pop) {
+            o << (firstPop ? " " : "  ") << layers[std::size_t(e.layer)].name << " " << fixed(e.depthMm);
+            firstPop = false;
+        }
     }
     o << '\n';
     at("loss of resistance", s.lorMm);
@@ -187,9 +201,19 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
     o << std::setprecision(2);
     o << "  " << std::setw(20) << "peak force" << s.peakModelN << " N model, " << s.peakRenderedN << " N rendered\n";
     if (s.peakPlungerN > 0.0) o << "  " << std::setw(20) << "peak plunger" << s.peakPlungerN << " N\n";
+    if (s.forceLimits > 0) { // §6.3: where the device's limits flattened the profile
+        o << "  " << std::setw(20) << "force limited" << s.forceLimits << (s.forceLimits == 1 ? " time" : " times")
+          << " from " << fixed(s.firstLimitMm) << " mm, " << s.limitedTicks << " ticks, up to "
+          << fixed(s.maxLimitedN, 2) << " N cut by the device limits\n";
+    } else {
+        o << "  " << std::setw(20) << "force limited"
+          << "never\n";
+    }
     if (s.faults) o << "  " << std::setw(20) << "faults" << s.faults << '\n';
-    o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << s.finalDepthMm << " mm in " << s.durationS
-      << " s\n";
+    o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << fixed(s.finalDepthMm) << " mm in "
+      << s.durationS << " s\n";
+    o << "  " << std::setw(20) << "success" << (r.outcome.success ? "yes" : "no") << " ("
+      << successRuleName(r.outcome.rule) << "): " << r.outcome.reason << '\n';
     return o.str();
 }
 

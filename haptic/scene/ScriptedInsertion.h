@@ -5,6 +5,7 @@
 #pragma once
 
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/Procedure.h"
 
 #include <filesystem>
 #include <string>
@@ -44,17 +45,24 @@ struct InsertionSummary {
     int pops = 0, boneContacts = 0, breaches = 0, faults = 0;
     double peakModelN = 0, peakRenderedN = 0, peakPlungerN = 0;
     double finalDepthMm = 0, durationS = 0;
+    // The device's peak and I²t limits (§6.3): how often they started cutting the
+    // force (ForceLimited events), from where, for how many ticks, and by how much.
+    int forceLimits = 0;
+    long limitedTicks = 0;
+    double firstLimitMm = kNoLimit, maxLimitedN = 0;
 };
 
 struct InsertionResult {
     std::vector<InsertionRow> rows;
     std::vector<Event> events;
     InsertionSummary summary;
+    ProcedureOutcome outcome; ///< under the rule runInsertion was given
 };
 
 /// @brief Drive @p model along its path by @p script at @p rateHz (the tip on the
-/// path, the needle along it).
-InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz);
+/// path, the needle along it), judging the outcome by @p success against @p target.
+InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz,
+    const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);
 
 /// @brief CSV: t_s, depth_mm, speed_mm_per_s, fx_N, fy_N, fz_N, force_N, axial_model_N,
 /// plunger_N, state, layer, events. Written to a temporary file, then renamed.

@@ -167,14 +167,17 @@ DeviceReading ReplayDevice::read(double t) noexcept
     return r;
 }
 
-TraineeMetricsAccumulator::TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection)
-    : mLayers(layers), mDirection(pathDirection.normalized()), mSkinT(kNoLimit)
+TraineeMetricsAccumulator::TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection,
+    const SuccessCriteria& success, std::optional<Vec3d> target)
+    : mLayers(layers), mDirection(pathDirection.normalized()), mOutcome(success, layers, target), mSkinT(kNoLimit)
 {
 }
 
 void TraineeMetricsAccumulator::addEvent(const Event& e) noexcept
 {
-    if (e.type == EventType::DuraPuncture) mM.success = false;
+    mOutcome.addEvent(e);
+    if (e.type == EventType::DuraPuncture) mM.duraIntact = false;
+    if (e.type == EventType::ForceLimited) ++mM.forceLimits;
     if (e.type == EventType::BoneContact) ++mM.boneContacts;
     if (e.type == EventType::Pop) ++mM.pops;
     if (e.type == EventType::SkinEntry && !std::isfinite(mSkinT)) mSkinT = e.timeS, mSkinDepth = e.depthMm;
@@ -203,6 +206,7 @@ void TraineeMetricsAccumulator::addRecord(const ServoRecord& r) noexcept
         ++mM.poseFaults;
         return;
     }
+    mOutcome.addTip(r.tip, r.layer);
     if (!mHavePrev) {
         mPrevGood = r;
         mHavePrev = true;
@@ -225,6 +229,8 @@ void TraineeMetricsAccumulator::addRecord(const ServoRecord& r) noexcept
 TraineeMetrics TraineeMetricsAccumulator::result() const
 {
     TraineeMetrics m = mM;
+    m.outcome = mOutcome.result();
+    m.success = m.outcome.success;
     if (mInEpidural) m.overshootMm = mEpidural;
     if (mN > 0) {
         m.speedMeanMmPerS = mSum / double(mN);
@@ -240,12 +246,13 @@ TraineeMetrics TraineeMetricsAccumulator::result() const
     return m;
 }
 
-TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection)
+TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection,
+    const SuccessCriteria& success, std::optional<Vec3d> target)
 {
     // Events and records merged in time order: an event before the records of its tick.
     std::vector<Event> events = s.events;
     std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.timeS < b.timeS; });
-    TraineeMetricsAccumulator acc(layers, pathDirection);
+    TraineeMetricsAccumulator acc(layers, pathDirection, success, target);
     std::size_t next = 0;
     for (const ServoRecord& r : s.records) {
         while (next < events.size() && events[next].timeS <= r.timeS) acc.addEvent(events[next++]);
@@ -255,8 +262,9 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
     return acc.result();
 }
 
-SessionRecorder::SessionRecorder(const fs::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection)
-    : mLayers(layers), mMetrics(layers, pathDirection)
+SessionRecorder::SessionRecorder(const fs::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection,
+    const SuccessCriteria& success, std::optional<Vec3d> target)
+    : mLayers(layers), mMetrics(layers, pathDirection, success, target)
 {
     fs::create_directories(dir);
     mSession = std::make_unique<StreamingOutput>(dir / "session.csv");

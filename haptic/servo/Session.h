@@ -4,6 +4,7 @@
 /// replay device, and the trainee metrics of [S19] (physics.md §2.3).
 #pragma once
 
+#include "haptic/Procedure.h"
 #include "haptic/servo/Device.h"
 #include "haptic/servo/ServoLoop.h"
 #include "core/AtomicFile.h"
@@ -58,7 +59,10 @@ private:
 
 /// @brief Trainee metrics after [S19] (physics.md §2.3).
 struct TraineeMetrics {
-    bool success = true; ///< the dura was not punctured
+    bool success = true;      ///< under the scene's success rule (Procedure.h)
+    bool duraIntact = true;   ///< the dura was not punctured ([S19]'s success, §2.3)
+    ProcedureOutcome outcome; ///< the rule, why it succeeded or failed, the closest approach to the target
+    int forceLimits = 0;      ///< times the device's peak or I²t limit started cutting the force (§6.3)
     int boneContacts = 0;
     int pops = 0;
     std::optional<double> insertionAngleDeg; ///< needle against the planned path at skin entry
@@ -85,7 +89,10 @@ inline constexpr double kMaxHandSpeedMmPerS = 5000.0;
 /// with the session: what a recorder of an hour-long session keeps.
 class TraineeMetricsAccumulator {
 public:
-    TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection);
+    /// @p success and @p target judge the outcome (Procedure.h): by default [S19]'s
+    /// dura_intact, without a target.
+    TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection,
+        const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);
     void addEvent(const Event& e) noexcept;
     void addRecord(const ServoRecord& r) noexcept;
     TraineeMetrics result() const;
@@ -93,6 +100,7 @@ public:
 private:
     const std::vector<Layer>& mLayers;
     Vec3d mDirection;
+    OutcomeTracker mOutcome;
     TraineeMetrics mM;
     double mSkinT, mSkinDepth = 0.0;
     double mSum = 0, mSum2 = 0, mEpidural = 0;
@@ -103,7 +111,8 @@ private:
     double mStartFraction = 0.0;
 };
 
-TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection);
+TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection,
+    const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);
 
 class ServoLoop;
 
@@ -116,8 +125,10 @@ class ServoLoop;
 /// and how many the servo loop dropped (its record queue was full).
 class SessionRecorder {
 public:
-    /// @p layers must outlive the recorder. @throw IoError when a file cannot be created
-    SessionRecorder(const std::filesystem::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection);
+    /// @p layers must outlive the recorder; @p success and @p target judge the outcome
+    /// (TraineeMetricsAccumulator). @throw IoError when a file cannot be created
+    SessionRecorder(const std::filesystem::path& dir, const std::vector<Layer>& layers, const Vec3d& pathDirection,
+        const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);
     ~SessionRecorder();
     SessionRecorder(const SessionRecorder&) = delete;
     SessionRecorder& operator=(const SessionRecorder&) = delete;

@@ -81,6 +81,7 @@ Json with(Json j, const std::string& field, double value)
         node = &next;
     }
     (*node)[keys.back()] = value;
+    if (keys.front() == "success") j["success"]["rule"] = "reach_target"; // the rule radius_mm belongs to
     return j;
 }
 
