@@ -114,8 +114,13 @@ std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, c
     const double deltaV = in.number("scene.terms.karnopp.delta_v_mm_per_s").value_or(1.0);
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
     if (!(v > deltaV)) return std::nullopt;
+    if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
+        return std::nullopt; // §3.3's d/d_ref scaling of k and C: not part of R2
+    // §4's bone texture −c·sgn(v) while the tip is in the bone row, when the scene has it
+    // (c 0.3 N [chosen] unless the scene gives c_N).
+    const double texture = termOn(in, "bone_texture") ? in.number("scene.terms.bone_texture.c_N").value_or(0.3) : 0.0;
     ClosedForm cf;
-    cf.rule = "physics.md §7 R2 ([LP] stack, §4 Table I)";
+    cf.rule = "physics.md §7 R2 ([LP] stack, §4 Table I" + std::string(texture > 0.0 ? ", bone texture" : "") + ")";
     for (const Sample& smp : samples) {
         const double depth = smp.depthMm + 5.0; // Table I starts 5 mm out of the skin
         double f = 0, start = 0, nearBoundary = 1e9;
@@ -124,6 +129,7 @@ std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, c
             const double l = overlap(5.0, depth, start, r.endMm); // shaft length in the layer [mm]
             f += r.bNsPerM2 * 1e-6 * l * v;                       // N·s/m² → N·s/mm²
             if (depth > start && depth <= r.endMm) f += r.kNPerM * 1e-3 * (depth - start) + r.cN;
+            if (depth > start && depth <= r.endMm && &r == &kTable[std::size(kTable) - 1]) f += texture; // bone
             start = r.endMm;
         }
         if (depth <= 5.0) f = 0; // out of the skin
@@ -155,6 +161,8 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
         return std::nullopt;
     const double v = *speed->second.number;
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
+    if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
+        return std::nullopt; // §3.3's d/d_ref scaling of every force: not part of R3
     const std::optional<double> bmi = recordedBmi(in);
     const double scale = bmi ? 10.0 * (2.52 + 0.11 * *bmi) / 40.9 : 1.0; // §3.3: s = SED/40.9 mm
     const std::string tip = in.text("scene.needle.tip");

@@ -175,7 +175,7 @@ TEST(RegressClosedForm, SlabProfileMatchesHandEvaluatedR1)
 /// past it the closed form does not claim the profile.
 TEST(RegressClosedForm, TiltedSlabIsComparedOnlyWhileTheTipIsInsideTheBlock)
 {
-    const Suite s = parseSuite(std::string(kHeader) + R"({"name": "t", "scene": "kyung",
+    const Suite s = parseSuite(std::string(kHeader) + R"({"name": "t", "scene": "kyung-damping",
         "volume": {"phantom": "slab", "tilt_deg": 75, "spacing_mm": 1}}]})",
         "my-suite.json", ".");
     Runner runner(s, {0}, {});
@@ -236,6 +236,28 @@ TEST(RegressClosedForm, LumbarPunctureStackMatchesThePhysicsReferenceValues)
     EXPECT_NEAR(cf->modelN[1], 3.8006, printed);
     EXPECT_NEAR(cf->modelN[2], 2.5613, printed);
     for (const double t : cf->toleranceN) EXPECT_EQ(t, 1e-6); // no sample near a boundary
+}
+
+/// R2 with §4's bone texture (issue 23 item 4): −c·sgn(v) in the bone row only,
+/// c as the scene records it; at a gauge other than the table's (§3.3) R2 does not apply.
+TEST(RegressClosedForm, LumbarPunctureStackAddsTheBoneTextureInBone)
+{
+    Case c;
+    c.scene = "lumbar-puncture";
+    Inputs in;
+    in["scene.model"] = InputValue{"lumbar-puncture", {}, ""};
+    in["scene.layers"] = InputValue{"table", {}, ""};
+    in["case.speed_mm_per_s"] = InputValue{"20.0", 20.0, "mm/s"};
+    const std::vector<Sample> samples{{27.0, 0, 0}, {45.0, 0, 0}};
+    const auto plain = closedForm(c, {}, in, samples);
+    in["scene.terms.bone_texture.c_N"] = InputValue{"0.25", 0.25, "N"};
+    const auto textured = closedForm(c, {}, in, samples);
+    ASSERT_TRUE(plain && textured);
+    EXPECT_EQ(textured->modelN[0], plain->modelN[0]);                 // 27 mm: ligament, no texture
+    EXPECT_NEAR(textured->modelN[1] - plain->modelN[1], 0.25, 1e-12); // 45 mm: bone row
+    in["scene.needle.gauge"] = InputValue{"18", 18.0, ""};
+    in["scene.needle.reference_gauge"] = InputValue{"22", 22.0, ""};
+    EXPECT_FALSE(closedForm(c, {}, in, samples));
 }
 
 /// physics.md §7 R3 against §3.2's fitted table, evaluated by hand from its

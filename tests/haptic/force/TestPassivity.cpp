@@ -136,7 +136,10 @@ public:
                 mTransientUntil = mT + mInst.scene().terms.bone.params.durationS + mDt;
         }
         mModelF = mOut.modelForce;
-        mOffF = mOff.apply(mOut.modelForce, hub, mDt);
+        // The same stages the model renders through: the scene's force scale on the
+        // tissue's force, F_G beside the observer (NeedleForceModel step 4).
+        const Vec3d g = mOut.terms.gravity;
+        mOffF = mOff.apply(mInst.scene().terms.renderScale * (mOut.modelForce - g), hub, mDt, g);
         mOnF = mOut.force;
         // While the model's own running energy has stayed at or below zero the observer
         // has nothing to take back, so the controller must leave the force alone.
