@@ -102,7 +102,7 @@ void checkScene(const Json& doc, const Scene& s)
     if (!doc.is_object()) finding("a scene that is not an object");
     onlyKnown(&doc, "top",
         {"schema", "name", "description", "source", "volume", "path", "model", "layers", "tenting", "overrides",
-            "terms", "needle", "device", "insertion"});
+            "terms", "needle", "device", "insertion", "force_scale", "success"});
     if (!at(doc, {"schema"}) || *at(doc, {"schema"}) != "voxhap-scene/1")
         finding("schema: accepted without voxhap-scene/1");
     if (s.name.empty()) finding("name: empty");
@@ -146,6 +146,16 @@ void checkScene(const Json& doc, const Scene& s)
     if (s.fixedTable != (layers && *layers == "table")) finding("layers: read differs from the file");
     if (s.fixedTable && s.recipe.model == LayerModel::Kyung) finding("layers: a table for the kyung model");
     if (const Json* t = at(doc, {"tenting"}); t && Json(s.recipe.tenting) != *t) finding("tenting: read differs");
+    if (!at(doc, {"tenting"}) && s.recipe.model == LayerModel::Kyung && !s.recipe.tenting.empty())
+        finding("tenting: a kyung scene tents what it did not name");
+
+    // force_scale and success (issue 23 items 5, 6)
+    number(doc, {"force_scale"}, s.terms.renderScale, Sign::Positive);
+    onlyKnown(at(doc, {"success"}), "success", {"rule", "radius_mm", "source"});
+    string(doc, {"success", "rule"}, voxhap::haptic::successRuleName(s.success.rule));
+    if (at(doc, {"success", "radius_mm"}) && s.success.rule != voxhap::haptic::SuccessRule::ReachTarget)
+        finding("success.radius_mm: accepted with a rule other than reach_target");
+    number(doc, {"success", "radius_mm"}, s.success.radiusMm, Sign::Positive);
 
     if (const Json* o = at(doc, {"overrides"})) {
         if (!o->is_object() || o->size() != s.recipe.overrides.size()) finding("overrides: not one per tissue");
@@ -173,7 +183,10 @@ void checkScene(const Json& doc, const Scene& s)
     if (!at(doc, {"terms"})) finding("terms: accepted without");
     onlyKnown(at(doc, {"terms"}), "terms",
         {"tip", "cutting", "viscous", "karnopp", "damping", "bone", "pivot", "lock", "lor", "critical",
-            "coupling_N_per_mm"});
+            "coupling_N_per_mm", "bone_texture"});
+    term(doc, "bone_texture", t.boneTexture.on);
+    onlyKnown(at(doc, {"terms", "bone_texture"}), "terms.bone_texture", {"c_N"});
+    number(doc, {"terms", "bone_texture", "c_N"}, t.boneTexture.cN, Sign::NonNegative);
     term(doc, "tip", t.tip);
     term(doc, "cutting", t.cutting);
     term(doc, "viscous", t.viscous);
@@ -232,7 +245,11 @@ void checkScene(const Json& doc, const Scene& s)
     } else if (d) {
         onlyKnown(d, "device",
             {"name", "max_force_N", "max_continuous_force_N", "max_stiffness_N_per_mm", "max_damping_Ns_per_mm",
-                "source"});
+                "handle_mass_kg", "down", "source"});
+        number(doc, {"device", "handle_mass_kg"}, s.device.handleMassKg, Sign::NonNegative);
+        double n2 = 0.0;
+        for (const double c : s.device.down) n2 += c * c;
+        if (!(std::abs(n2 - 1.0) < 1e-12)) finding("device.down: not a unit direction");
         string(doc, {"device", "name"}, s.device.name);
         number(doc, {"device", "max_force_N"}, s.device.maxForceN, Sign::Positive);
         number(doc, {"device", "max_continuous_force_N"}, s.device.maxContinuousForceN, Sign::Positive);
