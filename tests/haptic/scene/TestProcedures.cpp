@@ -10,6 +10,7 @@
 #include "haptic/Procedure.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/servo/Session.h"
 
 #include <gtest/gtest.h>
 
@@ -182,6 +183,37 @@ TEST(Success, CriticalBreachFailsEveryRule)
         EXPECT_FALSE(t.result().success) << successRuleName(rule);
         EXPECT_NE(t.result().reason.find("critical breach at 4.0 mm"), std::string::npos) << t.result().reason;
     }
+}
+
+// serve's metrics (Session.h) judge the session by the scene's rule: records that
+// pass 2 mm from the target succeed within a 3 mm radius; the limiter's events are
+// counted; the dura's state is kept beside the rule's verdict.
+TEST(Success, SessionMetricsFollowTheScenesRule)
+{
+    const std::vector<Layer> layers = {Layer{.name = "muscle", .role = LayerRole::Tissue, .startMm = 0, .endMm = 50}};
+    const Vec3d target(2.0, 0.0, 30.0);
+    TraineeMetricsAccumulator acc(layers, Vec3d(0, 0, 1), {SuccessRule::ReachTarget, 3.0}, target);
+    acc.addEvent({EventType::ForceLimited, 0.5, 25.0, 0});
+    acc.addEvent({EventType::ForceLimited, 0.9, 40.0, 0});
+    for (int i = 0; i <= 100; ++i) { // along z from 0 to 50 mm, 2 mm beside the target
+        ServoRecord r;
+        r.timeS = 0.01 * i;
+        r.depthMm = 0.5 * i;
+        r.tip = Vec3d(0.0, 0.0, r.depthMm);
+        r.layer = 0;
+        acc.addRecord(r);
+    }
+    const TraineeMetrics m = acc.result();
+    EXPECT_TRUE(m.success) << m.outcome.reason;
+    EXPECT_TRUE(m.duraIntact);
+    ASSERT_TRUE(m.outcome.targetDistanceMm);
+    EXPECT_NEAR(*m.outcome.targetDistanceMm, 2.0, 1e-12);
+    EXPECT_EQ(m.forceLimits, 2);
+    TraineeMetricsAccumulator tight(layers, Vec3d(0, 0, 1), {SuccessRule::ReachTarget, 1.5}, target);
+    ServoRecord r;
+    r.tip = Vec3d(0.0, 0.0, 30.0);
+    tight.addRecord(r);
+    EXPECT_FALSE(tight.result().success);
 }
 
 /// Item 7, Conci from the labels on the lumbar phantom's path: §3.2's fit on each
