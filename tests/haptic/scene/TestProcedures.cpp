@@ -11,6 +11,7 @@
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/servo/Session.h"
+#include "core/Errors.h"
 
 #include <gtest/gtest.h>
 
@@ -214,6 +215,45 @@ TEST(Success, SessionMetricsFollowTheScenesRule)
     r.tip = Vec3d(0.0, 0.0, 30.0);
     tight.addRecord(r);
     EXPECT_FALSE(tight.result().success);
+}
+
+// The new scene keys are read strictly: one line naming the file and the field.
+TEST(SceneKeys, NewKeysAreReadAndBadOnesRefusedNamingTheField)
+{
+    const std::string head = R"({"schema": "voxhap-scene/1", "name": "x", "model": "kyung", "terms": {"tip": true)";
+    const auto refusal = [](const std::string& json) {
+        try {
+            (void)parseScene(json, "s.json");
+        } catch (const ValueError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    const Scene ok = parseScene(head + R"(, "bone_texture": {"c_N": 0.4}}, "force_scale": 0.25,
+        "success": {"rule": "reach_target", "radius_mm": 3},
+        "device": {"handle_mass_kg": 0.3, "down": [0, 0, -4]}})",
+        "s.json");
+    EXPECT_TRUE(ok.terms.boneTexture.on);
+    EXPECT_EQ(ok.terms.boneTexture.cN, 0.4);
+    EXPECT_EQ(ok.terms.renderScale, 0.25);
+    EXPECT_EQ(ok.success.rule, SuccessRule::ReachTarget);
+    EXPECT_EQ(ok.success.radiusMm, 3.0);
+    EXPECT_EQ(ok.device.handleMassKg, 0.3);
+    EXPECT_EQ(ok.device.down[2], -1.0); // normalised
+    EXPECT_TRUE(ok.recipe.tenting.empty()) << "a kyung scene tents only what it names";
+    EXPECT_EQ(parseScene(head + "}}", "s.json").success.rule, SuccessRule::ReachTarget); // kyung's default
+
+    EXPECT_NE(
+        refusal(head + R"(}, "force_scale": 0})").find("s.json: force_scale: must be in (0, 10]"), std::string::npos);
+    EXPECT_NE(refusal(head + R"(}, "success": {"rule": "win"}})").find("s.json: success.rule: unknown success rule"),
+        std::string::npos);
+    EXPECT_NE(refusal(head + R"(}, "success": {"rule": "dura_intact", "radius_mm": 2}})")
+                  .find("s.json: success.radius_mm: applies to the reach_target rule only"),
+        std::string::npos);
+    EXPECT_NE(refusal(head + R"(}, "device": {"down": [0, 0, 0]}})").find("s.json: device.down: must be a direction"),
+        std::string::npos);
+    EXPECT_NE(refusal(head + R"(, "bone_texture": {"c": 1}}})").find("s.json: terms.bone_texture.c: unknown field"),
+        std::string::npos);
 }
 
 /// Item 7, Conci from the labels on the lumbar phantom's path: §3.2's fit on each
