@@ -46,8 +46,8 @@ TEST(PlannedLines, ReportPathsInRankOrder)
 TEST(PlannedLines, RefusalsNameTheField)
 {
     EXPECT_NE(refusal(R"({"schema": "other", "paths": []})").find("r.json: schema: must be"), std::string::npos);
-    EXPECT_NE(refusal(R"({"schema": "voxhap-plan-report/1"})").find("r.json: paths: must be an array"),
-        std::string::npos);
+    EXPECT_NE(
+        refusal(R"({"schema": "voxhap-plan-report/1"})").find("r.json: paths: must be an array"), std::string::npos);
     EXPECT_NE(refusal(R"({"schema": "voxhap-plan-report/1", "paths": [{"entry": [0, 0], "target": [1, 1, 1]}]})")
                   .find("r.json: paths[0].entry: must be [x, y, z] in mm"),
         std::string::npos);

@@ -137,7 +137,7 @@ TEST(ForceStress, PalpationAndGuidanceStepNeverAllocates)
         at(inst.entry() + Vec3d(3.0 * std::sin(0.01 * i), 0.0, 20.0 - 0.01 * i) + 3.0 * dir);
     for (int i = 0; i <= 1000; ++i) at(inst.entry() + Vec3d(0.0, 0.0, -20.0) + 3.0 * dir - 0.006 * i * dir); // lift
     for (int i = 0; i <= 1000; ++i) at(inst.entry() + (-20.0 + 0.02 * i) * Vec3d(0.0, 0.0, 1.0) + up); // to the entry
-    for (int i = 0; i <= 6000; ++i) at(inst.entry() + up + 0.004 * i * dir); // insert
+    for (int i = 0; i <= 6000; ++i) at(inst.entry() + up + 0.004 * i * dir);                           // insert
     EXPECT_EQ(test::allocations() - before, 0);
     EXPECT_EQ(test::deallocations() - freesBefore, 0);
     EXPECT_GT(palpating, 5000);

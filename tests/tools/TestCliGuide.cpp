@@ -79,10 +79,12 @@ TEST_F(CliGuide, SimulateIsPulledTowardThePlannedLineByItsClosedForm)
 
 TEST_F(CliGuide, BadGuidesFailInOneLineNamingTheFileAndField)
 {
-    write("report.json", R"({"schema": "voxhap-plan-report/1", "paths": [{"entry": [0, 0, 0], "target": [0, -40, 0]}]})");
+    write(
+        "report.json", R"({"schema": "voxhap-plan-report/1", "paths": [{"entry": [0, 0, 0], "target": [0, -40, 0]}]})");
     expectFailure(run("simulate --scene senac-average --guide report.json --guide-path 3 --no-plot -o x"),
         "report.json: paths: no path 3 (the file has 1)");
-    write("bad.json", R"({"schema": "voxhap-plan-report/1", "paths": [{"entry": [0, "a", 0], "target": [0, -40, 0]}]})");
+    write(
+        "bad.json", R"({"schema": "voxhap-plan-report/1", "paths": [{"entry": [0, "a", 0], "target": [0, -40, 0]}]})");
     expectFailure(
         run("simulate --scene senac-average --guide bad.json --no-plot -o x"), "bad.json: paths[0].entry: must be");
     write("other.json", R"({"hello": 1})");
