@@ -25,12 +25,14 @@ nlohmann::json summaryJson(
         events.push_back(
             {{"event", haptic::eventName(e.type)}, {"t_s", e.timeS}, {"depth_mm", e.depthMm}, {"layer", e.layer}});
     }
-    return {{"scene", scene.name}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
+    nlohmann::json j = {{"scene", scene.name}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
         {"loss_of_resistance_mm", depth(s.lorMm)}, {"dura_puncture_mm", depth(s.duraMm)},
         {"bone_contact_mm", depth(s.boneMm)}, {"critical_breach_mm", depth(s.breachMm)},
         {"peak_model_force_N", s.peakModelN}, {"peak_rendered_force_N", s.peakRenderedN},
         {"peak_plunger_force_N", s.peakPlungerN}, {"faults", s.faults}, {"final_depth_mm", s.finalDepthMm},
         {"duration_s", s.durationS}, {"events", events}, {"csv", csv}, {"png", png}};
+    if (s.guidance) j["guidance"] = {{"peak_force_N", s.peakGuidanceN}, {"max_offset_mm", s.maxOffsetMm}};
+    return j;
 }
 
 } // namespace

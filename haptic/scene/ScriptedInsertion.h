@@ -44,6 +44,9 @@ struct InsertionSummary {
     int pops = 0, boneContacts = 0, breaches = 0, faults = 0;
     double peakModelN = 0, peakRenderedN = 0, peakPlungerN = 0;
     double finalDepthMm = 0, durationS = 0;
+    bool guidance = false;    ///< the guidance term ran (Guidance.h)
+    double peakGuidanceN = 0; ///< its largest pull [N]
+    double maxOffsetMm = 0;   ///< the tip's largest distance from the planned line [mm]
 };
 
 struct InsertionResult {
