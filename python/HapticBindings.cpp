@@ -64,8 +64,8 @@ haptic::Strategy strategyOf(const std::string& s)
     if (s == "march-nearest") return haptic::Strategy::MarchNearest;
     if (s == "march-trilinear") return haptic::Strategy::MarchTrilinear;
     if (s == "profile") return haptic::Strategy::Profile;
-    throw ValueError("strategy: expected exact-voxel, exact-trilinear, march-nearest, march-trilinear or profile, got '" +
-        s + "'");
+    throw ValueError(
+        "strategy: expected exact-voxel, exact-trilinear, march-nearest, march-trilinear or profile, got '" + s + "'");
 }
 
 std::string labelName(int id)
@@ -123,8 +123,9 @@ py::dict eventDict(const haptic::Event& e, const std::vector<haptic::Layer>& lay
     d["type"] = std::string(haptic::eventName(e.type));
     d["time_s"] = e.timeS;
     d["depth_mm"] = e.depthMm;
-    d["layer"] = e.layer >= 0 && std::size_t(e.layer) < layers.size() ? py::object(py::str(layers[std::size_t(e.layer)].name))
-                                                                       : py::object(py::none());
+    d["layer"] = e.layer >= 0 && std::size_t(e.layer) < layers.size()
+        ? py::object(py::str(layers[std::size_t(e.layer)].name))
+        : py::object(py::none());
     return d;
 }
 
@@ -139,7 +140,7 @@ py::dict outputDict(const haptic::NeedleOutput& o, const std::vector<haptic::Lay
     d["depth_mm"] = o.tip.depthMm;
     const int layer = o.tip.currentLayer();
     d["layer"] = layer >= 0 && std::size_t(layer) < layers.size() ? py::object(py::str(layers[std::size_t(layer)].name))
-                                                                   : py::object(py::none());
+                                                                  : py::object(py::none());
     d["in_body"] = o.tip.inBody;
     d["critical"] = o.critical;
     d["fault"] = o.fault;
@@ -168,12 +169,12 @@ std::shared_ptr<PyScene> makeScene(const std::string& nameOrPath, std::shared_pt
     s->volume = volume;
     const haptic::Scene scene = sceneOf(nameOrPath);
     py::gil_scoped_release release;
-    s->instance =
-        std::make_unique<haptic::SceneInstance>(scene, std::move(volume), volume::TissueTable::builtin(), entry, target);
+    s->instance = std::make_unique<haptic::SceneInstance>(
+        scene, std::move(volume), volume::TissueTable::builtin(), entry, target);
     return s;
 }
 
-template<typename T>
+template <typename T>
 py::array_t<T> column(const std::vector<haptic::InsertionRow>& rows, T (*get)(const haptic::InsertionRow&))
 {
     py::array_t<T> a(py::ssize_t(rows.size()));
@@ -228,7 +229,9 @@ py::dict simulate(const std::shared_ptr<PyScene>& ps, std::optional<double> spee
     for (const haptic::Event& e : r.events) events.append(eventDict(e, layers));
     d["events"] = events;
     const haptic::InsertionSummary& sm = r.summary;
-    const auto depthOrNone = [](double x) { return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none()); };
+    const auto depthOrNone = [](double x) {
+        return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
+    };
     py::dict summary;
     summary["skin_entry_mm"] = depthOrNone(sm.skinEntryMm);
     summary["loss_of_resistance_mm"] = depthOrNone(sm.lorMm);
@@ -270,12 +273,14 @@ void bindHaptic(py::module_& m)
         }),
             py::arg("volume"), py::kw_only(), py::arg("damping") = true, py::arg("bone_stiffness") = false,
             py::arg("device") = "touch")
-        .def_property_readonly("damping",
+        .def_property_readonly(
+            "damping",
             [](const PyMaterialField& f) -> py::object {
                 return f.field->damping() ? py::object(gridToArray(*f.volume, *f.field->damping())) : py::none();
             },
             "beta [N s/mm^2] as an array of the volume's shape, or None")
-        .def_property_readonly("bone_stiffness",
+        .def_property_readonly(
+            "bone_stiffness",
             [](const PyMaterialField& f) -> py::object {
                 return f.field->boneStiffness() ? py::object(gridToArray(*f.volume, *f.field->boneStiffness()))
                                                 : py::none();
@@ -308,17 +313,17 @@ void bindHaptic(py::module_& m)
     py::class_<PyIntegrator, std::shared_ptr<PyIntegrator>>(m, "ShaftIntegrator",
         "Integrals along the needle shaft from entry to tip (physics.md 1.2, 7): the damping integral "
         "[N s/mm], the length in each tissue and each tissue's first hit [mm]")
-        .def(py::init([](std::shared_ptr<PyMaterialField> f, const std::string& strategy, double stepMm,
-                          bool trackLabels) {
-            haptic::IntegratorOptions o;
-            o.strategy = strategyOf(strategy);
-            o.stepMm = stepMm;
-            o.trackLabels = trackLabels;
-            auto p = std::make_shared<PyIntegrator>();
-            p->integrator = haptic::makeIntegrator(*f->field, o);
-            p->field = std::move(f);
-            return p;
-        }),
+        .def(py::init(
+                 [](std::shared_ptr<PyMaterialField> f, const std::string& strategy, double stepMm, bool trackLabels) {
+                     haptic::IntegratorOptions o;
+                     o.strategy = strategyOf(strategy);
+                     o.stepMm = stepMm;
+                     o.trackLabels = trackLabels;
+                     auto p = std::make_shared<PyIntegrator>();
+                     p->integrator = haptic::makeIntegrator(*f->field, o);
+                     p->field = std::move(f);
+                     return p;
+                 }),
             py::arg("field"), py::kw_only(), py::arg("strategy") = "exact-voxel", py::arg("step_mm") = 0.125,
             py::arg("track_labels") = true)
         .def_property_readonly("name", [](const PyIntegrator& p) { return p.integrator->name(); })
@@ -370,8 +375,8 @@ void bindHaptic(py::module_& m)
             "columns (time_s, depth_mm, speed_mm_per_s, force (n x 3), force_N, axial_N, plunger_N, layer), "
             "events, summary, layers and the summary text.");
 
-    py::class_<PyForceModel, std::shared_ptr<PyForceModel>>(m, "ForceModel",
-        "One scene's force pipeline (architecture.md 'The force pipeline'): one step per servo tick")
+    py::class_<PyForceModel, std::shared_ptr<PyForceModel>>(
+        m, "ForceModel", "One scene's force pipeline (architecture.md 'The force pipeline'): one step per servo tick")
         .def(
             "step",
             [](PyForceModel& p, const Vec3d& tip, const Vec3d& direction, const Vec3d& velocity, double timeS,

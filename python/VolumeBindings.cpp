@@ -40,8 +40,7 @@ std::optional<Channel> channelOf(const std::string& name)
 
 /// The array of a grid over the box: Dense's ZYX layout has k fastest, i.e. a
 /// C-ordered numpy array indexed [i, j, k].
-template<typename GridT>
-py::array denseOf(const GridT& grid, const volume::IndexBox& box)
+template <typename GridT> py::array denseOf(const GridT& grid, const volume::IndexBox& box)
 {
     using ValueT = typename GridT::ValueType;
     const Vec3i d = box.dims();
@@ -52,7 +51,7 @@ py::array denseOf(const GridT& grid, const volume::IndexBox& box)
     return out;
 }
 
-template<typename GridT>
+template <typename GridT>
 typename GridT::Ptr sparseOf(const py::array& any, const volume::IndexBox& box, typename GridT::ValueType background)
 {
     using ValueT = typename GridT::ValueType;
@@ -117,7 +116,9 @@ void setGrid(Volume& v, const std::string& name, const py::array& a)
     if (c == Channel::Label) {
         v.setGrid(*c, sparseOf<volume::LabelGrid>(a, box, volume::kAirLabel));
     } else if (c) {
-        const float air = *c == Channel::Hu ? volume::kAirHu : *c == Channel::T1 ? volume::kAirT1 : volume::kAirIntensity;
+        const float air = *c == Channel::Hu ? volume::kAirHu
+            : *c == Channel::T1             ? volume::kAirT1
+                                            : volume::kAirIntensity;
         v.setGrid(*c, sparseOf<volume::FloatGrid>(a, box, air));
     } else {
         v.setDerived(name, sparseOf<volume::FloatGrid>(a, box, 0.0f));
@@ -214,16 +215,18 @@ void bindVolume(py::module_& m)
                 const Vec3i d = v.indexBox().dims();
                 return py::make_tuple(d.x(), d.y(), d.z());
             })
-        .def_property_readonly("index_to_world", &arrayToWorld,
-            "4x4 affine from an array index [a, b, c] (voxel centres) to world LPS mm")
-        .def_property_readonly("index_min",
+        .def_property_readonly(
+            "index_to_world", &arrayToWorld, "4x4 affine from an array index [a, b, c] (voxel centres) to world LPS mm")
+        .def_property_readonly(
+            "index_min",
             [](const Volume& v) {
                 const Vec3i& i = v.indexBox().min;
                 return py::make_tuple(i.x(), i.y(), i.z());
             },
             "voxhap's own index of array element [0, 0, 0] (OpenVDB coordinates)")
         .def_property_readonly("spacing", [](const Volume& v) { return Vec3d(v.geometry().spacing); })
-        .def_property_readonly("world_bounds",
+        .def_property_readonly(
+            "world_bounds",
             [](const Volume& v) {
                 const auto b = v.worldBounds();
                 return py::make_tuple(b[0], b[1]);
@@ -278,7 +281,8 @@ void bindVolume(py::module_& m)
                 return p ? py::cast(*p) : py::none();
             },
             py::arg("name"), "A phantom's named point [mm], e.g. 'entry', 'target', or None")
-        .def("copy", [](const Volume& v) { return std::make_shared<Volume>(v); },
+        .def(
+            "copy", [](const Volume& v) { return std::make_shared<Volume>(v); },
             "A copy that shares the (immutable) grids: setting a grid on one leaves the other as it was")
         .def("__repr__", [](const Volume& v) {
             const Vec3i d = v.indexBox().dims();

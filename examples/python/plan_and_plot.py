@@ -26,31 +26,31 @@ import numpy as np  # noqa: E402
 
 import voxhap  # noqa: E402
 
-# One colour per tissue seen, in order; bone grey, critical structures red.
+# One colour per tissue, the same in every panel; bone grey, critical structures red.
 PALETTE = ["#f4d6c6", "#fbeeb8", "#d9b3a3", "#c7dcef", "#d8e8c8", "#e6d0ea", "#f0e0c0", "#cfe3e0"]
+COLOURS = {}
 
 
 def plan_and_simulate(volume, target, scene, allow_bone):
     """The best path to target and an insertion along it: (report path, simulation)."""
+    if "label" not in volume:
+        # A CT or MR: label it once (on a copy) for both the planner and the scene.
+        volume = volume.copy()
+        voxhap.segment(volume)
     report = voxhap.plan(volume, target, scene=scene, top=5, allow_bone=allow_bone)
     if not report["paths"]:
         raise SystemExit("plan_and_plot: no path satisfies the constraints")
     best = report["paths"][0]
-    # The planner segmented a copy when the volume had no labels; the scene needs them too.
-    if "label" not in volume:
-        volume = volume.copy()
-        voxhap.segment(volume)
     sim = voxhap.simulate(scene, volume, entry=best["entry"], target=best["target"])
     return best, sim
 
 
 def draw(ax, title, best, sim):
-    colours = {}
     for s in best["segments"]:
-        if s["tissue"] not in colours:
-            colours[s["tissue"]] = "#bbbbbb" if s["rigid"] else "#f2a0a0" if s["critical"] else \
-                PALETTE[len(colours) % len(PALETTE)]
-        ax.axvspan(s["start_mm"], s["end_mm"], color=colours[s["tissue"]], alpha=0.6, lw=0,
+        if s["tissue"] not in COLOURS:
+            COLOURS[s["tissue"]] = "#bbbbbb" if s["rigid"] else "#f2a0a0" if s["critical"] else \
+                PALETTE[len(COLOURS) % len(PALETTE)]
+        ax.axvspan(s["start_mm"], s["end_mm"], color=COLOURS[s["tissue"]], alpha=0.6, lw=0,
                    label=s["tissue"] if s["tissue"] not in ax.get_legend_handles_labels()[1] else None)
     force = best["force"]  # the planner's profile: depth_mm, force_N, peak_N, contact_mm, speed_mm_per_s
     ax.plot(force["depth_mm"], force["force_N"], "k--", lw=1.5,
@@ -81,7 +81,8 @@ def main(argv=None):
     cases.append(("torso phantom, vertebral lesion", torso, torso.landmark("lesion"), False))
     if a.ct:
         target = [float(x) for x in a.target.split(",")]
-        cases.append((f"CT {a.ct.rstrip('/').split('/')[-1]}, target {a.target}", voxhap.load(a.ct), target,
+        name = "/".join(a.ct.rstrip("/").split("/")[-2:])
+        cases.append((f"CT {name}, target {a.target}", voxhap.load(a.ct), target,
                       a.allow_bone))
 
     fig, axes = plt.subplots(len(cases), 1, figsize=(8, 3.6 * len(cases)), dpi=100, squeeze=False)

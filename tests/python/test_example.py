@@ -36,8 +36,6 @@ def test_plan_and_plot_example(source_dir, tmp_path):
     best = voxhap.plan(torso, torso.landmark("lesion"), top=5)["paths"][0]
     assert summary["entry"] == best["entry"] and summary["risk"] == best["risk"]["total"]
     assert summary["peak_predicted_N"] == best["force"]["peak_N"]
-    seg = torso.copy()
-    voxhap.segment(seg)
-    sim = voxhap.simulate("kyung", seg, entry=best["entry"], target=best["target"])
+    sim = voxhap.simulate("kyung", torso, entry=best["entry"], target=best["target"])
     assert summary["peak_rendered_N"] == pytest.approx(sim["summary"]["peak_rendered_N"], rel=0, abs=0)
     assert 0 < summary["peak_rendered_N"] <= summary["peak_predicted_N"] + 1e-9
