@@ -8,6 +8,7 @@
 /// that ever reached one would be reported, not silently stubbed.
 
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/force/Palpation.h"
 #include "haptic/materials/MaterialField.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/shaft/ShaftIntegration.h"
@@ -38,6 +39,11 @@ namespace voxhap::haptic {
 MaterialField::MaterialField(const volume::Volume&, const volume::TissueTable&, const MaterialOptions&)
 {
     notLinked("MaterialField");
+}
+SkinMap::SkinMap(const volume::Volume&, const volume::TissueTable&, const Vec3d&, const Vec3d&, const PalpationParams&,
+    double)
+{
+    notLinked("SkinMap");
 }
 std::unique_ptr<ShaftIntegrator> makeIntegrator(const MaterialField&, const IntegratorOptions&)
 {

@@ -85,6 +85,7 @@ Image Snapshot::render(ViewKind v)
         style.caster = mRequest.caster;
         style.criticalSurfaces = mRequest.criticalSurfaces;
         style.shade = mRequest.shade3d;
+        style.linesOnTop = mRequest.linesOnTop3d;
         style.window = mRequest.window ? *mRequest.window : mVolume->defaultWindow(mRequest.mode);
         o.title = "3d " + std::string(blendModeName(mRequest.mode));
         if (mr && mRequest.mode != BlendMode::Sum) { // the sum has no window

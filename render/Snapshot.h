@@ -46,6 +46,7 @@ struct RenderRequest {
     /// cost of a slice, as in `voxhap plan`'s views.
     RenderQuality quality3d = RenderQuality::Full;
     bool shade3d = true; ///< View3dStyle::shade
+    bool linesOnTop3d = false; ///< View3dStyle::linesOnTop
 };
 
 class Snapshot {

@@ -316,7 +316,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     // Composite modes keep them in the scene, hidden by what lies in front.
     const bool projection = style.mode == BlendMode::Mip || style.mode == BlendMode::Sum;
     m.lines = m.renderer;
-    if (projection) {
+    if (projection || style.linesOnTop) {
         m.lines = vtkSmartPointer<vtkRenderer>::New();
         m.lines->SetLayer(1);
         m.lines->SetActiveCamera(m.renderer->GetActiveCamera());

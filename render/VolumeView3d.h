@@ -54,6 +54,11 @@ struct View3dStyle {
     /// Gradient shading of the colour and grey modes. Off spares the mapper its
     /// per-voxel normals (a second of CPU on a CT) where a quick overview is enough.
     bool shade = true;
+    /// Paths, entries, targets and the needle drawn on a layer above the volume
+    /// in every mode, not only in the projections: an overview whose subject is
+    /// the path (`voxhap plan`'s fourth quadrant) must show it even where the
+    /// body lies in front of it. Off, composite modes hide what lies behind tissue.
+    bool linesOnTop = false;
 };
 
 class VolumeView3d {

@@ -148,6 +148,9 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             req.quality3d = render::RenderQuality::Moving;
             req.shade3d = false; // an overview beside the slices: no per-voxel normals
             req.criticalSurfaces = false;
+            // The paths are the subject: drawn over the body, which from the
+            // front lies between the camera and a posterior entry.
+            req.linesOnTop3d = true;
         } else {
             f.why3d = display->why();
         }

@@ -4,6 +4,7 @@
 /// status line; Ctrl-C stops cleanly and writes the session and the metrics.
 
 #include "tools/Cli.h"
+#include "tools/Guide.h"
 
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/igtl/PoseStream.h"
@@ -37,6 +38,7 @@ struct ServeOptions {
     std::string scene, device = "hand", out = "voxhap-serve", viewer;
     double speed = 0, duration = 0, rate = 0;
     bool reckless = false;
+    GuideOptions guide;
 };
 
 /// What --device names, checked before anything is loaded: a typo in it is
@@ -120,10 +122,11 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     const InterruptGuard guard;
     DeviceSpec spec = parseDeviceSpec(o.device); // before any loading: a typo is said at once
     const volume::TissueTable& table = tissueTable(o.common);
+    const std::optional<haptic::GuideLine> guide = guideLine(o.guide, cmd); // a bad plan file fails first
     haptic::Scene scene = loadSceneSayingDefaults(o.scene);
     if (cmd.count("--rate")) scene.rateHz = o.rate;
     const haptic::SceneInstance inst(scene, nullptr, table);
-    auto model = inst.makeModel();
+    auto model = inst.makeModel(guide);
     double duration = o.duration;
     auto device = makeDevice(o, std::move(spec), cmd, *model, scene, duration);
     haptic::ServoOptions so;
@@ -198,6 +201,13 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         {"skipped_periods", loop.skippedPeriods()}, {"records", session.recordCount()},
         {"dropped_records", loop.droppedRecords()}, {"dropped_events", loop.droppedEvents()},
         {"pose_faults", m.poseFaults}, {"interrupted", InterruptGuard::interrupted()}};
+    if (const haptic::Guidance* g = model->guidance()) {
+        const auto point = [](const Vec3d& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+        j["guidance"] = {{"file", o.guide.file}, {"path", guide ? nlohmann::json(o.guide.path) : nlohmann::json()},
+            {"entry", point(g->line().entry)}, {"target", point(g->line().target)},
+            {"stiffness_N_per_mm", g->params().stiffnessNPerMm}, {"max_force_N", g->params().maxForceN}};
+    }
+    if (model->palpation()) j["palpation"] = true;
     // The session and its metrics replace an earlier run's together (OutputSet): never a new
     // session.csv beside a stale metrics.json.
     OutputSet outputs;
@@ -211,6 +221,11 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     std::cout << "voxhap serve: " << scene.name << ", device " << device->name() << ", " << loop.ticks() << " ticks in "
               << std::fixed << std::setprecision(1) << wall << " s"
               << (InterruptGuard::interrupted() ? " (interrupted)" : "") << "\n"
+              << (model->guidance() ? "  guidance        toward " +
+                             (guide ? guideDescription(o.guide, *guide) : std::string("the scene's path")) + "\n"
+                                    : std::string())
+              << (model->palpation() ? "  palpation       on\n" : "")
+
               << "  success         " << (m.success ? "yes" : "no") << " (" << haptic::successRuleName(m.outcome.rule)
               << "): " << m.outcome.reason << "\n"
               << "  dura            " << (m.duraIntact ? "intact" : "punctured") << "\n"
@@ -254,6 +269,7 @@ Action registerServe(CLI::App& app)
     cmd->add_option("--viewer", o->viewer,
         "Stream the needle pose at about 50 Hz to `voxhap view --listen PORT` at [HOST:]PORT (OpenIGTLink "
         "TRANSFORM)");
+    addGuideOptions(*cmd, o->guide);
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };
 }

@@ -4,6 +4,7 @@
 /// scene's force model → CSV, force–depth PNG and a summary.
 
 #include "tools/Cli.h"
+#include "tools/Guide.h"
 #include "tools/SimulationOutputs.h"
 
 #include "haptic/scene/ScriptedInsertion.h"
@@ -30,6 +31,7 @@ struct SimulateOptions {
     std::string entry, target, script, out = "voxhap-simulate";
     double speed = 0, depth = 0, rate = 0;
     bool noPlot = false;
+    GuideOptions guide;
 };
 
 /// "lumbar", "lumbar:overweight", "torso", or a .vdb file.
@@ -53,6 +55,7 @@ haptic::VolumeSource sourceFor(const std::string& input, const haptic::VolumeSou
 int run(const SimulateOptions& o, const CLI::App& cmd)
 {
     const volume::TissueTable& table = tissueTable(o.common);
+    const std::optional<haptic::GuideLine> guide = guideLine(o.guide, cmd); // a bad plan file fails first
     const haptic::Scene scene = loadSceneSayingDefaults(o.scene);
     std::optional<Vec3d> entry, target;
     if (!o.entry.empty()) entry = parseVec3(o.entry, "--entry");
@@ -73,7 +76,7 @@ int run(const SimulateOptions& o, const CLI::App& cmd)
         : haptic::InsertionScript::load(o.script);
     if (script.duration() * rate > 5e7) throw UsageError("--rate and the insertion give more than 5e7 ticks");
 
-    auto model = inst.makeModel();
+    auto model = inst.makeModel(guide);
     const haptic::InsertionResult r = haptic::runInsertion(*model, script, rate, scene.success, inst.target());
 
     const SimulationFiles files = writeSimulation(r, inst, o.out, !o.noPlot);
@@ -84,8 +87,13 @@ int run(const SimulateOptions& o, const CLI::App& cmd)
                   << (scene.fixedTable ? "the paper's layer table" : "layers from the labels on the path") << ")\n"
                   << "  path " << inst.entry().transpose() << " -> " << inst.target().transpose() << " mm, "
                   << (o.script.empty() ? std::to_string(speed) + " mm/s" : "scripted") << ", " << rate << " Hz, device "
-                  << scene.device.name << "\n\n"
-                  << haptic::insertionSummaryText(r, inst.layers()) << "\noutputs:\n";
+                  << scene.device.name << "\n";
+        if (model->guidance()) {
+            std::cout << "  guidance toward "
+                      << (guide ? guideDescription(o.guide, *guide) : std::string("the scene's path")) << "\n";
+        }
+        if (model->palpation()) std::cout << "  palpation on: the skin map is felt away from the entry\n";
+        std::cout << "\n" << haptic::insertionSummaryText(r, inst.layers()) << "\noutputs:\n";
         printOutputs(std::cout, files);
     }
     if (!files.plotted && !o.noPlot) std::cerr << "voxhap simulate: no plot: " << files.plotWhy << '\n';
@@ -116,6 +124,7 @@ Action registerSimulate(CLI::App& app)
     cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-simulate)");
     cmd->add_flag("--no-plot", o->noPlot, "Skip the PNG");
+    addGuideOptions(*cmd, o->guide);
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };
 }

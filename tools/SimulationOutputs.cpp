@@ -27,8 +27,9 @@ nlohmann::json summaryJson(
     }
     const haptic::ProcedureOutcome& o = r.outcome;
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
-    return {{"scene", scene.name}, {"success", o.success}, {"success_rule", haptic::successRuleName(o.rule)},
-        {"success_reason", o.reason}, {"target_distance_mm", opt(o.targetDistanceMm)}, {"force_limited", s.forceLimits},
+    nlohmann::json j = {{"scene", scene.name}, {"success", o.success},
+        {"success_rule", haptic::successRuleName(o.rule)}, {"success_reason", o.reason},
+        {"target_distance_mm", opt(o.targetDistanceMm)}, {"force_limited", s.forceLimits},
         {"force_limited_first_mm", depth(s.firstLimitMm)}, {"force_limited_ticks", s.limitedTicks},
         {"force_limited_max_cut_N", s.maxLimitedN}, {"skin_puncture_mm", depth(s.skinEntryMm)}, {"pops", s.pops},
         {"loss_of_resistance_mm", depth(s.lorMm)}, {"dura_puncture_mm", depth(s.duraMm)},
@@ -36,6 +37,8 @@ nlohmann::json summaryJson(
         {"peak_model_force_N", s.peakModelN}, {"peak_rendered_force_N", s.peakRenderedN},
         {"peak_plunger_force_N", s.peakPlungerN}, {"faults", s.faults}, {"final_depth_mm", s.finalDepthMm},
         {"duration_s", s.durationS}, {"events", events}, {"csv", csv}, {"png", png}};
+    if (s.guidance) j["guidance"] = {{"peak_force_N", s.peakGuidanceN}, {"max_offset_mm", s.maxOffsetMm}};
+    return j;
 }
 
 } // namespace

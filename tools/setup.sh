@@ -42,6 +42,8 @@ packages=(
   gnuplot-nox
   # real DICOM test files of other encodings and object classes (pydicom's test data)
   python3-pydicom
+  # the Python module (python/): pybind11 and numpy for /usr/bin/python3; its tests and example
+  python3-dev python3-pybind11 pybind11-dev python3-numpy python3-pytest python3-matplotlib
   # a one-node SLURM for the test that runs the cohort example as an array job
   slurmctld slurmd slurm-client
 )

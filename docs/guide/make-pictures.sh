@@ -8,8 +8,8 @@
 #   docs/guide/make-pictures.sh --ct DIR        the patient CT (default ../shared/data/ct-abdomen-tcia/dicom)
 #   docs/guide/make-pictures.sh --list          print the pictures' names and exit
 #
-# Environment: VOXHAP_BUILD_DIR (default ./build). Needs the CT of the
-# planning chapter; every other picture comes from built-in phantoms and
+# Environment: VOXHAP_BUILD_DIR (default ./build), with the voxhap program and
+# the Python module. Needs the CT of the planning chapter; every other picture comes from built-in phantoms and
 # scenes. About a minute on 2 cores. Pictures are written only when every
 # step succeeded: a failed step leaves the old pictures in place.
 set -euo pipefail
@@ -29,6 +29,7 @@ pictures=(
   serve-session.png       # voxhap serve: a simulated trainee's hand stops at the loss of resistance
   regress-failure.png     # voxhap regress: a tissue edit caught, where and by how much
   bench-sampler.png       # voxhap bench sampler: runtime against error, Pareto front
+  python-plan-force.png   # examples/python/plan_and_plot.py: predicted and rendered force, phantom and CT
 )
 
 while (($#)); do
@@ -86,6 +87,12 @@ cp regress/senac-average.png regress-failure.png
 
 step "the shaft-integration benchmark (quick)"
 "$voxhap" bench sampler --quick --png bench-sampler.png >/dev/null
+
+step "the Python example: plan on the phantom and the CT, insert, plot force against depth"
+[ -f "$build_dir/python/voxhap/__init__.py" ] ||
+  { echo "make-pictures: no Python module in $build_dir/python (VOXHAP_WITH_PYTHON=ON builds it)" >&2; exit 2; }
+PYTHONPATH="$build_dir/python" MPLBACKEND=Agg /usr/bin/python3 "$here/examples/python/plan_and_plot.py" \
+  --ct "$ct" --target 4,128,296 --allow-bone --out python-plan-force.png >/dev/null
 
 mkdir -p "$out"
 for p in "${pictures[@]}"; do

@@ -44,6 +44,13 @@ NeedleForceModel::NeedleForceModel(ForceModelSetup setup)
         mGravity = -mDevice.handleMassKg * kStandardGravityMPerS2 * down.normalized();
     }
     if (mTerms.damping.on && !mIntegrator) throw ValueError("force model: voxel damping needs a shaft integrator");
+    if (mTerms.palpation.on) {
+        if (!setup.skin) throw ValueError("force model: palpation needs a skin map");
+        mPalp.emplace(std::move(setup.skin));
+    }
+    if (mTerms.guidance.on)
+        mGuide.emplace(
+            mTerms.guidance.params, setup.guide.value_or(GuideLine{mPath.origin, mPath.origin + mPath.direction}));
     mIntegral.reset();
 }
 
@@ -59,6 +66,9 @@ void NeedleForceModel::reset() noexcept
     mCritical = false;
     mLimited = false;
     mLockAnchor = Vec3d::Zero();
+    if (mPalp) mPalp->reset();
+    if (mGuide) mGuide->reset();
+    mPalpating = false;
     mLastDirection = 1;
     mLastTimeS = 0;
 }
@@ -118,7 +128,8 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
 {
     out.events.clear();
     out.terms = ForceBreakdown{};
-    out.fault = out.critical = false;
+    out.fault = out.critical = out.palpating = false;
+    out.palpation = PalpationOutput{};
     const double t = std::isfinite(in.timeS) ? in.timeS : mLastTimeS;
     const double dt = std::isfinite(in.dtS) && in.dtS > 0.0 ? std::min(in.dtS, mSafety.params().maxDtS) : 0.0;
     const double dirNorm = in.direction.norm();
@@ -147,6 +158,72 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     else if (v < 0.0)
         mLastDirection = -1;
     const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
+    ForceBreakdown& f = out.terms;
+
+    // Palpation (issue 23, Palpation.h): before the needle touches the skin the tip is
+    // felt against the skin map; the needle's layer model takes over at the entry. The
+    // mode changes only while neither is in contact (the tip outside the skin on the
+    // map and before the first layer on the path), when neither stores any energy, so
+    // the hand-over itself can create none (§6.4).
+    if (mPalp) {
+        const bool needleFree = !mState.skinEntered() && d < mState.surfaceMm();
+        if (needleFree && !mPalp->inside(in.tip)) {
+            mPalpating = lateralOf(in.tip - mPath.origin, u).norm() > mTerms.palpation.params.entryRadiusMm;
+        }
+    }
+    if (mPalpating) {
+        out.palpating = true;
+        out.palpation = mPalp->update(in.tip);
+        f.palpation = out.palpation.force;
+        mProxy.reset();
+        mIntegral.reset();
+        TipState outside;
+        outside.depthMm = d;
+        out.tip = outside;
+        if (mTerms.lor.on) out.plungerN = mLor.update(0.0, dt);
+    } else {
+        if (mPalp) mPalp->reset();
+        needleTerms(in, t, dt, d, v, dir, hub, out);
+    }
+    if (mGuide) f.guidance = mGuide->update(in.tip, t);
+
+    // §1.1 critical structures: zero force and a warning, in this tick (palpation
+    // indents the skin, it does not cut: the shaft rule starts with the needle).
+    const int current = out.tip.currentLayer();
+    const bool critical = !mPalpating && mTerms.critical && touchingCritical();
+    if (critical != mCritical) {
+        out.events.push({critical ? EventType::CriticalBreach : EventType::CriticalClear, t, d, current});
+        mCritical = critical;
+    }
+    out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
+    Vec3d model = -out.axialN * u + f.lateral;
+    if (mPalp) model += f.palpation;
+    if (mGuide) model += f.guidance;
+    // §1.1 Eq. 1: F = F_R + F_C + F_G. A critical structure zeroes the tissue's forces;
+    // F_G only holds up the handle, so it stays.
+    const Vec3d tissue = critical ? Vec3d::Zero() : model;
+    f.gravity = mGravity;
+    out.modelForce = tissue + mGravity;
+    out.critical = critical;
+    out.speedMmPerS = v;
+
+    // 4. Safety, on the scaled force (every term alike); F_G passes beside the passivity
+    // observer (the handle's weight does the opposite work) but within the device's limits.
+    out.force = mSafety.apply(mTerms.renderScale * tissue, hub, dt, mGravity);
+    out.limitedN = mSafety.limitedN();
+    const bool limited = out.limitedN > 0.0;
+    if (limited && !mLimited) out.events.push({EventType::ForceLimited, t, d, current});
+    mLimited = limited;
+    if (mSafety.faulted()) {
+        out.events.push({EventType::Fault, t, d, current});
+        out.fault = true;
+    }
+}
+
+void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, double d, double v, const Vec3d& dir,
+    const Vec3d& hub, NeedleOutput& out) noexcept
+{
+    const Vec3d& u = mPath.direction;
 
     // 2. Insertion state.
     mState.update(d, t, mNeedle.lengthMm, out.events);
@@ -213,37 +290,10 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         lateral -= k * (lateralOf(in.tip - mPath.origin, u) - mLockAnchor);
     }
     f.lateral = lateral;
-    f.gravity = mGravity;
 
     if (mTerms.lor.on)
         out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
-
-    // §1.1 critical structures: zero force and a warning, in this tick.
-    const bool critical = mTerms.critical && touchingCritical();
-    if (critical != mCritical) {
-        out.events.push({critical ? EventType::CriticalBreach : EventType::CriticalClear, t, d, current});
-        mCritical = critical;
-    }
-    out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
-    // §1.1 Eq. 1: F = F_R + F_C + F_G. A critical structure zeroes the tissue's forces;
-    // F_G only holds up the handle, so it stays.
-    const Vec3d tissue = critical ? Vec3d::Zero() : Vec3d(-out.axialN * u + lateral);
-    out.modelForce = tissue + mGravity;
-    out.critical = critical;
-    out.speedMmPerS = v;
     out.tip = tip;
-
-    // 4. Safety, on the scaled tissue force; F_G passes beside the passivity observer
-    // (the handle's weight does the opposite work) but within the device's limits.
-    out.force = mSafety.apply(mTerms.renderScale * tissue, hub, dt, mGravity);
-    out.limitedN = mSafety.limitedN();
-    const bool limited = out.limitedN > 0.0;
-    if (limited && !mLimited) out.events.push({EventType::ForceLimited, t, d, current});
-    mLimited = limited;
-    if (mSafety.faulted()) {
-        out.events.push({EventType::Fault, t, d, current});
-        out.fault = true;
-    }
 }
 
 } // namespace voxhap::haptic

@@ -12,15 +12,18 @@
 #include "haptic/force/ContactTransient.h"
 #include "haptic/DeviceLimits.h"
 #include "haptic/Events.h"
+#include "haptic/force/Guidance.h"
 #include "haptic/force/InsertionState.h"
 #include "haptic/force/LorChannel.h"
 #include "haptic/Needle.h"
+#include "haptic/force/Palpation.h"
 #include "haptic/force/PivotCorrection.h"
 #include "haptic/force/Safety.h"
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/force/StickSlipProxy.h"
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace voxhap::haptic {
@@ -59,12 +62,21 @@ struct ForceTerms {
         bool on = false; ///< [LP] bone texture f = −c·sgn(v) while the tip is in bone (§4), through the proxy (§6.2)
         double cN = 0.3; ///< c [N]: not given in [LP]; 0.3 N [chosen, physics.md §4]
     } boneTexture;
+    struct PalpationTerm {
+        bool on = false; ///< the skin felt before the needle touches it (Palpation.h; §6.2 proxy)
+        PalpationParams params;
+    } palpation;
+    struct GuidanceTerm {
+        bool on = false; ///< virtual fixture toward the planned line (Guidance.h)
+        GuidanceParams params;
+    } guidance;
     bool critical = true;        ///< touching a critical structure zeroes the force (§1.1)
     double couplingNPerMm = 0.0; ///< stick-slip proxy stiffness; 0: the device's maximum stiffness (§6.2)
-    /// Uniform scale on the tissue forces sent to the device (the scene's
-    /// force_scale): every term alike, so the contrasts between layers survive,
-    /// while the device's I²t budget lasts to bone contact (issue 23 item 6). The
-    /// model's own figures (axialN, modelForce) stay unscaled; F_G is not scaled.
+    /// Uniform scale on the force sent to the device (the scene's force_scale):
+    /// every term alike (palpation and guidance too), so the contrasts between
+    /// layers survive, while the device's I²t budget lasts to bone contact (issue 23
+    /// item 6). The model's own figures (axialN, modelForce) stay unscaled; F_G is
+    /// not scaled.
     double renderScale = 1.0;
 };
 
@@ -80,8 +92,10 @@ struct NeedleInput {
 /// @brief Each term's axial share [N] (positive pushes out) and the lateral terms.
 struct ForceBreakdown {
     double elastic = 0, proxy = 0, viscous = 0, damping = 0, bone = 0, transient = 0, keepDirection = 0;
-    Vec3d lateral{0, 0, 0}; ///< pivot correction, lock and bone sticking [N]
-    Vec3d gravity{0, 0, 0}; ///< Kyung's F_G = −m·g holding up the handle (§1.1 Eq. 1) [N]
+    Vec3d lateral{0, 0, 0};   ///< pivot correction, lock and bone sticking [N]
+    Vec3d gravity{0, 0, 0};   ///< Kyung's F_G = −m·g holding up the handle (§1.1 Eq. 1) [N]
+    Vec3d palpation{0, 0, 0}; ///< the skin's push on the palpating tip [N]
+    Vec3d guidance{0, 0, 0};  ///< the guidance fixture's pull toward the planned line [N]
 };
 
 struct NeedleOutput {
@@ -98,7 +112,11 @@ struct NeedleOutput {
     TipState tip;
     bool critical = false; ///< force zeroed by a critical structure
     bool fault = false;    ///< latched safety fault
-    EventBuffer events;    ///< this tick's events
+    /// Palpating: the tip is felt against the skin map, not yet a needle on its
+    /// path (the layer model waits; Palpation.h). Only with the palpation term.
+    bool palpating = false;
+    PalpationOutput palpation; ///< the proxy's state while palpating
+    EventBuffer events;        ///< this tick's events
 };
 
 /// @brief The needle's path: where depth 0 is, and the insertion direction.
@@ -141,11 +159,18 @@ struct ForceModelSetup {
     /// An integrator used once the skin is entered and the needle is tied to its
     /// line (a TrajectoryProfile: O(1) per tick), or null to keep @p integrator.
     std::unique_ptr<ShaftIntegrator> locked;
+    /// The skin map palpation reads (SceneInstance builds it), or null; required
+    /// with terms.palpation.on.
+    std::shared_ptr<const SkinMap> skin;
+    /// The planned line guidance pulls toward; with terms.guidance.on and none
+    /// given, the path itself.
+    std::optional<GuideLine> guide;
 };
 
 class NeedleForceModel {
 public:
-    /// @throw ValueError on a degenerate path, or damping without an integrator
+    /// @throw ValueError on a degenerate path, damping without an integrator,
+    /// palpation without a skin map, or a degenerate guide line
     explicit NeedleForceModel(ForceModelSetup setup);
 
     /// @brief One tick. Never allocates, locks or throws.
@@ -159,9 +184,16 @@ public:
     const Needle& needle() const { return mNeedle; }
     const DeviceLimits& device() const { return mDevice; }
     const Safety& safety() const { return mSafety; }
+    /// @brief The palpation contact, when the term is on.
+    const PalpationContact* palpation() const { return mPalp ? &*mPalp : nullptr; }
+    /// @brief The guidance fixture, when the term is on.
+    const Guidance* guidance() const { return mGuide ? &*mGuide : nullptr; }
 
 private:
     bool touchingCritical() const noexcept;
+    /// The needle on its path: insertion state and the layer terms (steps 2 and 3).
+    void needleTerms(const NeedleInput& in, double t, double dt, double d, double v, const Vec3d& dir, const Vec3d& hub,
+        NeedleOutput& out) noexcept;
 
     InsertionState mState;
     NeedlePath mPath;
@@ -184,6 +216,9 @@ private:
     Vec3d mGravity{0, 0, 0}; ///< F_G = −m·g (§1.1), constant
     bool mCritical = false;
     bool mLimited = false; ///< the device limits cut the last tick's demand
+    std::optional<PalpationContact> mPalp;
+    std::optional<Guidance> mGuide;
+    bool mPalpating = false; ///< palpation mode (switched only while out of contact)
     int mLastDirection = 1;
     double mLastTimeS = 0;
 };

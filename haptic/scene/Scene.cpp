@@ -126,6 +126,40 @@ void parseTerms(Fields& top, ForceTerms& t)
         // [LP] bone texture −c·sgn(v) (physics.md §4); c is [chosen] 0.3 N there.
         t.boneTexture.cN = terms.sub("bone_texture").within("c_N", t.boneTexture.cN, 0.0, 10.0, "N");
     }
+    if ((t.palpation.on = terms.term("palpation")) && terms.isObject("palpation")) {
+        Fields p = terms.sub("palpation");
+        PalpationParams& q = t.palpation.params;
+        q.entryRadiusMm = p.within("entry_radius_mm", q.entryRadiusMm, 0.0, 100.0, "mm", true);
+        q.modulusKPa = p.within("modulus_kPa", q.modulusKPa, 0.0, 1e4, "kPa", true);
+        q.contactAreaMm2 = p.within("contact_area_mm2", q.contactAreaMm2, 0.0, 1e4, "mm²", true);
+        q.minStiffnessNPerMm = p.within("min_stiffness_N_per_mm", q.minStiffnessNPerMm, 0.0, 20.0, "N/mm", true);
+        q.maxStiffnessNPerMm = p.within("max_stiffness_N_per_mm", q.maxStiffnessNPerMm, 0.0, 20.0, "N/mm");
+        q.frictionSoft = p.within("friction_soft", q.frictionSoft, 0.0, 10.0, "");
+        q.frictionBone = p.within("friction_bone", q.frictionBone, 0.0, 10.0, "");
+        q.radiusMm = p.within("radius_mm", q.radiusMm, 0.0, 500.0, "mm", true);
+        q.aboveMm = p.within("above_mm", q.aboveMm, 0.0, 500.0, "mm");
+        q.reachMm = p.within("reach_mm", q.reachMm, 0.0, 1000.0, "mm", true);
+        q.gridMm = p.within("grid_mm", q.gridMm, 0.0, 10.0, "mm");
+        q.skinHu = p.within("skin_HU", q.skinHu, -1024.0, 3071.0, "HU");
+        q.boneHu = p.within("bone_HU", q.boneHu, -1024.0, 3071.0, "HU");
+        const std::string source = p.string("source", "auto");
+        if (source == "auto")
+            q.source = SkinSource::Auto;
+        else if (source == "labels")
+            q.source = SkinSource::Labels;
+        else if (source == "hu")
+            q.source = SkinSource::Hu;
+        else
+            p.fail("source", "must be \"auto\", \"labels\" or \"hu\"");
+    }
+    if ((t.guidance.on = terms.term("guidance")) && terms.isObject("guidance")) {
+        Fields g = terms.sub("guidance");
+        GuidanceParams& q = t.guidance.params;
+        q.stiffnessNPerMm = g.within("stiffness_N_per_mm", q.stiffnessNPerMm, 0.0, 20.0, "N/mm");
+        q.maxForceN = g.within("max_force_N", q.maxForceN, 0.0, 100.0, "N");
+        q.captureRadiusMm = g.within("capture_radius_mm", q.captureRadiusMm, 0.0, 500.0, "mm");
+        q.fadeOutS = g.within("fade_out_s", q.fadeOutS, 0.0, 1e6, "s");
+    }
     t.critical = terms.term("critical");
     if (terms.has("coupling_N_per_mm"))
         t.couplingNPerMm = terms.within("coupling_N_per_mm", 0.0, 0.0, 20.0, "N/mm", true);
@@ -364,6 +398,15 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
         mo.tipAreaMm2 = scene.needle.tipAreaMm2();
         mField = std::make_unique<MaterialField>(*mVolume, table, mo);
     }
+    // Palpation reads the skin and the bone beneath it across the path (Palpation.h).
+    if (scene.terms.palpation.on) {
+        try {
+            mSkin = std::make_shared<const SkinMap>(
+                *mVolume, table, mEntry, dir, scene.terms.palpation.params, scene.device.maxStiffnessNPerMm);
+        } catch (const ValueError& e) {
+            throw ValueError(scene.origin + ": terms." + e.what());
+        }
+    }
     if (scene.fixedTable) {
         mLayers = fixedLayers(scene.recipe, table, volume::parseLumbarPreset(scene.volume.preset), scene.volume.bmi);
     } else {
@@ -372,7 +415,7 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
     }
 }
 
-std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
+std::unique_ptr<NeedleForceModel> SceneInstance::makeModel(const std::optional<GuideLine>& guide) const
 {
     std::unique_ptr<ShaftIntegrator> integrator, locked;
     if (mField && (mScene.terms.damping.on || (mScene.terms.critical && mField->labels()))) {
@@ -387,14 +430,18 @@ std::unique_ptr<NeedleForceModel> SceneInstance::makeModel() const
             locked = makeIntegrator(*mField, o);
         }
     }
+    ForceTerms terms = mScene.terms;
+    if (guide) terms.guidance.on = true; // a planned line turns guidance on, at the scene's parameters
     return std::make_unique<NeedleForceModel>(ForceModelSetup{.layers = mLayers,
         .path = NeedlePath{mEntry, mTarget - mEntry},
-        .terms = mScene.terms,
+        .terms = terms,
         .needle = mScene.needle,
         .device = mScene.device,
         .integrator = std::move(integrator),
         .field = mField.get(),
-        .locked = std::move(locked)});
+        .locked = std::move(locked),
+        .skin = mSkin,
+        .guide = guide});
 }
 
 } // namespace voxhap::haptic

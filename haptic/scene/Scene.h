@@ -75,13 +75,19 @@ public:
     Vec3d entry() const { return mEntry; }
     Vec3d target() const { return mTarget; }
     /// @brief A fresh force model (each run or thread its own).
-    std::unique_ptr<NeedleForceModel> makeModel() const;
+    /// @param guide a planned line for guidance (Guidance.h): turns the term on at
+    /// the scene's parameters (defaults when the scene has no `guidance` block);
+    /// without it, a scene's guidance pulls toward the scene's own path.
+    std::unique_ptr<NeedleForceModel> makeModel(const std::optional<GuideLine>& guide = std::nullopt) const;
+    /// @brief The skin map of the palpation term, or null.
+    const SkinMap* skinMap() const { return mSkin.get(); }
     const std::vector<Layer>& layers() const { return mLayers; }
 
 private:
     Scene mScene;
     std::shared_ptr<const volume::Volume> mVolume;
     std::unique_ptr<MaterialField> mField;
+    std::shared_ptr<const SkinMap> mSkin;
     Vec3d mEntry{0, 0, 0}, mTarget{0, 0, 0};
     std::vector<Layer> mLayers;
 };

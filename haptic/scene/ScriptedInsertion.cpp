@@ -146,6 +146,11 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
         s.peakModelN = std::max(s.peakModelN, out.modelForce.norm());
         s.peakRenderedN = std::max(s.peakRenderedN, out.force.norm());
         s.peakPlungerN = std::max(s.peakPlungerN, out.plungerN);
+        if (const Guidance* g = model.guidance()) {
+            s.guidance = true;
+            s.peakGuidanceN = std::max(s.peakGuidanceN, out.terms.guidance.norm());
+            s.maxOffsetMm = std::max(s.maxOffsetMm, g->offset(in.tip).norm());
+        }
         r.rows.push_back(row);
     }
     s.finalDepthMm = r.rows.empty() ? 0.0 : r.rows.back().depthMm;
@@ -210,6 +215,10 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
           << "never\n";
     }
     if (s.faults) o << "  " << std::setw(20) << "faults" << s.faults << '\n';
+    if (s.guidance) {
+        o << "  " << std::setw(20) << "guidance" << s.peakGuidanceN << " N peak pull, " << s.maxOffsetMm
+          << " mm largest offset from the planned line\n";
+    }
     o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << fixed(s.finalDepthMm) << " mm in "
       << s.durationS << " s\n";
     o << "  " << std::setw(20) << "success" << (r.outcome.success ? "yes" : "no") << " ("

@@ -50,6 +50,9 @@ struct InsertionSummary {
     int forceLimits = 0;
     long limitedTicks = 0;
     double firstLimitMm = kNoLimit, maxLimitedN = 0;
+    bool guidance = false;    ///< the guidance term ran (Guidance.h)
+    double peakGuidanceN = 0; ///< its largest pull [N]
+    double maxOffsetMm = 0;   ///< the tip's largest distance from the planned line [mm]
 };
 
 struct InsertionResult {

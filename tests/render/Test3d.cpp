@@ -11,6 +11,7 @@
 #include "render/VolumeView3d.h"
 #include "core/Errors.h"
 
+#include <cmath>
 #include <cstdlib>
 
 namespace voxhap::render {
@@ -114,6 +115,42 @@ TEST_F(View3d, CompositeModesAreNotBlank)
         const Image img = render(m, true, RayCaster::Gpu);
         EXPECT_EQ(img.width(), mFrame.width);
         EXPECT_GT(test::greySpread(img), 5.0) << blendModeName(m);
+    }
+}
+
+/// Whether a path-coloured pixel lies within 2 px of @p at (the line is 2 px wide).
+bool pathColourNear(const Image& img, const Vec2d& at)
+{
+    const Rgb want = OverlayStyle{}.path;
+    for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+            const int x = int(std::lround(at.x())) + dx, y = int(std::lround(at.y())) + dy;
+            if (x < 0 || y < 0 || x >= img.width() || y >= img.height()) continue;
+            const Rgb p = img.at(x, y);
+            if (std::abs(p.r - want.r) <= 8 && std::abs(p.g - want.g) <= 8 && std::abs(p.b - want.b) <= 8) return true;
+        }
+    }
+    return false;
+}
+
+TEST_F(View3d, PathBehindTheBodyIsShownOnlyWhenLinesAreOnTop)
+{
+    // A path 3 mm behind the sphere (seen from the camera), crossing its
+    // projected centre: the opaque core hides it in a composite rendering,
+    // and the overview's layer above (plan's fourth quadrant) shows it.
+    const Vec3d behind = mPhantom.centre + (mPhantom.radius + 3.0) * mFrame.normal;
+    Overlays o{{}, {}, {}, "", false, false, ""};
+    o.paths.push_back({"p", behind + 4.0 * mFrame.down, behind - 4.0 * mFrame.down, std::nullopt});
+    const Vec2d centre = expectedPixel("3d", mPhantom.centre, mBox.min, mBox.max, mFrame.pixelMm);
+    const RenderVolume rv(*mVolume, false);
+    for (const bool onTop : {false, true}) {
+        View3dStyle style;
+        style.mode = BlendMode::Grey;
+        style.window = {400.0, 200.0}; // opacity rises to bone's 0.3/mm from 400 HU: the cortical core is dense
+        style.criticalSurfaces = false;
+        style.linesOnTop = onTop;
+        VolumeView3d view(rv, mFrame, style, volume::TissueTable::builtin(), o);
+        EXPECT_EQ(pathColourNear(view.render(), centre), onTop) << (onTop ? "on top" : "in the scene");
     }
 }
 

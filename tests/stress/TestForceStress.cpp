@@ -18,8 +18,10 @@
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <random>
@@ -40,9 +42,8 @@ const SceneInstance& instance(const std::string& name)
 /// §6.4 "NaN/Inf", "extreme velocity", "dt jitter": 10⁶ random states, a tenth of them
 /// hostile. Every output is finite and within the device's peak; a non-finite input
 /// latches the fault and the force stays exactly zero until reset.
-void fuzz(const std::string& scene, long states, unsigned seed)
+void fuzz(const SceneInstance& inst, long states, unsigned seed)
 {
-    const SceneInstance& inst = instance(scene);
     auto model = inst.makeModel();
     const double peak = inst.scene().device.maxForceN;
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
@@ -89,8 +90,60 @@ void fuzz(const std::string& scene, long states, unsigned seed)
     EXPECT_GT(faults, states / 200); // kinds 96–98 are non-finite or degenerate: about 3 %
 }
 
-TEST(ForceStress, MillionRandomStatesSenac) { fuzz("senac-average", 1000000, 1); }
-TEST(ForceStress, RandomStatesKyungWithDampingPivotAndBone) { fuzz("kyung", 200000, 2); }
+TEST(ForceStress, MillionRandomStatesSenac) { fuzz(instance("senac-average"), 1000000, 1); }
+TEST(ForceStress, RandomStatesKyungWithDampingPivotAndBone) { fuzz(instance("kyung"), 200000, 2); }
+
+/// senac-average with palpation (issue 23 item 1) and guidance toward a line 2 mm
+/// beside the path (item 2) on.
+const SceneInstance& palpationInstance()
+{
+    static const SceneInstance inst = [] {
+        std::ifstream in(VOXHAP_SOURCE_DIR "/data/scenes/senac-average.json");
+        nlohmann::json j = nlohmann::json::parse(in);
+        j["terms"]["palpation"] = {{"entry_radius_mm", 1.0}, {"radius_mm", 30.0}};
+        j["terms"]["guidance"] = {{"stiffness_N_per_mm", 0.2}, {"fade_out_s", 30.0}};
+        return SceneInstance(parseScene(j.dump(), "stress.json"), nullptr, table());
+    }();
+    return inst;
+}
+
+TEST(ForceStress, RandomStatesWithPalpationAndGuidance) { fuzz(palpationInstance(), 200000, 3); }
+
+// Palpating (contact, friction, the proxy's descent), the hand-over to the needle and
+// the insertion with guidance on: no allocation or release in any tick.
+TEST(ForceStress, PalpationAndGuidanceStepNeverAllocates)
+{
+    const SceneInstance& inst = palpationInstance();
+    auto model = inst.makeModel(GuideLine{inst.entry() + Vec3d(2.0, 0.0, 0.0), inst.target() + Vec3d(2.0, 0.0, 0.0)});
+    const Vec3d dir = (inst.target() - inst.entry()).normalized();
+    NeedleOutput out;
+    NeedleInput in;
+    in.direction = dir;
+    long n = 0, palpating = 0, contact = 0;
+    bool entered = false;
+    const auto at = [&](const Vec3d& tip) {
+        in.timeS = 1e-3 * double(n++);
+        in.tip = tip;
+        model->step(in, out);
+        palpating += out.palpating;
+        contact += out.palpation.contact;
+        for (const Event& e : out.events) entered = entered || e.type == EventType::SkinEntry;
+    };
+    const Vec3d up = -3.0 * dir;
+    at(inst.entry() + Vec3d(0.0, 0.0, 20.0) + up); // the first tick may set things up
+    const long before = test::allocations(), freesBefore = test::deallocations();
+    for (int i = 0; i <= 1000; ++i) at(inst.entry() + Vec3d(0.0, 0.0, 20.0) + up + 0.006 * i * dir); // press in
+    for (int i = 0; i <= 4000; ++i) // slide across processes and the interspace, in contact
+        at(inst.entry() + Vec3d(3.0 * std::sin(0.01 * i), 0.0, 20.0 - 0.01 * i) + 3.0 * dir);
+    for (int i = 0; i <= 1000; ++i) at(inst.entry() + Vec3d(0.0, 0.0, -20.0) + 3.0 * dir - 0.006 * i * dir); // lift
+    for (int i = 0; i <= 1000; ++i) at(inst.entry() + (-20.0 + 0.02 * i) * Vec3d(0.0, 0.0, 1.0) + up); // to the entry
+    for (int i = 0; i <= 6000; ++i) at(inst.entry() + up + 0.004 * i * dir);                           // insert
+    EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
+    EXPECT_GT(palpating, 5000);
+    EXPECT_GT(contact, 4000);
+    EXPECT_TRUE(entered);
+}
 
 TEST(ForceStress, StepNeverAllocates)
 {
