@@ -120,6 +120,7 @@ nlohmann::json writeCohort(const AssessOptions& o, const volume::TissueTable& ta
         }
         csv << '\n';
         const std::string text = j.dump(2) + "\n";
+        fs::create_directories(fs::path(o.out) / id);
         outputs.addStream(fs::path(o.out) / id / "metrics.json", [text](std::ostream& out) { out << text; });
     }
     const std::string table_ = csv.str();
