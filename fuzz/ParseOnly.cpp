@@ -40,8 +40,8 @@ MaterialField::MaterialField(const volume::Volume&, const volume::TissueTable&, 
 {
     notLinked("MaterialField");
 }
-SkinMap::SkinMap(const volume::Volume&, const volume::TissueTable&, const Vec3d&, const Vec3d&, const PalpationParams&,
-    double)
+SkinMap::SkinMap(
+    const volume::Volume&, const volume::TissueTable&, const Vec3d&, const Vec3d&, const PalpationParams&, double)
 {
     notLinked("SkinMap");
 }

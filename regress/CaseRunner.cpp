@@ -63,7 +63,8 @@ std::string vecText(const Vec3d& v)
 void flattenScene(const Json& j, const std::string& prefix, Inputs& out)
 {
     for (const auto& [k, v] : j.items()) {
-        if (k == "description" || k == "source" || k == "name" || k == "schema") continue;
+        // "assessment" holds the trainee metrics' reference ranges (`voxhap assess`), which no force depends on.
+        if (k == "description" || k == "source" || k == "name" || k == "schema" || k == "assessment") continue;
         const std::string key = prefix + "." + k;
         bool bare = v.is_object(); // no parameters, only prose
         for (const auto& [k2, v2] : v.items()) bare = bare && (k2 == "description" || k2 == "source" || k2 == "name");

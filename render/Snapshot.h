@@ -45,7 +45,7 @@ struct RenderRequest {
     /// reduced path while the camera moves) where a 3D overview must come at the
     /// cost of a slice, as in `voxhap plan`'s views.
     RenderQuality quality3d = RenderQuality::Full;
-    bool shade3d = true; ///< View3dStyle::shade
+    bool shade3d = true;       ///< View3dStyle::shade
     bool linesOnTop3d = false; ///< View3dStyle::linesOnTop
 };
 

@@ -33,6 +33,11 @@ struct LabelMapping {
     std::map<std::int64_t, std::int32_t> tissueOf;
     std::string origin;         ///< the file, for messages
     std::filesystem::path file; ///< the label map the mapping names, resolved; empty if none
+    /// (imported tissue, automatic tissue): where the map says the first and the
+    /// automatic labels say the second, the automatic label stays (TotalSegmentator's
+    /// bones keep the cortex the CT numbers found). A mapped tissue of −1 keeps the
+    /// automatic label everywhere.
+    std::vector<std::pair<std::int32_t, std::int32_t>> keepAutomatic;
 };
 
 /// @brief Read and check a mapping file against @p table. @throw IoError, ValueError

@@ -171,10 +171,15 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
             labels = embedLabels(lat, labels, whole);
             lat = whole;
         }
-        const std::vector<std::int32_t> imported =
+        std::vector<std::int32_t> imported =
             resampleLabels(*o.imported->labels, o.imported->mapping, v, lat, o.imported->file);
         report.importedVoxels =
             std::int64_t(std::count_if(imported.begin(), imported.end(), [](std::int32_t x) { return x >= 0; }));
+        for (const auto& [mapped, automatic] : o.imported->mapping.keepAutomatic) {
+            for (std::size_t n = 0; n < imported.size(); ++n) {
+                if (imported[n] == mapped && labels[n] == automatic) imported[n] = -1;
+            }
+        }
         applyImported(labels, imported);
         if (report.method == "existing") report.method = "imported";
     }

@@ -100,6 +100,7 @@ Action registerView(CLI::App& app);
 Action registerPlan(CLI::App& app);
 Action registerRegress(CLI::App& app);
 Action registerBatch(CLI::App& app);
+Action registerAssess(CLI::App& app);
 
 /// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
 struct PlanFiles {

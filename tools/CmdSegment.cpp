@@ -9,6 +9,7 @@
 
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
+#include "segmentation/TotalSegmentator.h"
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
@@ -77,12 +78,24 @@ int run(const SegmentCliOptions& o)
     std::unique_ptr<volume::Volume> imported;
     if (!o.labels.empty()) {
         segmentation::ImportedLabels il;
-        il.mapping = segmentation::loadLabelMapping(o.labels, table);
-        const std::string mapFile = o.labelMap.empty() ? il.mapping.file.string() : o.labelMap;
-        if (mapFile.empty()) throw UsageError(o.labels + ": file: no label map named here; give one with --label-map");
-        ReaderOptions plain; // label values are not HU: keep every voxel, whatever its value
-        plain.airHu = -1e30;
-        imported = std::make_unique<volume::Volume>(loadVolumeWithProgress(mapFile, plain, terminal));
+        std::string mapFile;
+        if (o.labels == "totalsegmentator") {
+            // TotalSegmentator's multilabel file or its folder of per-class masks (issue 23 item 8).
+            if (o.labelMap.empty())
+                throw UsageError("--labels totalsegmentator needs --label-map: TotalSegmentator's multilabel .nii.gz "
+                                 "or its folder of per-class masks");
+            mapFile = o.labelMap;
+            il.mapping = segmentation::totalSegmentatorMapping(table);
+            imported = std::make_unique<volume::Volume>(segmentation::loadTotalSegmentator(mapFile, table));
+        } else {
+            il.mapping = segmentation::loadLabelMapping(o.labels, table);
+            mapFile = o.labelMap.empty() ? il.mapping.file.string() : o.labelMap;
+            if (mapFile.empty())
+                throw UsageError(o.labels + ": file: no label map named here; give one with --label-map");
+            ReaderOptions plain; // label values are not HU: keep every voxel, whatever its value
+            plain.airHu = -1e30;
+            imported = std::make_unique<volume::Volume>(loadVolumeWithProgress(mapFile, plain, terminal));
+        }
         il.labels = imported.get();
         il.file = mapFile;
         so.imported = std::move(il);
@@ -161,9 +174,11 @@ Action registerSegment(CLI::App& app)
         ->required();
     cmd->add_option("--labels", o->labels,
         "Label mapping JSON {\"schema\": \"voxhap.label-mapping/1\", \"file\": MAP, \"labels\": {VALUE: "
-        "TISSUE}}: the imported labels override the automatic ones");
-    cmd->add_option(
-        "--label-map", o->labelMap, "The label map (.nrrd, .nii, .mha, .vdb) if the mapping does not name it");
+        "TISSUE}}: the imported labels override the automatic ones; or 'totalsegmentator': the built-in mapping of "
+        "TotalSegmentator v2's 117 'total' classes, with --label-map its multilabel file or folder of masks");
+    cmd->add_option("--label-map", o->labelMap,
+        "The label map (.nrrd, .nii, .mha, .vdb) if the mapping does not name it; with --labels totalsegmentator a "
+        "multilabel file or a folder of <class>.nii.gz masks");
     cmd->add_option(
         "--export", o->exportNrrd, "Also write the label grid alone as .nrrd (opens in 3D Slicer as a label map)");
     cmd->add_option("--critical", o->critical,

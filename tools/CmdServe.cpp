@@ -6,6 +6,8 @@
 #include "tools/Cli.h"
 #include "tools/Guide.h"
 
+#include "assessment/Metrics.h"
+
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/igtl/PoseStream.h"
 #include "haptic/scene/Scene.h"
@@ -184,15 +186,9 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     const double wall = elapsed();
 
     const haptic::TraineeMetrics m = session.metrics();
-    const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
-    nlohmann::json j = {{"scene", scene.name}, {"device", device->name()}, {"success", m.success},
-        {"success_rule", haptic::successRuleName(m.outcome.rule)}, {"success_reason", m.outcome.reason},
-        {"success_dura_intact", m.duraIntact}, {"target_distance_mm", opt(m.outcome.targetDistanceMm)},
-        {"csf_reached", m.outcome.csfReached}, {"critical_breach", m.outcome.criticalBreach},
-        {"force_limited", m.forceLimits}, {"bone_contacts", m.boneContacts}, {"pops", m.pops},
-        {"insertion_angle_deg", opt(m.insertionAngleDeg)}, {"speed_mean_mm_per_s", m.speedMeanMmPerS},
-        {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2}, {"epidural_overshoot_mm", opt(m.overshootMm)},
-        {"syrrate_per_m", opt(m.syrrate)}, {"duration_s", m.durationS}, {"ticks", loop.ticks()},
+    // The trainee metrics under the names `voxhap assess` reads (assessment/Metrics.h), then the run's own.
+    nlohmann::json j = assessment::traineeMetricsJson(m);
+    j.update({{"scene", scene.name}, {"device", device->name()}, {"ticks", loop.ticks()},
         {"rate_hz", double(loop.ticks()) / std::max(wall, 1e-9)},
         {"tick_compute_ns",
             {{"p50", loop.stats().computeQuantileNs(0.5)}, {"p99", loop.stats().computeQuantileNs(0.99)},
@@ -200,7 +196,7 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         {"period_error_ns_p99", loop.stats().jitterQuantileNs(0.99)}, {"overruns", loop.overruns()},
         {"skipped_periods", loop.skippedPeriods()}, {"records", session.recordCount()},
         {"dropped_records", loop.droppedRecords()}, {"dropped_events", loop.droppedEvents()},
-        {"pose_faults", m.poseFaults}, {"interrupted", InterruptGuard::interrupted()}};
+        {"interrupted", InterruptGuard::interrupted()}});
     if (const haptic::Guidance* g = model->guidance()) {
         const auto point = [](const Vec3d& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
         j["guidance"] = {{"file", o.guide.file}, {"path", guide ? nlohmann::json(o.guide.path) : nlohmann::json()},

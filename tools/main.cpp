@@ -34,6 +34,7 @@ int main(int argc, char** argv)
         {"bench", registerBench(app)},
         {"regress", registerRegress(app)},
         {"batch", registerBatch(app)},
+        {"assess", registerAssess(app)},
     };
 
     if (argc > 1 && argv[1][0] != '-' && !actions.count(argv[1])) {

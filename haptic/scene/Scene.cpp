@@ -205,6 +205,28 @@ SuccessCriteria parseSuccess(Fields& top, LayerModel model)
     return c;
 }
 
+/// "assessment": {"<metric>": {"min": a, "max": b, "source": "..."}, ...}. The metric
+/// names are checked by assessment/ (which knows metrics.json); here the ranges.
+void parseAssessment(Fields& top, const std::string& origin, std::vector<MetricRange>& out)
+{
+    if (!top.has("assessment")) return;
+    const Json& all = top.raw("assessment");
+    if (!all.is_object()) top.fail("assessment", "must be an object of metric names");
+    for (const auto& [name, v] : all.items()) {
+        Fields f(v, origin, "assessment." + name);
+        MetricRange r;
+        r.metric = name;
+        // Any finite bound: metrics carry their own units (docs/reference.md "Assessment").
+        r.min = f.optWithin("min", -1e9, 1e9, "");
+        r.max = f.optWithin("max", -1e9, 1e9, "");
+        r.source = f.string("source", "");
+        if (!r.min && !r.max) f.fail("", "give min, max or both");
+        if (r.min && r.max && *r.min > *r.max) f.fail("min", "must not exceed max");
+        if (r.source.empty()) f.fail("source", "missing: say where the range comes from (a paper, or [chosen])");
+        out.push_back(std::move(r));
+    }
+}
+
 /// @p message with control characters escaped: names quoted from the file ("a\nb") stay on one line.
 std::string oneLine(const std::string& message)
 {
@@ -311,6 +333,7 @@ Scene readScene(const std::string& text, const std::string& origin)
     } else {
         s.defaulted.push_back("no \"insertion\" given: 10 mm/s at 1000 Hz from 5 mm outside the entry, to the target");
     }
+    parseAssessment(top, origin, s.assessment);
     if (s.recipe.model == LayerModel::Kyung && s.fixedTable)
         top.fail("layers", "the kyung model reads voxels: use \"labels\"");
     return s;

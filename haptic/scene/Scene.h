@@ -31,6 +31,15 @@ struct VolumeSource {
     std::string file;               ///< a .vdb volume
 };
 
+/// @brief A reference range of one trainee metric (a key of metrics.json), from the
+/// scene's "assessment" block; `voxhap assess` (assessment/) checks the names and
+/// compares sessions with it.
+struct MetricRange {
+    std::string metric;             ///< a metrics.json key, e.g. "speed_mean_mm_per_s"
+    std::optional<double> min, max; ///< in the metric's unit; a flag (true/false) is 1/0
+    std::string source;             ///< where the range comes from (a paper, or "[chosen]")
+};
+
 struct Scene {
     std::string name, description, source, origin; ///< origin: the file or "builtin:<name>"
     VolumeSource volume;
@@ -48,6 +57,8 @@ struct Scene {
     double rateHz = 1000.0;        ///< servo rate of the simulation
     double approachMm = 5.0;       ///< the tip starts this far outside the entry point
     std::optional<double> depthMm; ///< insertion depth past the entry; else to the target
+    /// The scene's reference ranges of the trainee metrics ("assessment" block), in file order.
+    std::vector<MetricRange> assessment;
     /// Blocks the file left out and the defaults taken for them, one line each,
     /// for a command to print (docs/scenes.md lists every default).
     std::vector<std::string> defaulted;
