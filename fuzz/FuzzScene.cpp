@@ -102,7 +102,7 @@ void checkScene(const Json& doc, const Scene& s)
     if (!doc.is_object()) finding("a scene that is not an object");
     onlyKnown(&doc, "top",
         {"schema", "name", "description", "source", "volume", "path", "model", "layers", "tenting", "overrides",
-            "terms", "needle", "device", "insertion", "force_scale", "success"});
+            "terms", "needle", "device", "insertion", "force_scale", "success", "assessment"});
     if (!at(doc, {"schema"}) || *at(doc, {"schema"}) != "voxhap-scene/1")
         finding("schema: accepted without voxhap-scene/1");
     if (s.name.empty()) finding("name: empty");
@@ -183,7 +183,7 @@ void checkScene(const Json& doc, const Scene& s)
     if (!at(doc, {"terms"})) finding("terms: accepted without");
     onlyKnown(at(doc, {"terms"}), "terms",
         {"tip", "cutting", "viscous", "karnopp", "damping", "bone", "pivot", "lock", "lor", "critical",
-            "coupling_N_per_mm", "bone_texture"});
+            "coupling_N_per_mm", "bone_texture", "palpation", "guidance"});
     term(doc, "bone_texture", t.boneTexture.on);
     onlyKnown(at(doc, {"terms", "bone_texture"}), "terms.bone_texture", {"c_N"});
     number(doc, {"terms", "bone_texture", "c_N"}, t.boneTexture.cN, Sign::NonNegative);
