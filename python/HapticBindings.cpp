@@ -244,6 +244,7 @@ py::dict simulate(const std::shared_ptr<PyScene>& ps, std::optional<double> spee
     summary["faults"] = sm.faults;
     summary["peak_model_N"] = sm.peakModelN;
     summary["peak_rendered_N"] = sm.peakRenderedN;
+    summary["force_scale"] = scene.terms.renderScale; // the scene's uniform scale of what the device renders
     summary["peak_plunger_N"] = sm.peakPlungerN;
     summary["final_depth_mm"] = sm.finalDepthMm;
     summary["duration_s"] = sm.durationS;

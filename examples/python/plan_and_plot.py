@@ -56,7 +56,9 @@ def draw(ax, title, best, sim):
     ax.plot(force["depth_mm"], force["force_N"], "k--", lw=1.5,
             label=f"predicted at {force['speed_mm_per_s']:.0f} mm/s (planner)")
     inside = sim["depth_mm"] >= 0
-    ax.plot(sim["depth_mm"][inside], sim["force_N"][inside], color="#1f5fa8", lw=1.2, label="rendered (simulation)")
+    scale = sim["summary"]["force_scale"]  # the scene renders its model force times this (kyung: 0.5)
+    label = "rendered (simulation)" if scale == 1.0 else f"rendered (simulation, force_scale {scale:g})"
+    ax.plot(sim["depth_mm"][inside], sim["force_N"][inside], color="#1f5fa8", lw=1.2, label=label)
     ax.set_title(title, fontsize=10)
     ax.set_xlabel("depth past the entry [mm]")
     ax.set_ylabel("force [N]")

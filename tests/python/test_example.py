@@ -38,4 +38,8 @@ def test_plan_and_plot_example(source_dir, tmp_path):
     assert summary["peak_predicted_N"] == best["force"]["peak_N"]
     sim = voxhap.simulate("kyung", torso, entry=best["entry"], target=best["target"])
     assert summary["peak_rendered_N"] == pytest.approx(sim["summary"]["peak_rendered_N"], rel=0, abs=0)
-    assert 0 < summary["peak_rendered_N"] <= summary["peak_predicted_N"] + 1e-9
+    # The device renders the model's force times the scene's force_scale, or less where its limits act;
+    # the planner's prediction ends at bone contact, the insertion goes on into bone, so the two peaks
+    # are not ordered.
+    scaled = sim["summary"]["force_scale"] * sim["summary"]["peak_model_N"]
+    assert 0 < summary["peak_rendered_N"] <= scaled + 1e-9
