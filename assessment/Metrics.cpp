@@ -21,8 +21,8 @@ const std::vector<MetricInfo>& metricCatalogue()
     // Default ranges: where the seed papers give a figure it is cited; the rest are
     // [chosen] and say so. A scene's "assessment" block replaces them (data/scenes/).
     static const std::vector<MetricInfo> c{
-        {"success", "true/false", "the procedure's goal, by the scene's success rule, without a critical breach",
-            1.0, std::nullopt,
+        {"success", "true/false", "the procedure's goal, by the scene's success rule, without a critical breach", 1.0,
+            std::nullopt,
             "haptic/Procedure.h: dura_intact [S19], reach_csf ([LP], [C]), reach_target within the scene's radius "
             "[chosen] (issue 23 item 5)"},
         {"success_dura_intact", "true/false", "the dura was not punctured", 1.0, std::nullopt,
