@@ -99,9 +99,10 @@ TEST(KyungScene, RenderedProfileRisesWithTheModelUpToBoneContact)
             const InsertionRow &a = r.rows[i - 1], &b = r.rows[i];
             // The rendered force is along the path (no lateral terms on a straight line).
             if (b.axialN > a.axialN && b.force.norm() < a.force.norm() - 1e-12) ++falls;
-            if (scale == inst.scene().terms.renderScale)
+            if (scale == inst.scene().terms.renderScale) {
                 EXPECT_NEAR(b.force.norm(), scale * std::abs(b.axialN), 1e-12 * std::abs(b.axialN) + 1e-15)
                     << "at " << b.depthMm << " mm";
+            }
         }
     };
     ASSERT_EQ(inst.scene().terms.renderScale, 0.5);
