@@ -165,10 +165,12 @@ std::vector<OrbitCase> orbitVolume(
         render::View3dStyle style;
         style.moving = cand.path;
         style.movingFactor = cand.factor;
+        style.sampleVoxels = defaults.sampleVoxels; // the viewer's full-quality step
         style.window = rv.defaultWindow(style.mode);
         render::Overlays none;
         none.letters = false, none.scaleBar = false;
-        render::VolumeView3d view(rv, home, style, table, none);
+        auto owned = std::make_unique<render::VolumeView3d>(rv, home, style, table, none);
+        render::VolumeView3d& view = *owned;
         auto t = RenderClock::now();
         const render::Image fullHome = view.render(render::RenderQuality::Full);
         c.firstFullS = renderSecondsSince(t);
@@ -208,6 +210,37 @@ std::vector<OrbitCase> orbitVolume(
         view.render(render::RenderQuality::Full);
         c.stopToFullS = renderSecondsSince(t);
         c.fullOverMoving = c.fullS / std::max(1e-12, quantile(moving, 0.5));
+        if (c.chosen) {
+            // Full-quality candidates: the same view at other ray steps, each against
+            // the one-voxel frame of the same camera (the reference, listed first).
+            // One view (one GL context) at a time: the orbit's is closed first.
+            owned.reset();
+            render::Image oneVoxel;
+            for (const double step : {1.0, 1.5, 2.0}) {
+                render::View3dStyle other = style;
+                other.sampleVoxels = step;
+                render::VolumeView3d stepView(rv, home, other, table, none);
+                const render::Image first = stepView.render(render::RenderQuality::Full);
+                if (step == 1.0) {
+                    oneVoxel = first;
+                    c.viewerVsOneVoxelGrey = meanGreyDifference(fullHome, oneVoxel);
+                }
+                FullStep fs;
+                fs.stepVoxels = step;
+                fs.greyVsOneVoxel = meanGreyDifference(first, oneVoxel);
+                std::vector<double> wall, cpu;
+                for (int i = 0; i < o.fullFrames; ++i) {
+                    const double c0 = processCpuSeconds();
+                    t = RenderClock::now();
+                    stepView.render(render::RenderQuality::Full);
+                    wall.push_back(renderSecondsSince(t));
+                    cpu.push_back(processCpuSeconds() - c0);
+                }
+                fs.fullS = sampleStats(wall).median;
+                fs.cpuFullS = sampleStats(cpu).median;
+                c.fullSteps.push_back(fs);
+            }
+        }
         if (progress) {
             std::ostringstream line;
             line << name << ", " << cand.name << ": " << std::fixed << std::setprecision(1) << c.fpsMedian
@@ -304,6 +337,22 @@ void printRenderReport(std::ostream& os, const RenderReport& r)
           "(a wheel zoom adds the viewer's 0.3 s settle time); |dgrey|: mean grey difference, moving against full,\n"
           "at the home camera; cpu s/frame: process CPU time (all threads), which the machine's load does not\n"
           "inflate. Targets (issue 28 item 7): fps >= 10 while moving, full quality <= 1.5 s after.\n";
+    os << "\nfull-quality ray step (the viewer's uses " << render::ViewerOptions{}.sampleVoxels
+       << " voxels; |dgrey| against one-voxel steps at the home camera):\n"
+       << std::left << std::setw(16) << "volume" << std::setw(14) << "step [voxel]" << std::setw(12) << "full [s]"
+       << std::setw(16) << "cpu s/frame"
+       << "|dgrey| vs 1 voxel\n";
+    for (const OrbitCase& c : r.orbits) {
+        if (!c.chosen) continue;
+        os << std::left << std::setw(16) << c.volume << std::setw(14) << "viewer's" << std::fixed
+           << std::setprecision(3) << std::setw(12) << c.fullS << std::setw(16) << c.cpuFullS << std::setprecision(2)
+           << c.viewerVsOneVoxelGrey << "\n";
+        for (const FullStep& f : c.fullSteps) {
+            os << std::left << std::setw(16) << c.volume << std::setprecision(1) << std::setw(14) << f.stepVoxels
+               << std::setprecision(3) << std::setw(12) << f.fullS << std::setw(16) << f.cpuFullS
+               << std::setprecision(2) << f.greyVsOneVoxel << "\n";
+        }
+    }
 }
 
 nlohmann::json renderReportJson(const RenderReport& r)
@@ -322,6 +371,15 @@ nlohmann::json renderReportJson(const RenderReport& r)
                 {"fps_p10", c.fpsP10}, {"full_frame_s", c.fullS}, {"stop_to_full_s", c.stopToFullS},
                 {"full_over_moving", c.fullOverMoving}, {"moving_vs_full_mean_grey", c.movingVsFullGrey},
                 {"first_full_s", c.firstFullS}, {"first_moving_s", c.firstMovingS}, {"frames", c.frames}});
+        nlohmann::json steps = nlohmann::json::array();
+        for (const FullStep& f : c.fullSteps) {
+            steps.push_back({{"step_voxels", f.stepVoxels}, {"full_frame_s", f.fullS}, {"cpu_full_s", f.cpuFullS},
+                {"mean_grey_vs_one_voxel", f.greyVsOneVoxel}});
+        }
+        if (!steps.empty()) {
+            orbits.back()["full_steps"] = steps;
+            orbits.back()["viewer_full_vs_one_voxel_mean_grey"] = c.viewerVsOneVoxelGrey;
+        }
     }
     return {{"machine", r.machine}, {"display", r.display}, {"cases", cases},
         {"orbit",

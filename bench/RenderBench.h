@@ -38,6 +38,14 @@ struct RenderBenchOptions {
 };
 
 /// @brief One moving path measured on one volume's orbit.
+/// @brief One ray step of the full-quality frame, against the viewer's one voxel.
+struct FullStep {
+    double stepVoxels = 1.0;   ///< View3dStyle::sampleVoxels
+    double fullS = 0;          ///< median full-quality frame at the home camera [s]
+    double cpuFullS = 0;       ///< process CPU seconds per frame, median
+    double greyVsOneVoxel = 0; ///< mean |grey difference| against the one-voxel frame [0..255]
+};
+
 struct OrbitCase {
     std::string volume, path;    ///< e.g. "real CT", "subsample x3"
     bool chosen = false;         ///< the viewer's default moving path
@@ -52,6 +60,10 @@ struct OrbitCase {
     double cpuMovingS = 0;       ///< process CPU seconds per moving frame, median (all threads): the load-free cost
     double cpuFullS = 0;         ///< process CPU seconds per full-quality frame, median
     int frames = 0;
+    /// The chosen path's case only: the full frame at longer ray steps, the
+    /// candidates for full quality within 1.5 s of stopping.
+    std::vector<FullStep> fullSteps;
+    double viewerVsOneVoxelGrey = 0; ///< the viewer's own full frame against one-voxel steps, home camera
 };
 
 /// @brief Mean and sample standard deviation [s].

@@ -337,6 +337,7 @@ Image Viewer::render3dPane()
         }
         style.moving = mOpt.moving;
         style.movingFactor = mOpt.movingFactor;
+        style.sampleVoxels = mOpt.sampleVoxels;
         m3d = std::make_unique<VolumeView3d>(*mVolume, mCamera.home(), style, mTable, o);
     }
     m3d->setCamera(f);
