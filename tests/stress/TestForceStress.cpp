@@ -6,6 +6,7 @@
 /// record queue draining or full.
 
 #include "common/BuiltinTable.h"
+#include "common/SceneCache.h"
 #include "common/Phantom.h"
 #include "stress/AllocationCounter.h"
 
@@ -31,13 +32,7 @@ namespace {
 
 using voxhap::test::table;
 
-const SceneInstance& instance(const std::string& name)
-{
-    static std::map<std::string, std::unique_ptr<SceneInstance>> cache;
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<SceneInstance>(loadScene(name), nullptr, table());
-    return *slot;
-}
+const SceneInstance& instance(const std::string& name) { return test::sceneInstance(name); }
 
 /// §6.4 "NaN/Inf", "extreme velocity", "dt jitter": 10⁶ random states, a tenth of them
 /// hostile. Every output is finite and within the device's peak; a non-finite input

@@ -5,6 +5,7 @@
 /// the controller (§6.2 guard) changes the force when it is on.
 
 #include "common/BuiltinTable.h"
+#include "common/SceneCache.h"
 
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/force/Safety.h"
@@ -25,13 +26,7 @@ namespace {
 
 using voxhap::test::table;
 
-const SceneInstance& instance(const std::string& name)
-{
-    static std::map<std::string, std::unique_ptr<SceneInstance>> cache;
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<SceneInstance>(loadScene(name), nullptr, table());
-    return *slot;
-}
+const SceneInstance& instance(const std::string& name) { return test::sceneInstance(name); }
 
 /// The stiffest spring the model can present at the hub [N/mm]: the device's
 /// maximum stiffness (stick-slip proxy, bone contact, trajectory lock: §1.3,

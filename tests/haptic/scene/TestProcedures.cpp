@@ -6,6 +6,7 @@
 /// label-driven Conci and lumbar-puncture scenes against their closed forms.
 
 #include "common/BuiltinTable.h"
+#include "common/SceneCache.h"
 
 #include "haptic/Procedure.h"
 #include "haptic/scene/Scene.h"
@@ -24,14 +25,7 @@ namespace procedures_test {
 
 using voxhap::test::table;
 
-/// Scene instances are built once per test program: the torso phantom takes seconds.
-const SceneInstance& instance(const std::string& name)
-{
-    static std::map<std::string, std::unique_ptr<SceneInstance>> cache;
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<SceneInstance>(loadScene(name), nullptr, table());
-    return *slot;
-}
+const SceneInstance& instance(const std::string& name) { return test::sceneInstance(name); }
 
 InsertionResult simulate(const SceneInstance& inst, NeedleForceModel& model, std::optional<double> depth = std::nullopt)
 {

@@ -5,6 +5,7 @@
 /// material grids its terms read.
 
 #include "common/BuiltinTable.h"
+#include "common/SceneCache.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/scene/Scene.h"
 #include "core/Errors.h"
@@ -31,14 +32,7 @@ struct SceneRun {
     std::vector<Layer> layers;
 };
 
-/// Scene instances are built once per test program: the torso phantom takes seconds.
-const SceneInstance& instance(const std::string& name)
-{
-    static std::map<std::string, std::unique_ptr<SceneInstance>> cache;
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<SceneInstance>(loadScene(name), nullptr, table());
-    return *slot;
-}
+const SceneInstance& instance(const std::string& name) { return test::sceneInstance(name); }
 
 SceneRun simulate(const std::string& name, std::optional<double> depth = std::nullopt)
 {
