@@ -25,8 +25,9 @@ const std::vector<MetricInfo>& metricCatalogue()
             std::nullopt,
             "haptic/Procedure.h: dura_intact [S19], reach_csf ([LP], [C]), reach_target within the scene's radius "
             "[chosen] (issue 23 item 5)"},
-        {"success_dura_intact", "true/false", "the dura was not punctured", 1.0, std::nullopt,
-            "[S19] Sec. IV-A: an attempt that punctures the dura is a failure (physics.md §2.3)"},
+        {"success_dura_intact", "true/false", "the dura was not punctured", std::nullopt, std::nullopt,
+            "reported: an intact dura is the epidural procedure's rule, not every procedure's (a lumbar puncture "
+            "must cross it); the senac-* scenes judge it ([S19] Sec. IV-A, physics.md §2.3)"},
         {"bone_contacts", "", "times the tip met bone", std::nullopt, 0.0,
             "[chosen] [S19] records bone contacts among its 24 variables without a reference value; none is the "
             "careful mark"},

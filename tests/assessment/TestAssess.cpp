@@ -23,7 +23,7 @@ const ReferenceRange& rangeOf(const std::vector<ReferenceRange>& r, const std::s
 }
 
 // senac-average's ranges: [S19] Fig. 4's 3 mm/s and Table I's 6 mm epidural space
-// replace the defaults; the rest keep theirs (the dura must stay intact).
+// replace the defaults, and the dura must stay intact ([S19]); the rest keep theirs.
 TEST(Assess, SceneRangesReplaceTheDefaults)
 {
     const haptic::Scene s = haptic::loadScene("senac-average");
@@ -33,7 +33,10 @@ TEST(Assess, SceneRangesReplaceTheDefaults)
     EXPECT_NE(rangeOf(r, "speed_mean_mm_per_s").source.find("[S19] Fig. 4"), std::string::npos);
     EXPECT_EQ(*rangeOf(r, "epidural_overshoot_mm").max, 6.0);
     EXPECT_EQ(*rangeOf(r, "success_dura_intact").min, 1.0);
-    EXPECT_EQ(rangeOf(r, "success_dura_intact").from, "default");
+    EXPECT_EQ(rangeOf(r, "success_dura_intact").from, "scene senac-average");
+    // A lumbar puncture must cross the dura: there the dura's state is reported, not judged.
+    const haptic::Scene lp = haptic::loadScene("lumbar-puncture");
+    EXPECT_FALSE(rangeOf(referenceRanges(&lp), "success_dura_intact").min);
     const haptic::Scene o = haptic::loadScene("senac-overweight");
     EXPECT_EQ(*rangeOf(referenceRanges(&o), "epidural_overshoot_mm").max, 4.0); // [S19] Table I
     // Every range has a source, and every built-in scene names only known metrics.
