@@ -296,15 +296,20 @@ void bindVolume(py::module_& m)
 
     m.def(
         "load",
-        [](const std::filesystem::path& path, const std::string& modality) {
+        [](const std::filesystem::path& path, const std::string& modality, const std::string& series,
+            std::size_t volumeIndex) {
             volume::LoadOptions o;
             o.modality = modalityOf(modality);
+            o.dicom.series = series;
+            o.dicom.volume = volumeIndex;
             py::gil_scoped_release release;
             return std::make_shared<Volume>(volume::loadVolume(path, o));
         },
-        py::arg("path"), py::arg("modality") = "infer",
+        py::arg("path"), py::arg("modality") = "infer", py::arg("series") = "", py::arg("volume") = 0,
         "Load a volume: DICOM folder or file, .nii/.nii.gz, .nrrd, .mha/.mhd or .vdb. modality: 'infer', 'ct' "
-        "or 'mr' for formats that do not say. Raises OSError naming the file and field.");
+        "or 'mr' for formats that do not say. A DICOM folder: series= its UID, SeriesNumber or '#index' (the "
+        "command line's --series; default the largest), volume= which volume of a 4D series from 1 (--volume; "
+        "0: the series must hold one). Raises OSError naming the file and field.");
     m.def(
         "save",
         [](const Volume& v, const std::filesystem::path& path) {

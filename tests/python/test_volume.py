@@ -2,6 +2,8 @@
 """Volumes from Python: a phantom's layer values against the tissue table and
 its own layer table, numpy arrays saved and reloaded unchanged, the same
 phantom as `voxhap phantom` writes it, and one-line errors naming the file."""
+import os
+import pathlib
 import numpy as np
 import pytest
 
@@ -131,3 +133,33 @@ def test_bad_input_is_one_clear_error(tmp_path):
         v.set_grid("hu", np.zeros((4, 4, 5), np.float32))
     with pytest.raises(ValueError, match="unknown|kind"):
         voxhap.phantom("teapot")
+
+
+SHARED = pathlib.Path(__file__).resolve().parents[2].parent / "shared" / "data"
+
+
+def shared_folder(*parts):
+    folder = SHARED.joinpath(*parts)
+    if not folder.is_dir():
+        if os.environ.get("VOXHAP_REQUIRE_SHARED_DATA"):
+            pytest.fail(f"no shared data at {folder}")
+        pytest.skip("no ../shared/data beside the project")
+    return folder
+
+
+def test_a_4d_dicom_series_loads_one_volume_at_a_time():
+    # The Siemens diffusion series: 13 volumes of 25 slices (b=0, then 12 at b=1000; its README).
+    # Without volume= the loader refuses and says so; volume=1 and volume=2 load those volumes,
+    # on one grid, and the b=0 image is brighter than a diffusion-weighted one.
+    dwi = shared_folder("mr-dwi-prisma", "dwi-mosaic")
+    with pytest.raises(OSError, match="13 volumes"):
+        voxhap.load(dwi)
+    b0, b1000 = voxhap.load(dwi, volume=1), voxhap.load(dwi, volume=2)
+    assert b0.shape == b1000.shape and 25 in b0.shape
+    assert np.nanmean(b0.grid("intensity")) > np.nanmean(b1000.grid("intensity"))
+    with pytest.raises(OSError):
+        voxhap.load(dwi, volume=14)
+    # The field map's echoes alternate irregularly (its README): one echo alone has uneven slice
+    # spacing, which is refused, never stacked silently.
+    with pytest.raises(OSError, match="non-uniform slice spacing"):
+        voxhap.load(shared_folder("mr-head-trio", "gre-field-map"), volume=1)
