@@ -174,9 +174,11 @@ std::vector<OrbitCase> orbitVolume(
         auto t = RenderClock::now();
         const render::Image fullHome = view.render(render::RenderQuality::Full);
         c.firstFullS = renderSecondsSince(t);
+        c.trianglesFull = view.criticalTriangles();
         t = RenderClock::now();
         const render::Image movingHome = view.render(render::RenderQuality::Moving);
         c.firstMovingS = renderSecondsSince(t);
+        c.trianglesMoving = view.criticalTriangles();
         c.movingVsFullGrey = meanGreyDifference(movingHome, fullHome);
         std::vector<double> full, cpuFull;
         for (int i = 0; i < o.fullFrames; ++i) {
@@ -337,6 +339,12 @@ void printRenderReport(std::ostream& os, const RenderReport& r)
           "(a wheel zoom adds the viewer's 0.3 s settle time); |dgrey|: mean grey difference, moving against full,\n"
           "at the home camera; cpu s/frame: process CPU time (all threads), which the machine's load does not\n"
           "inflate. Targets (issue 28 item 7): fps >= 10 while moving, full quality <= 1.5 s after.\n";
+    for (const OrbitCase& c : r.orbits) {
+        if (c.chosen && c.trianglesFull > 0) {
+            os << "critical surfaces, " << c.volume << ": " << c.trianglesFull << " triangles at full quality, "
+               << c.trianglesMoving << " while moving (" << c.path << ")\n";
+        }
+    }
     os << "\nfull-quality ray step (the viewer's uses " << render::ViewerOptions{}.sampleVoxels
        << " voxels; |dgrey| against one-voxel steps at the home camera):\n"
        << std::left << std::setw(16) << "volume" << std::setw(14) << "step [voxel]" << std::setw(12) << "full [s]"
@@ -370,7 +378,8 @@ nlohmann::json renderReportJson(const RenderReport& r)
             {{"volume", c.volume}, {"moving_path", c.path}, {"chosen", c.chosen}, {"fps_median", c.fpsMedian},
                 {"fps_p10", c.fpsP10}, {"full_frame_s", c.fullS}, {"stop_to_full_s", c.stopToFullS},
                 {"full_over_moving", c.fullOverMoving}, {"moving_vs_full_mean_grey", c.movingVsFullGrey},
-                {"first_full_s", c.firstFullS}, {"first_moving_s", c.firstMovingS}, {"frames", c.frames}});
+                {"first_full_s", c.firstFullS}, {"first_moving_s", c.firstMovingS}, {"frames", c.frames},
+                {"critical_triangles_full", c.trianglesFull}, {"critical_triangles_moving", c.trianglesMoving}});
         nlohmann::json steps = nlohmann::json::array();
         for (const FullStep& f : c.fullSteps) {
             steps.push_back({{"step_voxels", f.stepVoxels}, {"full_frame_s", f.fullS}, {"cpu_full_s", f.cpuFullS},

@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstddef>
 #include <functional>
 #include <ostream>
 #include <string>
@@ -60,6 +61,8 @@ struct OrbitCase {
     double cpuMovingS = 0;       ///< process CPU seconds per moving frame, median (all threads): the load-free cost
     double cpuFullS = 0;         ///< process CPU seconds per full-quality frame, median
     int frames = 0;
+    std::size_t trianglesFull = 0;   ///< critical-surface triangles of the full frame (0: no labels)
+    std::size_t trianglesMoving = 0; ///< and of the moving frame (from the sampled label map)
     /// The chosen path's case only: the full frame at longer ray steps, the
     /// candidates for full quality within 1.5 s of stopping.
     std::vector<FullStep> fullSteps;

@@ -13,6 +13,7 @@
 #include "render/ViewFrame.h"
 #include "render/ViewTypes.h"
 
+#include <cstddef>
 #include <memory>
 
 namespace voxhap::volume {
@@ -77,6 +78,10 @@ public:
     Image render(RenderQuality quality = RenderQuality::Full);
     /// @brief The quality of the last render().
     RenderQuality lastQuality() const;
+    /// @brief Triangles of the critical surfaces in the last render() (0 without
+    /// them): moving frames draw them from the label map sampled at the moving
+    /// ray step (movingFactor full steps), so about (that step in voxels)² fewer.
+    std::size_t criticalTriangles() const;
     /// @brief Point the camera along another frame of the same size in pixels
     /// (OrbitCamera.h): a parallel projection whose pixel (x, y) shows the ray
     /// through frame.toWorld(x, y). The orientation letters follow it.
