@@ -437,6 +437,14 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         m.window->SetNumberOfLayers(2);
         m.window->AddRenderer(m.lines);
     }
+    // VTK 9.1's vtkViewport::ComputeAspect skips its work when the window size,
+    // viewport and pixel aspect equal those it last computed with, and those
+    // remembered values are not initialised: a renderer allocated where an
+    // earlier one lived can find them equal and keep the default aspect 1 : 1.
+    // The CPU ray caster reads that aspect for its rays (the GL geometry does
+    // not), so about one view in six drew the volume stretched sideways under
+    // correctly placed surfaces. The window's size is fixed: set the aspect.
+    for (vtkRenderer* r : {m.renderer.Get(), m.lines.Get()}) r->SetAspect(double(frame.width) / frame.height, 1.0);
 }
 
 VolumeView3d::~VolumeView3d()

@@ -97,6 +97,38 @@ TEST_F(View3d, MipPeaksAtTheProjectedCentre)
     }
 }
 
+TEST_F(View3d, EveryFreshViewOfAWideFrameDrawsTheVolumeWhereTheCameraProjectsIt)
+{
+    // A frame three times wider than high, from the front, centred 30 mm to
+    // the patient's right of the sphere and level with it: the sphere's
+    // centre projects 60 px right of the image centre (x = L), on its middle row.
+    constexpr int kW = 240, kH = 80;
+    constexpr double kOffsetMm = 30.0;
+    ViewFrame f = mFrame;
+    f.width = kW, f.height = kH;
+    const Vec3d centre(mPhantom.centre.x() - kOffsetMm, 0.5 * (mBox.min.y() + mBox.max.y()), mPhantom.centre.z());
+    f.origin = centre - f.pixelMm * (0.5 * (kW - 1) * f.right + 0.5 * (kH - 1) * f.down);
+    ASSERT_EQ(f.right, Vec3d(1, 0, 0)) << "the test's closed form assumes the front view";
+    const Vec2d expected(0.5 * (kW - 1) + kOffsetMm / f.pixelMm, 0.5 * (kH - 1));
+    // Views built and destroyed one after another, as the viewer, plan and
+    // the bench do: VTK 9.1 could give a new renderer a stale 1 : 1 aspect,
+    // and its CPU ray caster then cast the rays three times too far apart
+    // sideways (the sphere 180 px off centre, outside the image) in about one
+    // fresh view out of six. Twelve views make a miss very likely to show.
+    const RenderVolume rv(*mVolume, false);
+    View3dStyle style;
+    style.mode = BlendMode::Mip;
+    style.caster = RayCaster::Cpu;
+    style.window = {2000.0, 900.0};
+    for (int i = 0; i < 12; ++i) {
+        SCOPED_TRACE("view " + std::to_string(i));
+        VolumeView3d view(rv, f, style, volume::TissueTable::builtin(), Overlays{{}, {}, {}, "", false, false, ""});
+        const Vec2d got = peak(view.render());
+        EXPECT_NEAR(got.x(), expected.x(), kPeakPx);
+        EXPECT_NEAR(got.y(), expected.y(), kPeakPx);
+    }
+}
+
 TEST_F(View3d, SummedProjectionPeaksAtTheProjectedCentre)
 {
     // The longest chord through the sphere (and its densest core) is the one
