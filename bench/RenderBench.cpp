@@ -218,7 +218,7 @@ std::vector<OrbitCase> orbitVolume(
             // One view (one GL context) at a time: the orbit's is closed first.
             owned.reset();
             render::Image oneVoxel;
-            for (const double step : {1.0, 1.5, 2.0}) {
+            for (const double step : {1.0, 1.5, 1.75, 2.0}) {
                 render::View3dStyle other = style;
                 other.sampleVoxels = step;
                 render::VolumeView3d stepView(rv, home, other, table, none);
@@ -356,7 +356,7 @@ void printRenderReport(std::ostream& os, const RenderReport& r)
            << std::setprecision(3) << std::setw(12) << c.fullS << std::setw(16) << c.cpuFullS << std::setprecision(2)
            << c.viewerVsOneVoxelGrey << "\n";
         for (const FullStep& f : c.fullSteps) {
-            os << std::left << std::setw(16) << c.volume << std::setprecision(1) << std::setw(14) << f.stepVoxels
+            os << std::left << std::setw(16) << c.volume << std::setprecision(2) << std::setw(14) << f.stepVoxels
                << std::setprecision(3) << std::setw(12) << f.fullS << std::setw(16) << f.cpuFullS
                << std::setprecision(2) << f.greyVsOneVoxel << "\n";
         }

@@ -60,12 +60,13 @@ struct ViewerOptions {
     RayCaster caster = RayCaster::Auto;
     MovingPath moving = MovingPath::Subsample; ///< the 3D pane while its camera moves
     int movingFactor = 3;                      ///< View3dStyle::movingFactor
-    /// View3dStyle::sampleVoxels of the 3D pane's full-quality frame. 1.5 voxels:
-    /// on the shared CT and the torso phantom the still frame stays within 2 grey
-    /// levels (mean) of one-voxel steps and arrives within 1.5 s of stopping on
-    /// 2 cores, where one-voxel steps took 1.6–2.7 s; 2 voxels differ by up to 17
-    /// levels on the CT (`voxhap bench render`, docs/reference.md "Views and plots").
-    double sampleVoxels = 1.5;
+    /// View3dStyle::sampleVoxels of the 3D pane's full-quality frame. 1.75 voxels:
+    /// on the shared CT and the torso phantom the still frame stays within about
+    /// 2 grey levels (mean) of one-voxel steps and arrives within 1.5 s of
+    /// stopping on 2 cores with a margin (CT: 1.2 s), where one-voxel steps took
+    /// 1.6–2.7 s and 1.5 voxels 1.4–1.6 s (`voxhap bench render`,
+    /// docs/reference.md "Views and plots").
+    double sampleVoxels = 1.75;
     std::optional<WindowLevel> window; ///< slices and 3D; default RenderVolume::defaultWindow (CT presets on CT only)
     bool labels = true;                ///< tissue colours on the slices
     bool threeD = true;                ///< false: the 3D pane says why not (threeDNote) instead
