@@ -195,10 +195,11 @@ struct VolumeView3d::Impl {
     vtkSmartPointer<vtkImageData> scalars; ///< the RenderVolume's array (shared, not copied)
     vtkSmartPointer<vtkMatrix4x4> dataToWorld;
     Vec3d spacing{1, 1, 1};
-    vtkSmartPointer<vtkImageData> labels;    ///< the RenderVolume's label map (shared), if surfaces are drawn
+    vtkSmartPointer<vtkImageData> labels;     ///< the RenderVolume's label map (shared), if surfaces are drawn
     std::optional<volume::TissueTable> table; ///< a copy: the caller's table need not outlive the view
-    vtkSmartPointer<vtkActor> surfaces;      ///< critical surfaces at the labels' own resolution (full quality)
-    vtkSmartPointer<vtkActor> movingSurfaces; ///< the same, labels sampled at the moving ray step: built at the first moving frame
+    vtkSmartPointer<vtkActor> surfaces;       ///< critical surfaces at the labels' own resolution (full quality)
+    vtkSmartPointer<vtkActor>
+        movingSurfaces; ///< the same, labels sampled at the moving ray step: built at the first moving frame
 
     /// A ray caster of the view's kind on @p input, @p imageSample pixels per ray, steps of @p stepMm.
     vtkSmartPointer<vtkVolumeMapper> makeMapper(vtkImageData* input, double stepMm) const;

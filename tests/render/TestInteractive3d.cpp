@@ -255,8 +255,8 @@ TEST_F(Interactive3d, MovingFramesDrawTheCriticalSurfacesFromTheSampledLabelMap)
     EXPECT_LT(double(movingTriangles), expected * kTriangleRatioSlack);
     // Still the sphere where it was: bright at its projected centre, close to the full picture.
     const Vec2d c = expectedPixel("3d", mPhantom.centre, mBox.min, mBox.max, mFrame.pixelMm);
-    const Vec2d fat = expectedPixel(
-        "3d", mPhantom.centre + Vec3d(-2.0 * mPhantom.radius, 0, 0), mBox.min, mBox.max, mFrame.pixelMm);
+    const Vec2d fat =
+        expectedPixel("3d", mPhantom.centre + Vec3d(-2.0 * mPhantom.radius, 0, 0), mBox.min, mBox.max, mFrame.pixelMm);
     EXPECT_GT(greyAround(moving, c), greyAround(moving, fat) + kBoneOverFatGrey);
     EXPECT_LT(meanGreyDifference(moving, full), kMovingMeanGrey);
     // Released: the full-resolution surfaces again, the full picture pixel for pixel.
