@@ -47,7 +47,7 @@ bool displayReachable(const std::string& display)
     return true;
 }
 
-DisplayGuard::DisplayGuard(double startTimeoutS)
+DisplayGuard::DisplayGuard(double startTimeoutS, bool wait) : mTimeoutS(startTimeoutS)
 {
     if (const char* current = std::getenv("DISPLAY")) {
         mHadDisplay = true;
@@ -58,11 +58,22 @@ DisplayGuard::DisplayGuard(double startTimeoutS)
             return;
         }
     }
-    startXvfb(startTimeoutS);
+    launchXvfb();
+    if (wait) this->wait();
+}
+
+void DisplayGuard::wait()
+{
+    if (mReport >= 0) awaitXvfb();
 }
 
 DisplayGuard::~DisplayGuard()
 {
+    if (mReport >= 0) { // started, never waited for
+        ::close(mReport);
+        stopXvfb();
+        return;
+    }
     if (mKind != DisplayKind::Xvfb) return;
     stopXvfb();
     if (mHadDisplay)
@@ -84,7 +95,7 @@ std::string DisplayGuard::description() const
     return "no display (" + mWhy + "): slices only, through the GL-free path";
 }
 
-void DisplayGuard::startXvfb(double timeoutS)
+void DisplayGuard::launchXvfb()
 {
     const std::string xvfb = findOnPath("Xvfb");
     if (xvfb.empty()) {
@@ -93,7 +104,7 @@ void DisplayGuard::startXvfb(double timeoutS)
         return;
     }
     int fds[2];
-    if (::pipe(fds) != 0) {
+    if (::pipe2(fds, O_CLOEXEC) != 0) {
         mWhy = std::string("cannot start Xvfb: pipe: ") + std::strerror(errno);
         return;
     }
@@ -112,6 +123,7 @@ void DisplayGuard::startXvfb(double timeoutS)
         ::prctl(PR_SET_PDEATHSIG, SIGTERM);
         if (::getppid() != parent) ::_exit(1);
         ::close(fds[0]);
+        ::fcntl(fds[1], F_SETFD, 0); // the one descriptor Xvfb must keep across exec
         const int devnull = ::open("/dev/null", O_RDWR);
         if (devnull >= 0) ::dup2(devnull, 0), ::dup2(devnull, 1), ::dup2(devnull, 2);
         ::execl(xvfb.c_str(), "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1280x1024x24", "-nolisten", "tcp",
@@ -120,9 +132,17 @@ void DisplayGuard::startXvfb(double timeoutS)
     }
     ::close(fds[1]);
     mXvfb = pid;
+    mReport = fds[0];
+}
+
+void DisplayGuard::awaitXvfb()
+{
     // (-noreset: an X server resets when its last client leaves and refuses
     // connections meanwhile; our own probe below would be such a client.)
     // Xvfb writes its display number and a newline once it accepts connections.
+    const int report = mReport;
+    mReport = -1;
+    const double timeoutS = mTimeoutS;
     std::string number;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeoutS);
     bool done = false;
@@ -130,10 +150,10 @@ void DisplayGuard::startXvfb(double timeoutS)
         const auto left =
             std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
         if (left.count() <= 0) break;
-        pollfd p{fds[0], POLLIN, 0};
+        pollfd p{report, POLLIN, 0};
         if (::poll(&p, 1, int(left.count())) <= 0) continue;
         char buf[32];
-        const ssize_t n = ::read(fds[0], buf, sizeof buf);
+        const ssize_t n = ::read(report, buf, sizeof buf);
         if (n <= 0) break; // Xvfb exited (or failed to exec)
         for (ssize_t i = 0; i < n && !done; ++i) {
             if (buf[i] == '\n')
@@ -142,7 +162,7 @@ void DisplayGuard::startXvfb(double timeoutS)
                 number += buf[i];
         }
     }
-    ::close(fds[0]);
+    ::close(report);
     if (!done || number.empty()) {
         stopXvfb();
         mWhy = "Xvfb did not start within " + std::to_string(int(timeoutS)) + " s";

@@ -31,11 +31,20 @@ enum class DisplayKind {
 class DisplayGuard {
 public:
     /// @param startTimeoutS how long to wait for Xvfb to report its display [s]
+    /// @param wait false: start Xvfb (if one is needed) and return at once; the
+    ///        caller goes on with its own work while the server starts, and
+    ///        calls wait() before it uses the display (Xvfb takes 0.2–0.4 s to
+    ///        accept connections, a share of `voxhap plan`'s 6 s budget).
     /// Never throws: when no display can be had, kind() is Unavailable and why() says why.
-    explicit DisplayGuard(double startTimeoutS = 10.0);
+    explicit DisplayGuard(double startTimeoutS = 10.0, bool wait = true);
     ~DisplayGuard();
     DisplayGuard(const DisplayGuard&) = delete;
     DisplayGuard& operator=(const DisplayGuard&) = delete;
+
+    /// @brief Finish a start begun with wait = false: wait for Xvfb to accept
+    /// connections and point $DISPLAY at it. Does nothing the second time, or
+    /// when the guard was made with wait = true.
+    void wait();
 
     DisplayKind kind() const { return mKind; }
     bool available() const { return mKind != DisplayKind::Unavailable; }
@@ -47,7 +56,8 @@ public:
     std::string description() const;
 
 private:
-    void startXvfb(double timeoutS);
+    void launchXvfb();
+    void awaitXvfb();
     void stopXvfb();
 
     DisplayKind mKind = DisplayKind::Unavailable;
@@ -55,6 +65,8 @@ private:
     std::string mPreviousDisplay;
     bool mHadDisplay = false;
     pid_t mXvfb = -1;
+    int mReport = -1;        ///< read end of Xvfb's -displayfd pipe while its start is pending
+    double mTimeoutS = 10.0; ///< for awaitXvfb
 };
 
 } // namespace voxhap::render

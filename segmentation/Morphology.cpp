@@ -180,30 +180,44 @@ void fillHolesPerSlice(const Lattice& lat, Mask& m)
     const std::size_t ss = strides[std::size_t(lat.sliceAxis)];
     tbb::parallel_for(0, lat.dims[lat.sliceAxis], [&](int k) {
         const std::size_t base = std::size_t(k) * ss;
-        // Background reachable from the border: flood fill with an explicit stack.
+        // Background reachable from the border: a scanline flood fill. Each seed
+        // grows into its whole run along a0, and one seed is pushed per run of
+        // open pixels in the rows beside it, so a slice costs a few stack
+        // operations per run rather than four per pixel (a CT slice is mostly
+        // one background region; the pixel-by-pixel fill was 16 % of `voxhap
+        // plan`'s CPU time on the shared CT).
         std::vector<std::uint8_t> reached(std::size_t(n0) * std::size_t(n1), 0);
-        std::vector<std::pair<int, int>> stack;
-        auto push = [&](int u, int w) {
-            const std::size_t local = std::size_t(u) + std::size_t(n0) * std::size_t(w);
-            if (reached[local] || m[base + std::size_t(u) * s0 + std::size_t(w) * s1]) return;
-            reached[local] = 1;
-            stack.emplace_back(u, w);
+        const auto open = [&](int u, int w) {
+            return !reached[std::size_t(u) + std::size_t(n0) * std::size_t(w)] &&
+                !m[base + std::size_t(u) * s0 + std::size_t(w) * s1];
         };
-        for (int u = 0; u < n0; ++u) {
-            push(u, 0);
-            push(u, n1 - 1);
-        }
-        for (int w = 0; w < n1; ++w) {
-            push(0, w);
-            push(n0 - 1, w);
+        std::vector<std::pair<int, int>> stack;
+        // One seed per run of open pixels in row w between u0 and u1.
+        const auto seedRuns = [&](int u0, int u1, int w) {
+            bool inRun = false;
+            for (int u = u0; u <= u1; ++u) {
+                const bool o = open(u, w);
+                if (o && !inRun) stack.emplace_back(u, w);
+                inRun = o;
+            }
+        };
+        seedRuns(0, n0 - 1, 0);
+        seedRuns(0, n0 - 1, n1 - 1);
+        for (int w = 1; w + 1 < n1; ++w) {
+            if (open(0, w)) stack.emplace_back(0, w);
+            if (open(n0 - 1, w)) stack.emplace_back(n0 - 1, w);
         }
         while (!stack.empty()) {
             const auto [u, w] = stack.back();
             stack.pop_back();
-            if (u > 0) push(u - 1, w);
-            if (u + 1 < n0) push(u + 1, w);
-            if (w > 0) push(u, w - 1);
-            if (w + 1 < n1) push(u, w + 1);
+            if (!open(u, w)) continue; // reached through another seed meanwhile
+            int lo = u, hi = u;
+            while (lo > 0 && open(lo - 1, w)) --lo;
+            while (hi + 1 < n0 && open(hi + 1, w)) ++hi;
+            std::fill_n(reached.begin() + std::ptrdiff_t(std::size_t(lo) + std::size_t(n0) * std::size_t(w)),
+                hi - lo + 1, std::uint8_t(1));
+            if (w > 0) seedRuns(lo, hi, w - 1);
+            if (w + 1 < n1) seedRuns(lo, hi, w + 1);
         }
         for (int w = 0; w < n1; ++w) {
             for (int u = 0; u < n0; ++u) {

@@ -23,6 +23,10 @@ namespace voxhap::haptic {
 struct Scene;
 } // namespace voxhap::haptic
 
+namespace voxhap::render {
+class DisplayGuard;
+}
+
 namespace voxhap::planning {
 class Planner;
 struct TrajectoryReport;
@@ -110,8 +114,11 @@ struct PlanFiles {
 };
 /// @brief report.json, paths.mrk.json, views.png (slices with the paths, when @p views)
 /// and force-depth.png (the first path's predicted profile) in @p outDir.
+/// @param display a display started earlier without waiting (render::DisplayGuard's
+///        wait = false), so that Xvfb came up while the caller loaded and planned;
+///        null: one is started here when the views need it.
 PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
-    const nlohmann::json& report, const std::string& outDir, bool views);
+    const nlohmann::json& report, const std::string& outDir, bool views, render::DisplayGuard* display = nullptr);
 void printPlanFiles(std::ostream& os, const PlanFiles& f);
 
 } // namespace voxhap::tools

@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <future>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -96,7 +97,7 @@ void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
 } // namespace
 
 PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
-    const nlohmann::json& report, const std::string& outDir, bool views)
+    const nlohmann::json& report, const std::string& outDir, bool views, render::DisplayGuard* early)
 {
     PlanFiles f;
     fs::create_directories(outDir);
@@ -117,30 +118,45 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
     const std::string png = (dir / "force-depth.png").string();
     const fs::path pngTemporary = temporaryPathFor(png);
     const std::string viewsFile = (dir / "views.png").string();
+    // The predicted force–depth profile of the first path, with its tissue bands,
+    // drawn (gnuplot may be missing) under the name the set puts in place. gnuplot
+    // is a process of its own: it draws while this thread renders the views.
+    std::future<bool> plotted;
+    std::string plotWhy;
     if (!paths.empty()) {
-        // The predicted force–depth profile of the first path, with its tissue bands,
-        // drawn first (gnuplot may be missing) under the name the set puts in place.
         render::ForceTrace trace;
         const auto& best = paths.front();
         trace.title = "path 1: predicted at " + fixed(best.speedMmPerS, 0) + " mm/s (" + planner.scene().name + ")";
         for (const auto& s : best.force) trace.samples.push_back({s.depthMm, s.forceN, s.forceN, 0.0});
         for (const auto& s : best.segments) trace.layers.push_back({s.tissue, s.startMm, s.endMm});
         if (std::isfinite(best.contactMm)) trace.addEvent(best.contactMm, "bone contact");
-        if (render::plotForceDepth(trace, pngTemporary.string(), f.why)) f.plot = png;
+        plotted = std::async(std::launch::async, [trace = std::move(trace), tmp = pngTemporary.string(), &plotWhy] {
+            return render::plotForceDepth(trace, tmp, plotWhy);
+        });
     }
-    if (!f.plot.empty()) {
-        out.add(png, [](const fs::path&) {}); // already at its temporary path
-    } else {
-        std::error_code ignored;
-        fs::remove(pngTemporary, ignored);
-        out.remove(png);
-    }
+    // Whatever happens below, the plot's thread is joined before its temporary is judged.
+    const auto finishPlot = [&] {
+        if (!plotted.valid()) return;
+        bool ok = false;
+        try {
+            ok = plotted.get();
+        } catch (const std::exception& e) {
+            plotWhy = e.what();
+        }
+        if (ok) {
+            f.plot = png;
+        } else {
+            f.why = plotWhy;
+        }
+    };
     std::optional<render::DisplayGuard> display; // the 3D view needs X (Xvfb when there is none)
     if (views && !paths.empty()) {               // slices through the first target and a 3D view, every path drawn
         render::RenderRequest req;
         req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
-        display.emplace();
-        if (display->available()) {
+        if (!early) display.emplace();
+        render::DisplayGuard& x = early ? *early : *display;
+        x.wait();
+        if (x.available()) {
             // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
             // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
             // more than the whole plan's budget (docs/reference.md "Planning").
@@ -152,18 +168,33 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             // front lies between the camera and a posterior entry.
             req.linesOnTop3d = true;
         } else {
-            f.why3d = display->why();
+            f.why3d = x.why();
         }
         req.point = paths.front().target;
         for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
-        render::Snapshot snap(planner.volume(), req, planner.table());
-        std::vector<render::Image> images;
-        for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
-        f.views = viewsFile;
-        out.add(
-            viewsFile, [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
+        try {
+            render::Snapshot snap(planner.volume(), req, planner.table());
+            std::vector<render::Image> images;
+            for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
+            f.views = viewsFile;
+            out.add(viewsFile,
+                [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
+        } catch (...) {
+            finishPlot();
+            std::error_code ignored;
+            fs::remove(pngTemporary, ignored);
+            throw;
+        }
     } else {
         out.remove(viewsFile);
+    }
+    finishPlot();
+    if (!f.plot.empty()) {
+        out.add(png, [](const fs::path&) {}); // already at its temporary path
+    } else {
+        std::error_code ignored;
+        fs::remove(pngTemporary, ignored);
+        out.remove(png);
     }
     try {
         out.commit();
@@ -215,6 +246,10 @@ int run(const PlanCliOptions& o)
     const haptic::Scene scene = haptic::loadScene(o.scene);
     const volume::TissueTable& table = tissueTable(o.common);
     const bool terminal = stderrIsTerminal() && !o.common.json;
+    // The views' X display, started now and waited for at the views: Xvfb comes
+    // up (0.2–0.4 s) while the volume loads and is segmented.
+    std::optional<render::DisplayGuard> display;
+    if (!o.noViews) display.emplace(10.0, false);
 
     auto v = std::make_shared<volume::Volume>(loadVolumeWithProgress(o.in, o.reader, terminal));
     {
@@ -252,7 +287,7 @@ int run(const PlanCliOptions& o)
     report["paths"] = nlohmann::json::array();
     for (std::size_t i = 0; i < paths.size(); ++i) report["paths"].push_back(planning::pathJson(paths[i], int(i) + 1));
 
-    const PlanFiles files = writePlanOutputs(planner, paths, report, o.out, !o.noViews);
+    const PlanFiles files = writePlanOutputs(planner, paths, report, o.out, !o.noViews, display ? &*display : nullptr);
     if (o.common.json) {
         nlohmann::json j = report;
         j["outputs"] = {{"report", files.report}, {"markups", files.markups}, {"views", files.views},

@@ -13,6 +13,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
 
 namespace voxhap::render {
 namespace {
@@ -200,6 +204,46 @@ TEST(Display, NoReachableDisplayIsReplacedThenRestored)
     }
     EXPECT_STREQ(std::getenv("DISPLAY"), ":65000");
     EXPECT_FALSE(displayReachable(":65000"));
+}
+
+/// Xvfb processes (running or zombie) whose parent is this process, from /proc.
+int xvfbChildren()
+{
+    int n = 0;
+    for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+        std::ifstream stat(e.path() / "stat");
+        std::string pid, comm, state;
+        long ppid = 0;
+        if (stat >> pid >> comm >> state >> ppid && comm == "(Xvfb)" && ppid == long(::getpid())) ++n;
+    }
+    return n;
+}
+
+TEST(Display, AStartBegunWithoutWaitingIsFinishedByWaitOrStoppedUnwaited)
+{
+    // `voxhap plan` starts Xvfb before it loads and waits for it at the views.
+    ::setenv("DISPLAY", ":65000", 1); // nothing listens there
+    {
+        DisplayGuard guard(10.0, false);
+        EXPECT_FALSE(guard.available()) << "not usable before wait()";
+        EXPECT_STREQ(std::getenv("DISPLAY"), ":65000") << "$DISPLAY untouched until wait()";
+        guard.wait();
+        ASSERT_TRUE(guard.available()) << guard.why();
+        EXPECT_EQ(guard.kind(), DisplayKind::Xvfb);
+        EXPECT_TRUE(displayReachable(guard.display()));
+        guard.wait(); // a second wait changes nothing
+        EXPECT_TRUE(displayReachable(guard.display()));
+    }
+    EXPECT_STREQ(std::getenv("DISPLAY"), ":65000");
+    // Dropped before anyone waited (a plan that failed while loading): the
+    // server it started is stopped and reaped, and $DISPLAY was never changed.
+    const int before = xvfbChildren();
+    {
+        DisplayGuard guard(10.0, false);
+        EXPECT_EQ(xvfbChildren(), before + 1) << "the server is started at once";
+    }
+    EXPECT_EQ(xvfbChildren(), before) << "stopped and reaped (a zombie still counts)";
+    EXPECT_STREQ(std::getenv("DISPLAY"), ":65000");
 }
 
 TEST(Display, ThreeDViewRefusesWithoutDisplay)
