@@ -26,8 +26,9 @@ enum class DisplayKind {
 };
 
 /// @brief Makes sure a display is reachable for as long as it lives.
-/// @warning Sets $DISPLAY for the whole process: create it before starting
-/// threads that read the environment, and only one at a time.
+/// @warning Sets $DISPLAY for the whole process (in the constructor, or in
+/// wait() for a start begun without waiting): do that before starting threads
+/// that read the environment or spawn processes, and keep one at a time.
 class DisplayGuard {
 public:
     /// @param startTimeoutS how long to wait for Xvfb to report its display [s]

@@ -118,6 +118,16 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
     const std::string png = (dir / "force-depth.png").string();
     const fs::path pngTemporary = temporaryPathFor(png);
     const std::string viewsFile = (dir / "views.png").string();
+    // The display first: finishing its start sets $DISPLAY, which must not
+    // change while the plot's thread spawns gnuplot with this environment.
+    const bool drawViews = views && !paths.empty();
+    std::optional<render::DisplayGuard> display; // the 3D view needs X (Xvfb when there is none)
+    render::DisplayGuard* x = nullptr;
+    if (drawViews) {
+        if (!early) display.emplace();
+        x = early ? early : &*display;
+        x->wait();
+    }
     // The predicted force–depth profile of the first path, with its tissue bands,
     // drawn (gnuplot may be missing) under the name the set puts in place. gnuplot
     // is a process of its own: it draws while this thread renders the views.
@@ -149,14 +159,10 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             f.why = plotWhy;
         }
     };
-    std::optional<render::DisplayGuard> display; // the 3D view needs X (Xvfb when there is none)
-    if (views && !paths.empty()) {               // slices through the first target and a 3D view, every path drawn
+    if (drawViews) { // slices through the first target and a 3D view, every path drawn
         render::RenderRequest req;
         req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
-        if (!early) display.emplace();
-        render::DisplayGuard& x = early ? *early : *display;
-        x.wait();
-        if (x.available()) {
+        if (x->available()) {
             // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
             // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
             // more than the whole plan's budget (docs/reference.md "Planning").
@@ -168,7 +174,7 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             // front lies between the camera and a posterior entry.
             req.linesOnTop3d = true;
         } else {
-            f.why3d = x.why();
+            f.why3d = x->why();
         }
         req.point = paths.front().target;
         for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
