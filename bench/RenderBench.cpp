@@ -20,6 +20,8 @@
 #include <iomanip>
 #include <optional>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 namespace voxhap::bench {
 
@@ -138,6 +140,20 @@ double quantile(std::vector<double> x, double q)
     return i + 1 < x.size() ? (1 - t) * x[i] + t * x[i + 1] : x[i];
 }
 
+/// Median wall and process-CPU seconds of @p frames full-quality frames of @p view.
+std::pair<double, double> medianFullFrame(render::VolumeView3d& view, int frames)
+{
+    std::vector<double> wall, cpu;
+    for (int i = 0; i < frames; ++i) {
+        const double c0 = processCpuSeconds();
+        const auto t = RenderClock::now();
+        view.render(render::RenderQuality::Full);
+        wall.push_back(renderSecondsSince(t));
+        cpu.push_back(processCpuSeconds() - c0);
+    }
+    return {sampleStats(wall).median, sampleStats(cpu).median};
+}
+
 struct MovingCandidate {
     render::MovingPath path;
     int factor;
@@ -180,16 +196,7 @@ std::vector<OrbitCase> orbitVolume(
         c.firstMovingS = renderSecondsSince(t);
         c.trianglesMoving = view.criticalTriangles();
         c.movingVsFullGrey = meanGreyDifference(movingHome, fullHome);
-        std::vector<double> full, cpuFull;
-        for (int i = 0; i < o.fullFrames; ++i) {
-            const double cpu = processCpuSeconds();
-            t = RenderClock::now();
-            view.render(render::RenderQuality::Full);
-            full.push_back(renderSecondsSince(t));
-            cpuFull.push_back(processCpuSeconds() - cpu);
-        }
-        c.fullS = sampleStats(full).median;
-        c.cpuFullS = sampleStats(cpuFull).median;
+        std::tie(c.fullS, c.cpuFullS) = medianFullFrame(view, o.fullFrames);
         // The orbit: azimuth steps while the button is held, each frame at moving quality.
         render::OrbitCamera camera(home);
         std::vector<double> moving, fps, cpuMoving;
@@ -230,16 +237,7 @@ std::vector<OrbitCase> orbitVolume(
                 FullStep fs;
                 fs.stepVoxels = step;
                 fs.greyVsOneVoxel = meanGreyDifference(first, oneVoxel);
-                std::vector<double> wall, cpu;
-                for (int i = 0; i < o.fullFrames; ++i) {
-                    const double c0 = processCpuSeconds();
-                    t = RenderClock::now();
-                    stepView.render(render::RenderQuality::Full);
-                    wall.push_back(renderSecondsSince(t));
-                    cpu.push_back(processCpuSeconds() - c0);
-                }
-                fs.fullS = sampleStats(wall).median;
-                fs.cpuFullS = sampleStats(cpu).median;
+                std::tie(fs.fullS, fs.cpuFullS) = medianFullFrame(stepView, o.fullFrames);
                 c.fullSteps.push_back(fs);
             }
         }

@@ -41,7 +41,8 @@ enum class MovingPath {
 /// @brief The quality of one 3D frame.
 enum class RenderQuality {
     Full,   ///< one ray per pixel, steps of sampleVoxels, trilinear: the still picture
-    Moving, ///< the View3dStyle's moving path: for frames while the camera moves
+    Moving, ///< the View3dStyle's moving path, and the critical surfaces from the label map sampled
+            ///< at the moving ray step, opaque: for frames while the camera moves
 };
 
 struct View3dStyle {

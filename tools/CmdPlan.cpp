@@ -144,7 +144,7 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             return render::plotForceDepth(trace, tmp, plotWhy);
         });
     }
-    // Whatever happens below, the plot's thread is joined before its temporary is judged.
+    // Joins the plot's thread (once; later calls do nothing) and records its outcome.
     const auto finishPlot = [&] {
         if (!plotted.valid()) return;
         bool ok = false;
@@ -159,52 +159,47 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
             f.why = plotWhy;
         }
     };
-    if (drawViews) { // slices through the first target and a 3D view, every path drawn
-        render::RenderRequest req;
-        req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
-        if (x->available()) {
-            // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
-            // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
-            // more than the whole plan's budget (docs/reference.md "Planning").
-            req.views.push_back(render::ViewKind::ThreeD);
-            req.quality3d = render::RenderQuality::Moving;
-            req.shade3d = false; // an overview beside the slices: no per-voxel normals
-            req.criticalSurfaces = false;
-            // The paths are the subject: drawn over the body, which from the
-            // front lies between the camera and a posterior entry.
-            req.linesOnTop3d = true;
-        } else {
-            f.why3d = x->why();
-        }
-        req.point = paths.front().target;
-        for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
-        try {
+    // Until the set is committed, a failure joins the plot's thread and removes its temporary.
+    try {
+        if (drawViews) { // slices through the first target and a 3D view, every path drawn
+            render::RenderRequest req;
+            req.views = {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal};
+            if (x->available()) {
+                // The 3D overview in the fourth quadrant, by the viewer's moving path (a third
+                // of the rays per side): a full-quality CPU ray cast of a CT costs seconds,
+                // more than the whole plan's budget (docs/reference.md "Planning").
+                req.views.push_back(render::ViewKind::ThreeD);
+                req.quality3d = render::RenderQuality::Moving;
+                req.shade3d = false; // an overview beside the slices: no per-voxel normals
+                req.criticalSurfaces = false;
+                // The paths are the subject: drawn over the body, which from the
+                // front lies between the camera and a posterior entry.
+                req.linesOnTop3d = true;
+            } else {
+                f.why3d = x->why();
+            }
+            req.point = paths.front().target;
+            for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
             render::Snapshot snap(planner.volume(), req, planner.table());
             std::vector<render::Image> images;
             for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
             f.views = viewsFile;
             out.add(viewsFile,
                 [sheet = render::contactSheet(images)](const fs::path& tmp) { render::writePng(sheet, tmp); });
-        } catch (...) {
-            finishPlot();
+        } else {
+            out.remove(viewsFile);
+        }
+        finishPlot();
+        if (!f.plot.empty()) {
+            out.add(png, [](const fs::path&) {}); // already at its temporary path
+        } else {
             std::error_code ignored;
             fs::remove(pngTemporary, ignored);
-            throw;
+            out.remove(png);
         }
-    } else {
-        out.remove(viewsFile);
-    }
-    finishPlot();
-    if (!f.plot.empty()) {
-        out.add(png, [](const fs::path&) {}); // already at its temporary path
-    } else {
-        std::error_code ignored;
-        fs::remove(pngTemporary, ignored);
-        out.remove(png);
-    }
-    try {
         out.commit();
     } catch (...) {
+        finishPlot(); // no-op once joined
         std::error_code ignored;
         fs::remove(pngTemporary, ignored);
         throw;
