@@ -15,7 +15,7 @@
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/ServoStep.h"
-#include "haptic/servo/SimulatedDevices.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>
