@@ -10,7 +10,7 @@
 #include "common/Phantom.h"
 #include "stress/AllocationCounter.h"
 
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
