@@ -13,14 +13,14 @@ namespace voxhap::assessment {
 std::vector<ReferenceRange> referenceRanges(const haptic::Scene* scene)
 {
     std::vector<ReferenceRange> out;
-    for (const MetricInfo& m : metricCatalogue()) out.push_back({m.key, m.min, m.max, m.source, "default"});
+    for (const DefaultRange& m : defaultRanges()) out.push_back({m.key, m.min, m.max, m.source, "default"});
     if (!scene) return out;
     for (const haptic::MetricRange& r : scene->assessment) {
         const auto it =
             std::find_if(out.begin(), out.end(), [&](const ReferenceRange& x) { return x.metric == r.metric; });
         if (it == out.end()) {
             std::string names;
-            for (const MetricInfo& m : metricCatalogue()) names += (names.empty() ? "" : ", ") + m.key;
+            for (const DefaultRange& m : defaultRanges()) names += (names.empty() ? "" : ", ") + m.key;
             throw ValueError(
                 scene->origin + ": assessment." + r.metric + ": not a metric of metrics.json (" + names + ")");
         }
@@ -85,10 +85,11 @@ nlohmann::json toJson(const SessionAssessment& a)
     nlohmann::json metrics = nlohmann::json::array();
     const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
     for (const MetricResult& m : a.metrics) {
-        const MetricInfo* info = findMetric(m.range.metric);
-        metrics.push_back({{"metric", m.range.metric}, {"value", opt(m.value)}, {"unit", info ? info->unit : ""},
-            {"min", opt(m.range.min)}, {"max", opt(m.range.max)}, {"verdict", verdictName(m.verdict)},
-            {"source", m.range.source}, {"range_from", m.range.from}});
+        const haptic::TraineeMetricInfo* info = haptic::findTraineeMetric(m.range.metric);
+        metrics.push_back({{"metric", m.range.metric}, {"value", opt(m.value)},
+            {"unit", info ? std::string(info->unit) : std::string()}, {"min", opt(m.range.min)},
+            {"max", opt(m.range.max)}, {"verdict", verdictName(m.verdict)}, {"source", m.range.source},
+            {"range_from", m.range.from}});
     }
     return {{"file", a.file}, {"scene", a.scene}, {"flagged", a.flagged()}, {"passed", a.passed()},
         {"metrics", std::move(metrics)}};

@@ -2,7 +2,7 @@
 /// @file Assess.h
 /// @brief A session's metrics against reference ranges: pass or flag per metric
 /// (issue 23 item 3). The ranges are the scene's ("assessment" block of a scene
-/// file) over the catalogue's defaults (Metrics.h), each with its source.
+/// file) over the defaults (Metrics.h), each with its source.
 #pragma once
 
 #include "assessment/Metrics.h"

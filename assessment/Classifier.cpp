@@ -4,7 +4,6 @@
 
 #include "assessment/Classifier.h"
 
-#include "core/BoundedRead.h"
 #include "core/Errors.h"
 
 #include <Eigen/Dense>
@@ -20,102 +19,12 @@ namespace voxhap::assessment {
 
 namespace {
 
-std::string trim(const std::string& s)
-{
-    const auto b = s.find_first_not_of(" \t\r");
-    if (b == std::string::npos) return "";
-    return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
-std::vector<std::string> splitCsv(const std::string& line)
-{
-    std::vector<std::string> out;
-    std::stringstream in(line);
-    for (std::string f; std::getline(in, f, ',');) out.push_back(trim(f));
-    if (!line.empty() && line.back() == ',') out.push_back("");
-    return out;
-}
-
-/// A number, or true/false as 1/0; nullopt otherwise.
-std::optional<double> cell(const std::string& s)
-{
-    if (s == "true") return 1.0;
-    if (s == "false") return 0.0;
-    if (s.empty()) return std::nullopt;
-    char* end = nullptr;
-    const double v = std::strtod(s.c_str(), &end);
-    if (end != s.c_str() + s.size() || !std::isfinite(v)) return std::nullopt;
-    return v;
-}
-
 double sigmoid(double t) { return t >= 0 ? 1.0 / (1.0 + std::exp(-t)) : std::exp(t) / (1.0 + std::exp(t)); }
 
 /// ln(1 + e^t) without overflow.
 double softplus(double t) { return t > 0 ? t + std::log1p(std::exp(-t)) : std::log1p(std::exp(t)); }
 
 } // namespace
-
-LabelledSet parseLabelledCsv(const std::string& text, const std::string& origin)
-{
-    LabelledSet d;
-    d.origin = origin;
-    std::stringstream in(text);
-    std::vector<std::string> header;
-    int labelCol = -1, idCol = -1, lineNo = 0;
-    for (std::string line; std::getline(in, line);) {
-        ++lineNo;
-        const std::string t = trim(line);
-        if (t.empty() || t[0] == '#') continue;
-        const std::vector<std::string> cells = splitCsv(t);
-        const std::string where = origin + ": line " + std::to_string(lineNo);
-        if (header.empty()) {
-            header = cells;
-            for (int c = 0; c < int(header.size()); ++c) {
-                const std::string& h = header[std::size_t(c)];
-                if (h.empty()) throw ValueError(where + ": column " + std::to_string(c + 1) + ": empty column name");
-                if (std::count(header.begin(), header.end(), h) > 1)
-                    throw ValueError(where + ": column '" + h + "': named twice");
-                if (h == "label")
-                    labelCol = c;
-                else if (h == "session")
-                    idCol = c;
-                else
-                    d.features.push_back(h);
-            }
-            if (labelCol < 0) throw ValueError(where + ": no 'label' column (0 or 1 per session)");
-            if (d.features.empty()) throw ValueError(where + ": no feature columns beside 'label'");
-            continue;
-        }
-        if (cells.size() != header.size())
-            throw ValueError(where + ": " + std::to_string(cells.size()) + " cells, the header has " +
-                std::to_string(header.size()));
-        std::vector<double> row;
-        for (int c = 0; c < int(cells.size()); ++c) {
-            const std::string& h = header[std::size_t(c)];
-            if (c == idCol) continue;
-            const std::optional<double> v = cell(cells[std::size_t(c)]);
-            if (c == labelCol) {
-                if (!v || (*v != 0.0 && *v != 1.0))
-                    throw ValueError(where + ": column 'label': '" + cells[std::size_t(c)] + "' is not 0 or 1");
-                d.y.push_back(int(*v));
-            } else {
-                if (!v)
-                    throw ValueError(where + ": column '" + h + "': '" + cells[std::size_t(c)] + "' is not a number");
-                row.push_back(*v);
-            }
-        }
-        d.x.push_back(std::move(row));
-        d.ids.push_back(idCol >= 0 ? cells[std::size_t(idCol)] : "row " + std::to_string(lineNo));
-    }
-    if (header.empty()) throw ValueError(origin + ": empty: expected a header line and labelled rows");
-    if (d.x.empty()) throw ValueError(origin + ": no rows after the header");
-    return d;
-}
-
-LabelledSet readLabelledCsv(const std::filesystem::path& file)
-{
-    return parseLabelledCsv(readBoundedFile(file, "labelled CSV"), file.string());
-}
 
 double LogisticModel::probability(const std::vector<double>& x) const
 {

@@ -18,6 +18,8 @@
 /// been trained on or checked against real trainees.
 #pragma once
 
+#include "assessment/LabelledCsv.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
@@ -26,24 +28,6 @@
 #include <vector>
 
 namespace voxhap::assessment {
-
-/// @brief Labelled rows: features by name, label 0 or 1.
-struct LabelledSet {
-    std::vector<std::string> features;
-    std::vector<std::vector<double>> x; ///< one row per sample, features in order
-    std::vector<int> y;                 ///< 0 or 1
-    std::vector<std::string> ids;       ///< the "session" column, or "row N"
-    std::string origin;                 ///< the file, for messages
-};
-
-/// @brief Read a labelled CSV: a header line naming the columns; a "label" column
-/// of 0/1 (or false/true); an optional "session" column (any text, an id); every
-/// other column a feature, numeric (true/false read as 1/0). Blank lines and lines
-/// starting with '#' are skipped.
-/// @throw IoError, ValueError naming the file, the line and the column
-LabelledSet readLabelledCsv(const std::filesystem::path& file);
-/// @brief The same from text; @p origin names it in messages.
-LabelledSet parseLabelledCsv(const std::string& text, const std::string& origin);
 
 struct TrainOptions {
     double lambda = 1.0;      ///< L2 penalty on the standardised weights [chosen: mild for tens of samples]

@@ -16,63 +16,60 @@ namespace voxhap::assessment {
 
 namespace fs = std::filesystem;
 
-const std::vector<MetricInfo>& metricCatalogue()
+const std::vector<DefaultRange>& defaultRanges()
 {
-    // Default ranges: where the seed papers give a figure it is cited; the rest are
-    // [chosen] and say so. A scene's "assessment" block replaces them (data/scenes/).
-    static const std::vector<MetricInfo> c{
-        {"success", "true/false", "the procedure's goal, by the scene's success rule, without a critical breach", 1.0,
-            std::nullopt,
+    // Where the seed papers give a figure it is cited; the rest are [chosen] and
+    // say so. A scene's "assessment" block replaces them (data/scenes/).
+    static const std::vector<DefaultRange> c{
+        {"success", 1.0, std::nullopt,
             "haptic/Procedure.h: dura_intact [S19], reach_csf ([LP], [C]), reach_target within the scene's radius "
             "[chosen] (issue 23 item 5)"},
-        {"success_dura_intact", "true/false", "the dura was not punctured", std::nullopt, std::nullopt,
+        {"success_dura_intact", std::nullopt, std::nullopt,
             "reported: an intact dura is the epidural procedure's rule, not every procedure's (a lumbar puncture "
             "must cross it); the senac-* scenes judge it ([S19] Sec. IV-A, physics.md §2.3)"},
-        {"bone_contacts", "", "times the tip met bone", std::nullopt, 0.0,
+        {"bone_contacts", std::nullopt, 0.0,
             "[chosen] [S19] records bone contacts among its 24 variables without a reference value; none is the "
             "careful mark"},
-        {"pops", "", "punctures felt (skin, ligaments, dura)", std::nullopt, std::nullopt,
-            "the patient's layers decide the count: reported, not judged"},
-        {"insertion_angle_deg", "deg", "needle against the planned path at skin entry", std::nullopt, 10.0,
+        {"pops", std::nullopt, std::nullopt, "the patient's layers decide the count: reported, not judged"},
+        {"insertion_angle_deg", std::nullopt, 10.0,
             "[chosen] the pivot correction's design angle of 10 deg (physics.md §7 R7); no seed paper gives a "
             "tolerance"},
-        {"speed_mean_mm_per_s", "mm/s", "mean advancing speed inside the body", std::nullopt, 10.0,
+        {"speed_mean_mm_per_s", std::nullopt, 10.0,
             "[K01] the resistance data were recorded at a constant 1 cm/s (physics.md §1.1): faster is beyond the "
             "data the forces come from [chosen reading]"},
-        {"speed_variance_mm2_per_s2", "mm²/s²", "variance of the advancing speed", std::nullopt, 4.0,
+        {"speed_variance_mm2_per_s2", std::nullopt, 4.0,
             "[chosen] a standard deviation of 2 mm/s; [S19] Sec. IV-B: experts keep a low, constant speed, novices a "
             "variable one (no figure given)"},
-        {"epidural_overshoot_mm", "mm", "distance travelled inside the epidural space", std::nullopt, std::nullopt,
+        {"epidural_overshoot_mm", std::nullopt, std::nullopt,
             "the epidural space's length is the patient's: ranges come from the scene ([S19] Table I)"},
-        {"syrrate_per_m", "1/m", "syringe emptied per metre travelled after the derma's puncture", std::nullopt,
-            std::nullopt, "[S19] Eq. 5 and Fig. 4 (0-20 1/m, experts higher than novices; no threshold given)"},
-        {"duration_s", "s", "session length", std::nullopt, std::nullopt, "reported, not judged"},
-        {"pose_faults", "", "records no hand produces (haptic/servo/Session.h)", std::nullopt, 0.0,
+        {"syrrate_per_m", std::nullopt, std::nullopt,
+            "[S19] Eq. 5 and Fig. 4 (0-20 1/m, experts higher than novices; no threshold given)"},
+        {"duration_s", std::nullopt, std::nullopt, "reported, not judged"},
+        {"pose_faults", std::nullopt, 0.0,
             "[chosen] a device or recording fault, not the trainee's: any one is flagged"},
     };
     return c;
 }
 
-const MetricInfo* findMetric(std::string_view key)
-{
-    for (const MetricInfo& m : metricCatalogue()) {
-        if (m.key == key) return &m;
-    }
-    return nullptr;
-}
-
 nlohmann::json traineeMetricsJson(const haptic::TraineeMetrics& m)
 {
-    const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
     // The scene's success rule (haptic/Procedure.h: dura_intact, reach_csf, reach_target)
-    // beside the dura's own state, which the catalogue's success_dura_intact judges.
-    return {{"success", m.success}, {"success_rule", haptic::successRuleName(m.outcome.rule)},
-        {"success_reason", m.outcome.reason}, {"target_distance_mm", opt(m.outcome.targetDistanceMm)},
-        {"csf_reached", m.outcome.csfReached}, {"critical_breach", m.outcome.criticalBreach},
-        {"force_limited", m.forceLimits}, {"success_dura_intact", m.duraIntact}, {"bone_contacts", m.boneContacts},
-        {"pops", m.pops}, {"insertion_angle_deg", opt(m.insertionAngleDeg)}, {"speed_mean_mm_per_s", m.speedMeanMmPerS},
-        {"speed_variance_mm2_per_s2", m.speedVarianceMm2PerS2}, {"epidural_overshoot_mm", opt(m.overshootMm)},
-        {"syrrate_per_m", opt(m.syrrate)}, {"duration_s", m.durationS}, {"pose_faults", m.poseFaults}};
+    // beside every metric of the catalogue.
+    nlohmann::json j = {
+        {"success_rule", haptic::successRuleName(m.outcome.rule)}, {"success_reason", m.outcome.reason}};
+    for (const haptic::TraineeMetricInfo& info : haptic::traineeMetricCatalogue()) {
+        const std::optional<double> v = info.value(m);
+        nlohmann::json& out = j[std::string(info.key)];
+        if (!v)
+            out = nullptr;
+        else if (info.kind == haptic::MetricKind::Flag)
+            out = *v != 0.0;
+        else if (info.kind == haptic::MetricKind::Count)
+            out = std::int64_t(*v);
+        else
+            out = *v;
+    }
+    return j;
 }
 
 SessionMetrics sessionMetricsFromJson(const nlohmann::json& j, const std::string& origin)
@@ -83,7 +80,7 @@ SessionMetrics sessionMetricsFromJson(const nlohmann::json& j, const std::string
     if (!j.contains("scene") || !j.at("scene").is_string() || j.at("scene").get<std::string>().empty())
         throw ValueError(origin + ": scene: missing (metrics.json names the scene of its session)");
     s.scene = j.at("scene").get<std::string>();
-    for (const MetricInfo& m : metricCatalogue()) {
+    for (const DefaultRange& m : defaultRanges()) {
         if (!j.contains(m.key)) continue;
         const nlohmann::json& v = j.at(m.key);
         if (v.is_null()) {

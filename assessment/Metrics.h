@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Metrics.h
-/// @brief The trainee metrics a session leaves in metrics.json (`voxhap serve`;
-/// haptic/servo/Session.h computes them, physics.md §2.3), their units and
-/// default reference ranges, and reading them back from one or many sessions.
+/// @brief The trainee metrics `voxhap assess` judges, with their default
+/// reference ranges and each range's source, and metrics.json written and read
+/// back. What each metric is called, its unit and how it is computed is
+/// haptic/servo/TraineeMetrics.h's (physics.md §2.3).
 #pragma once
 
-#include "haptic/servo/Session.h"
+#include "haptic/servo/TraineeMetrics.h"
 
 #include <nlohmann/json.hpp>
 
@@ -18,23 +19,20 @@
 
 namespace voxhap::assessment {
 
-/// @brief One assessable metric: its metrics.json key, unit, meaning and the
-/// default reference range (used where the scene gives none).
-struct MetricInfo {
+/// @brief One assessed metric (a key of haptic::traineeMetricCatalogue()) and its
+/// default reference range, used where the scene gives none.
+struct DefaultRange {
     std::string key;
-    std::string unit; ///< "" for counts; "true/false" for a flag (read as 1/0)
-    std::string description;
-    std::optional<double> min, max; ///< default range; neither: reported, not judged
-    std::string source;             ///< of the default range
+    std::optional<double> min, max; ///< neither: reported, not judged
+    std::string source;             ///< of the range
 };
 
-/// @brief Every metric `voxhap assess` knows, in report order.
-const std::vector<MetricInfo>& metricCatalogue();
-/// @brief The catalogue entry of @p key, or null.
-const MetricInfo* findMetric(std::string_view key);
+/// @brief Every metric `voxhap assess` judges, in report order.
+const std::vector<DefaultRange>& defaultRanges();
 
-/// @brief The trainee metrics as metrics.json writes them (the keys of the catalogue
-/// that a session computes; a metric without a value is null).
+/// @brief The trainee metrics as metrics.json writes them: every metric of the
+/// catalogue (a flag true/false, a count a whole number, a value not measured
+/// null), the success rule's name and its reason.
 nlohmann::json traineeMetricsJson(const haptic::TraineeMetrics& m);
 
 /// @brief One session's metrics, read back.

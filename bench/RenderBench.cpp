@@ -83,7 +83,7 @@ RenderCase benchVolume(const std::string& name, const volume::Volume& v, double 
             }
             // A streamed needle pose: the slices' overlays and the 3D pane's lines
             // are redrawn over cached pictures; no volume rendering.
-            render::NeedlePose needle;
+            planning::NeedlePose needle;
             needle.tip = viewer.point() + Vec3d(0, 0, double(k));
             needle.direction = Vec3d(0, 0.6, -0.8);
             viewer.setNeedle(needle);

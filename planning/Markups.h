@@ -5,7 +5,7 @@
 /// The writer fills the fields of Slicer's markups schema (v1.0.3: "@schema" and
 /// "markups" at the top, "type" on each markup) and the ones Slicer writes itself,
 /// so Slicer opens the file as it would its own; the reader is the one parser of
-/// the project (render/Plan.cpp uses it too) and accepts LPS or RAS.
+/// the project (PlanFile.cpp uses it too) and accepts LPS or RAS.
 #pragma once
 
 #include "core/Math.h"

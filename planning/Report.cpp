@@ -3,8 +3,6 @@
 #include "planning/Report.h"
 
 #include "core/AtomicFile.h"
-#include "core/BoundedRead.h"
-#include "core/Errors.h"
 
 namespace voxhap::planning {
 
@@ -81,49 +79,6 @@ nlohmann::json searchJson(
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file)
 {
     writeStreamAtomically(file, [&](std::ostream& os) { os << report.dump(2) << '\n'; });
-}
-
-std::vector<MarkupLine> parseReportPaths(std::string_view json, const std::string& origin)
-{
-    const nlohmann::json j = parseJsonText(json, origin); // any nlohmann::json exception, on one line
-    const auto fail = [&](const std::string& field, const std::string& why) {
-        throw ValueError(origin + ": " + field + ": " + why);
-    };
-    if (!j.is_object()) fail("schema", "not a planning report (a JSON object expected)");
-    if (!j.contains("schema") || j["schema"] != kReportSchema)
-        fail("schema", std::string("must be \"") + kReportSchema + "\"");
-    if (!j.contains("paths") || !j["paths"].is_array()) fail("paths", "must be an array");
-    std::vector<MarkupLine> lines;
-    for (std::size_t i = 0; i < j["paths"].size(); ++i) {
-        const nlohmann::json& path = j["paths"][i];
-        const std::string at = "paths[" + std::to_string(i) + "]";
-        if (!path.is_object()) fail(at, "must be an object");
-        Vec3d pts[2];
-        const char* keys[2] = {"entry", "target"};
-        for (int c = 0; c < 2; ++c) {
-            const std::string field = at + "." + keys[c];
-            const nlohmann::json p = path.contains(keys[c]) ? path[keys[c]] : nlohmann::json();
-            if (!p.is_array() || p.size() != 3) fail(field, "must be [x, y, z] in mm");
-            for (int k = 0; k < 3; ++k) {
-                if (!p[std::size_t(k)].is_number()) fail(field, "must be [x, y, z] in mm");
-                pts[c][k] = p[std::size_t(k)].get<double>();
-            }
-            if (!pts[c].allFinite()) fail(field, "must be finite");
-        }
-        if ((pts[1] - pts[0]).norm() < 1e-6) fail(at, "entry and target coincide");
-        lines.push_back({"path " + std::to_string(i + 1), pts[0], pts[1]});
-    }
-    return lines;
-}
-
-std::vector<MarkupLine> loadPlannedLines(const std::filesystem::path& file)
-{
-    const std::string text = readBoundedFile(file, "plan file"); // regular, at most 16 MiB
-    const nlohmann::json j = parseJsonText(text, file.string());
-    if (j.is_object() && j.contains("markups")) return parseMarkups(text, file.string());
-    if (j.is_object() && j.contains("schema")) return parseReportPaths(text, file.string());
-    throw ValueError(file.string() + ": neither a planning report (\"schema\": \"" + kReportSchema +
-        "\") nor 3D Slicer markups (\"markups\")");
 }
 
 } // namespace voxhap::planning

@@ -24,6 +24,7 @@
 #pragma once
 
 #include "planning/Markups.h"
+#include "planning/PlanFile.h"
 #include "planning/Search.h"
 
 #include <nlohmann/json.hpp>
@@ -35,7 +36,6 @@
 
 namespace voxhap::planning {
 
-inline constexpr const char* kReportSchema = "voxhap-plan-report/1";
 inline constexpr const char* kRiskFormula =
     "R = 100*breach + 100*too_short + 10*bone_obstacles + 10*over_force + sum_c max(0, 1 - clearance_c/margin) "
     "+ length/needle_length + peak_force/device_peak_force";
@@ -48,18 +48,7 @@ nlohmann::json reportHeader(const Planner& planner, const std::string& volumeNam
 nlohmann::json searchJson(
     const Planner& planner, const SearchResult& found, const SearchConstraints& k, const SearchOptions& options);
 /// @brief Write @p report atomically (core/AtomicFile.h). @throw IoError
+/// (Its paths are read back by planning/PlanFile.h, with every other plan file.)
 void writeReport(const nlohmann::json& report, const std::filesystem::path& file);
-
-/// @brief The paths of a report, in its order (path N is "paths"[N−1], rank N): each
-/// as a line named "path N" from its "entry" to its "target". An empty "paths" (a
-/// search that found nothing) gives none.
-/// @throw ValueError naming @p origin and the field ("paths[1].entry: must be [x, y, z] in mm")
-std::vector<MarkupLine> parseReportPaths(std::string_view json, const std::string& origin);
-
-/// @brief The planned lines of a file `voxhap plan` wrote or a user made: a report
-/// ("voxhap-plan-report/1") or 3D Slicer markups (.mrk.json, its Line markups),
-/// told apart by content. For guidance (tools/Guide.h) and other readers of a plan.
-/// @throw IoError if unreadable, ValueError naming the file and the field
-std::vector<MarkupLine> loadPlannedLines(const std::filesystem::path& file);
 
 } // namespace voxhap::planning

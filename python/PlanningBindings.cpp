@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file PlanningBindings.cpp
-/// @brief Python: segment a volume, and plan a path (analyse given entries or
-/// search them), with the report `voxhap plan --json` prints.
+/// @brief Python: segment a volume, plan a path (analyse given entries or
+/// search them) with the report `voxhap plan --json` prints, and read plan files.
 
 #include "python/Bindings.h"
 
 #include "core/Errors.h"
 #include "haptic/scene/Scene.h"
+#include "planning/PlanFile.h"
 #include "planning/Planner.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
@@ -160,6 +161,33 @@ void bindPlanning(py::module_& m)
         "lacks labels or distance fields. Returns the report `voxhap plan --json` prints (schema "
         "voxhap-plan-report/1): header, paths (ranked; segments, clearances, force profile, warnings, risk), "
         "and search and pareto when it searched.");
+
+    m.def(
+        "load_plan",
+        [](const std::filesystem::path& file) {
+            const planning::Plan plan = planning::loadPlan(file);
+            py::list paths;
+            for (const planning::PlannedPath& p : plan.paths) {
+                py::dict d;
+                d["name"] = p.name;
+                d["entry"] = p.entry;
+                d["target"] = p.target;
+                if (p.needle) {
+                    py::dict n;
+                    n["tip"] = p.needle->tip;
+                    n["direction"] = p.needle->direction;
+                    n["length_mm"] = p.needle->lengthMm;
+                    d["needle"] = n;
+                }
+                paths.append(d);
+            }
+            return paths;
+        },
+        py::arg("path"),
+        "The planned paths of a plan file, as `voxhap view --plan` and `--guide` read them "
+        "(planning/PlanFile.h): a plan.json (voxhap-plan/1), the report `voxhap plan` writes "
+        "(voxhap-plan-report/1; path N is rank N) or 3D Slicer markups; a list of {name, entry, target[, "
+        "needle: {tip, direction, length_mm}]} in LPS mm");
 }
 
 } // namespace voxhap::python

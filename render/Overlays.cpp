@@ -120,7 +120,7 @@ void drawAnnotations(Image& img, const ViewFrame& f, const Overlays& o, const Ov
 void drawSliceOverlays(Image& img, const ViewFrame& f, const Overlays& o, const OverlayStyle& s)
 {
     if (o.crosshair) drawCrosshair(img, f.toPixel(*o.crosshair), s.crosshair);
-    for (const PlannedPath& p : o.paths) {
+    for (const planning::PlannedPath& p : o.paths) {
         drawRing(img, f.toPixel(p.entry), kMarkerPx, Stroke{s.entry, 2.0, 0.0, 1.0});
         drawRing(img, f.toPixel(p.target), kMarkerPx, Stroke{s.target, 2.0, 0.0, 1.0});
         drawSegment(img, f, p.entry, p.target, s.path, 1.0, s);

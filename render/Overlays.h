@@ -6,7 +6,7 @@
 #pragma once
 
 #include "render/Image.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 #include "render/ViewFrame.h"
 
 #include <optional>
@@ -31,8 +31,8 @@ struct OverlayStyle {
 
 /// @brief What to draw over a view.
 struct Overlays {
-    std::vector<PlannedPath> paths;
-    std::optional<NeedlePose> needle;
+    std::vector<planning::PlannedPath> paths;
+    std::optional<planning::NeedlePose> needle;
     std::optional<Vec3d> crosshair; ///< [mm, LPS]
     std::string title;
     bool scaleBar = true;

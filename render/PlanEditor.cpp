@@ -22,7 +22,7 @@ std::string_view toolName(Tool t)
     return "?";
 }
 
-PlanEditor::PlanEditor(Plan initial) : mPlan(std::move(initial)) { }
+PlanEditor::PlanEditor(planning::Plan initial) : mPlan(std::move(initial)) { }
 
 void PlanEditor::setTool(Tool t)
 {
@@ -52,7 +52,7 @@ std::optional<Vec3d> PlanEditor::click(const Vec3d& w)
         if ((w - *mPendingEntry).norm() == 0.0)
             return std::nullopt; // a path needs a direction: wait for another target
         {
-            PlannedPath p;
+            planning::PlannedPath p;
             p.name = "viewer";
             p.entry = *mPendingEntry;
             p.target = w;
@@ -102,7 +102,7 @@ std::string PlanEditor::status() const
         break;
     }
     if (mEdited) {
-        const PlannedPath& p = mPlan.paths[*mEdited];
+        const planning::PlannedPath& p = mPlan.paths[*mEdited];
         os << " | path " << distanceMm(p.entry, p.target) << " mm";
     }
     if (mDistance) os << " | distance " << mDistance->lengthMm() << " mm";

@@ -13,7 +13,7 @@
 #pragma once
 
 #include "render/Measurement.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 
 #include <optional>
 #include <string>
@@ -34,7 +34,7 @@ class PlanEditor {
 public:
     /// @param initial paths loaded with --plan: kept and drawn; the viewer's own
     /// path is appended after them as "viewer"
-    explicit PlanEditor(Plan initial = {});
+    explicit PlanEditor(planning::Plan initial = {});
 
     void setTool(Tool t);
     Tool tool() const { return mTool; }
@@ -46,7 +46,7 @@ public:
     void clearMeasurements();
 
     /// @brief The loaded paths plus the one made here (if complete).
-    const Plan& plan() const { return mPlan; }
+    const planning::Plan& plan() const { return mPlan; }
     /// @brief True once the viewer's path has an entry and a target.
     bool hasEditedPath() const { return mEdited.has_value(); }
     /// @brief An entry clicked but no target yet.
@@ -62,7 +62,7 @@ public:
 
 private:
     Tool mTool = Tool::Navigate;
-    Plan mPlan;
+    planning::Plan mPlan;
     std::optional<std::size_t> mEdited; ///< index of the viewer's path in mPlan
     std::optional<Vec3d> mPendingEntry;
     std::vector<Vec3d> mPoints;

@@ -7,7 +7,7 @@
 
 #include "render/Image.h"
 #include "render/Overlays.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 #include "render/ViewFrame.h"
 #include "render/ViewTypes.h"
 #include "render/VolumeView3d.h"
@@ -35,8 +35,8 @@ struct RenderRequest {
     /// Where the slices cut and the crosshair sits [mm, LPS]; default the first
     /// path's target, else the centre of the volume.
     std::optional<Vec3d> point;
-    Plan plan;
-    std::optional<NeedlePose> needle;
+    planning::Plan plan;
+    std::optional<planning::NeedlePose> needle;
     double pixelMm = 0.0;         ///< pixel size [mm]; 0: the finest voxel size
     int maxPixels = 768;          ///< largest side of a view [px] (the pixel size grows to fit)
     bool labels = true;           ///< tissue colours on the slices (when the volume has labels)

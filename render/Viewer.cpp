@@ -238,7 +238,7 @@ void Viewer::savePlan()
     // A failed save must not end an interactive session: say so in the status
     // bar and keep the error for a scripted run to report.
     try {
-        render::savePlan(mEditor.plan(), mOpt.planOut);
+        planning::savePlan(mEditor.plan(), mOpt.planOut);
         mMessage = "saved " + mOpt.planOut.string();
         mSaveError.clear();
     } catch (const std::exception& e) {
@@ -247,7 +247,7 @@ void Viewer::savePlan()
     }
 }
 
-void Viewer::setNeedle(const std::optional<NeedlePose>& needle)
+void Viewer::setNeedle(const std::optional<planning::NeedlePose>& needle)
 {
     mNeedle = needle;
     mDirty = true; // the 3D picture is kept: the needle is drawn over it
@@ -353,7 +353,7 @@ void Viewer::drawOver3d(Image& img) const
     // needle costs no volume rendering.
     const ViewFrame& f = frame(ViewKind::ThreeD);
     const OverlayStyle style;
-    for (const PlannedPath& p : mEditor.plan().paths) {
+    for (const planning::PlannedPath& p : mEditor.plan().paths) {
         drawLine(img, f.toPixel(p.entry), f.toPixel(p.target), Stroke{style.path, 2.0, 0.0, 1.0});
         fillDisc(img, f.toPixel(p.entry), 4.0, style.entry);
         fillDisc(img, f.toPixel(p.target), 4.0, style.target);

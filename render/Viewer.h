@@ -72,7 +72,7 @@ struct ViewerOptions {
     bool threeD = true;                ///< false: the 3D pane says why not (threeDNote) instead
     std::string threeDNote;            ///< shown in the 3D pane when threeD is false
     std::optional<Vec3d> point;        ///< first crosshair [mm, LPS]; default the first target, else the centre
-    Plan plan;                         ///< paths loaded with the volume
+    planning::Plan plan;               ///< paths loaded with the volume
     std::filesystem::path planOut = "plan.json"; ///< where key s saves
 };
 
@@ -123,7 +123,7 @@ public:
     RenderQuality last3dQuality() const { return m3dQuality; }
 
     /// @brief The live needle (nullopt: none).
-    void setNeedle(const std::optional<NeedlePose>& needle);
+    void setNeedle(const std::optional<planning::NeedlePose>& needle);
     /// @brief A note for the status bar (e.g. the pose stream's state).
     void setNote(std::string note);
     /// @brief Redraw every pane at the next render(), the 3D one included (for benchmarks).
@@ -178,7 +178,7 @@ private:
     int mWindowPreset = 0;
     ViewKind mActive = ViewKind::Axial;
     PlanEditor mEditor;
-    std::optional<NeedlePose> mNeedle;
+    std::optional<planning::NeedlePose> mNeedle;
     std::string mNote, mMessage, mSaveError;
 };
 

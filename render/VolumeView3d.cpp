@@ -415,7 +415,7 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
     // Paths and needles as 3D lines; entry and target as points.
     std::vector<std::pair<Vec3d, Vec3d>> paths, needles;
     std::vector<Vec3d> entries, targets;
-    for (const PlannedPath& p : overlays.paths) {
+    for (const planning::PlannedPath& p : overlays.paths) {
         paths.emplace_back(p.entry, p.target);
         entries.push_back(p.entry);
         targets.push_back(p.target);
@@ -486,7 +486,7 @@ void VolumeView3d::setCamera(const ViewFrame& frame)
     cam->SetClippingRange(0.5, 3.0 * m.far);
 }
 
-void VolumeView3d::setNeedle(const std::optional<NeedlePose>& needle)
+void VolumeView3d::setNeedle(const std::optional<planning::NeedlePose>& needle)
 {
     Impl& m = *mImpl;
     if (m.needle) m.lines->RemoveActor(m.needle);

@@ -90,7 +90,7 @@ public:
     /// @brief The ray caster in use (Auto resolved).
     RayCaster caster() const;
     /// @brief Move (or remove) the live needle drawn in the view.
-    void setNeedle(const std::optional<NeedlePose>& needle);
+    void setNeedle(const std::optional<planning::NeedlePose>& needle);
 
 private:
     struct Impl;

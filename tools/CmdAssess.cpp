@@ -12,6 +12,7 @@
 
 #include "assessment/Assess.h"
 #include "assessment/Classifier.h"
+#include "assessment/LabelledCsv.h"
 #include "assessment/SimulatedCohort.h"
 #include "core/AtomicFile.h"
 #include "core/BoundedRead.h"
@@ -49,8 +50,8 @@ struct AssessOptions {
 std::string valueText(const MetricResult& m)
 {
     if (!m.value) return "null";
-    const MetricInfo* info = findMetric(m.range.metric);
-    if (info && info->unit == "true/false") return *m.value != 0.0 ? "true" : "false";
+    const haptic::TraineeMetricInfo* info = haptic::findTraineeMetric(m.range.metric);
+    if (info && info->kind == haptic::MetricKind::Flag) return *m.value != 0.0 ? "true" : "false";
     std::ostringstream os;
     os << std::setprecision(4) << *m.value;
     return os.str();
@@ -58,8 +59,9 @@ std::string valueText(const MetricResult& m)
 
 std::string rangeText(const ReferenceRange& r)
 {
-    const MetricInfo* info = findMetric(r.metric);
-    if (info && info->unit == "true/false") return r.min && *r.min > 0 ? "true" : r.max && *r.max < 1 ? "false" : "-";
+    const haptic::TraineeMetricInfo* info = haptic::findTraineeMetric(r.metric);
+    if (info && info->kind == haptic::MetricKind::Flag)
+        return r.min && *r.min > 0 ? "true" : r.max && *r.max < 1 ? "false" : "-";
     std::ostringstream os;
     os << std::setprecision(4);
     if (r.min && r.max)
@@ -99,31 +101,24 @@ nlohmann::json writeCohort(const AssessOptions& o, const volume::TissueTable& ta
     for (const SimulatedTrainee& t : simulatedCohort(spec)) sessions.push_back(simulateSession(inst, t));
     // Columns: the catalogue's metrics that every simulated session measured.
     std::vector<std::string> columns;
-    for (const MetricInfo& m : metricCatalogue()) {
+    for (const DefaultRange& m : defaultRanges()) {
         if (m.key == "duration_s" || m.key == "pose_faults") continue; // the session's length; faults are not skill
         bool all = true;
         for (const auto& j : sessions) all = all && j.contains(m.key) && !j.at(m.key).is_null();
         if (all) columns.push_back(m.key);
     }
-    std::ostringstream csv;
-    csv << "# simulated cohort: careful (label 0) and reckless (label 1) simulated hands on scene " << scene.name
-        << "; not real trainees\nsession,label";
-    for (const auto& c : columns) csv << ',' << c;
-    csv << '\n';
+    std::vector<LabelledRow> rows;
     OutputSet outputs;
     for (const auto& j : sessions) {
         const std::string id = j.at("trainee").get<std::string>();
-        csv << id << ',' << (id.rfind("reckless", 0) == 0 ? 1 : 0);
-        for (const auto& c : columns) {
-            const auto& v = j.at(c);
-            csv << ',' << (v.is_boolean() ? (v.get<bool>() ? "1" : "0") : v.dump());
-        }
-        csv << '\n';
+        rows.push_back({id, id.rfind("reckless", 0) == 0 ? 1 : 0, j});
         const std::string text = j.dump(2) + "\n";
         fs::create_directories(fs::path(o.out) / id);
         outputs.addStream(fs::path(o.out) / id / "metrics.json", [text](std::ostream& out) { out << text; });
     }
-    const std::string table_ = csv.str();
+    const std::string table_ = labelledCsvText(rows, columns,
+        "simulated cohort: careful (label 0) and reckless (label 1) simulated hands on scene " + scene.name +
+            "; not real trainees");
     outputs.addStream(fs::path(o.out) / "labelled.csv", [table_](std::ostream& out) { out << table_; });
     outputs.commit();
     return {{"simulated_cohort",

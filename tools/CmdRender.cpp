@@ -10,7 +10,7 @@
 
 #include "render/Display.h"
 #include "render/ImageFile.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 #include "render/RenderVolume.h"
 #include "render/Snapshot.h"
 #include "core/Errors.h"
@@ -74,7 +74,7 @@ int run(const RenderOptions& o)
 {
     render::RenderRequest req = request(o);
     // Cheap inputs first: a bad plan fails before the volume loads.
-    if (!o.path.empty()) req.plan = render::loadPlan(o.path);
+    if (!o.path.empty()) req.plan = planning::loadPlan(o.path);
     const volume::TissueTable& table = tissueTable(o.common);
     const bool threeD = std::find(req.views.begin(), req.views.end(), render::ViewKind::ThreeD) != req.views.end();
     // Before any thread starts: the guard may set $DISPLAY for this process.

@@ -10,7 +10,7 @@
 #include "haptic/igtl/PoseStream.h"
 #include "render/Display.h"
 #include "render/ImageFile.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 #include "render/Viewer.h"
 #include "render/ViewerScript.h"
 #include "render/ViewerWindow.h"
@@ -77,7 +77,7 @@ public:
         const long n = mReceiver->poses();
         if (n != mSeen) {
             if (const auto p = mReceiver->latest()) {
-                render::NeedlePose pose;
+                planning::NeedlePose pose;
                 pose.tip = p->tip;
                 pose.direction = p->direction;
                 pose.lengthMm = mLengthMm;
@@ -172,7 +172,7 @@ int run(const ViewOptions& o)
     if (o.listen > 65535) throw UsageError("--listen: port " + std::to_string(o.listen) + " outside 0..65535");
     vo.labels = !o.noLabels;
     vo.planOut = o.save;
-    if (!o.plan.empty()) vo.plan = render::loadPlan(o.plan);
+    if (!o.plan.empty()) vo.plan = planning::loadPlan(o.plan);
     ScriptPlayer script(
         o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script);
     const volume::TissueTable& table = tissueTable(o.common);

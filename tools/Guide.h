@@ -2,7 +2,7 @@
 /// @file Guide.h
 /// @brief `--guide FILE --guide-path N` of `voxhap simulate` and `voxhap serve`: the
 /// planned line guidance pulls toward (haptic/force/Guidance.h), read from the
-/// report or the markups `voxhap plan` wrote (planning::loadPlannedLines).
+/// report or the markups `voxhap plan` wrote, or a plan.json (planning/PlanFile.h).
 #pragma once
 
 #include "haptic/force/Guidance.h"

@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Session.h
 /// @brief A recorded servo session (pose, force, plunger, events), its file, and
-/// the trainee metrics of [S19] (physics.md §2.3); haptic/devices/ReplayDevice.h
+/// its trainee metrics (TraineeMetrics.h says what they are); haptic/devices/ReplayDevice.h
 /// plays one back.
 #pragma once
 
 #include "haptic/Procedure.h"
+#include "haptic/servo/TraineeMetrics.h"
 #include "haptic/servo/Device.h"
 #include "haptic/servo/ServoLoop.h"
 #include "core/AtomicFile.h"
@@ -40,60 +41,6 @@ void addSessionOutputs(
 ///        line whose first seven fields are not finite numbers, a t_s that does
 ///        not increase, and a file of fewer than two records
 std::vector<ServoRecord> readSessionPoses(const std::filesystem::path& file);
-
-/// @brief Trainee metrics after [S19] (physics.md §2.3).
-struct TraineeMetrics {
-    bool success = true;      ///< under the scene's success rule (Procedure.h)
-    bool duraIntact = true;   ///< the dura was not punctured ([S19]'s success, §2.3)
-    ProcedureOutcome outcome; ///< the rule, why it succeeded or failed, the closest approach to the target
-    int forceLimits = 0;      ///< times the device's peak or I²t limit started cutting the force (§6.3)
-    int boneContacts = 0;
-    int pops = 0;
-    std::optional<double> insertionAngleDeg; ///< needle against the planned path at skin entry
-    double speedMeanMmPerS = 0;              ///< along the path, while advancing inside the body
-    double speedVarianceMm2PerS2 = 0;
-    std::optional<double> overshootMm; ///< distance travelled inside the epidural space
-    std::optional<double> syrrate;     ///< fraction emptied per metre [1/m]; null without a plunger channel
-    double durationS = 0;
-    /// Records no hand on a desk-mounted device produces, left out of every
-    /// figure above: a non-finite tip, a tip more than kWorkspaceReachMm from the
-    /// session's first one, or a step faster than kMaxHandSpeedMmPerS.
-    long poseFaults = 0;
-};
-
-/// Farthest a tip may be from the session's first tip [mm]: beyond the largest
-/// desk-mounted haptic workspace (Phantom Premium 3.0: 838 × 584 × 406 mm) [chosen].
-inline constexpr double kWorkspaceReachMm = 1000.0;
-/// Fastest a hand moves a needle's tip [mm/s]: fast human reaching peaks near
-/// 2 m/s; 5 m/s leaves margin [chosen].
-inline constexpr double kMaxHandSpeedMmPerS = 5000.0;
-
-/// @brief traineeMetrics() one record and one event at a time, in time order
-/// (an event before the record of its tick), with memory that does not grow
-/// with the session: what a recorder of an hour-long session keeps.
-class TraineeMetricsAccumulator {
-public:
-    /// @p success and @p target judge the outcome (Procedure.h): by default [S19]'s
-    /// dura_intact, without a target.
-    TraineeMetricsAccumulator(const std::vector<Layer>& layers, const Vec3d& pathDirection,
-        const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);
-    void addEvent(const Event& e) noexcept;
-    void addRecord(const ServoRecord& r) noexcept;
-    TraineeMetrics result() const;
-
-private:
-    const std::vector<Layer>& mLayers;
-    Vec3d mDirection;
-    OutcomeTracker mOutcome;
-    TraineeMetrics mM;
-    double mSkinT, mSkinDepth = 0.0;
-    double mSum = 0, mSum2 = 0, mEpidural = 0;
-    long mN = 0;
-    bool mInEpidural = false;
-    bool mHaveFirst = false, mHavePrev = false, mHaveStartFraction = false;
-    ServoRecord mFirst, mLast, mPrevGood;
-    double mStartFraction = 0.0;
-};
 
 TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection,
     const SuccessCriteria& success = {}, std::optional<Vec3d> target = std::nullopt);

@@ -118,5 +118,46 @@ TEST(Assess, BadMetricsAreRefusedNamingFileAndField)
     refused({{"scene", "kyung"}, {"ticks", 3}}, "m.json: no trainee metrics");
 }
 
+// The metrics are named, measured and written by haptic/servo/TraineeMetrics.h;
+// assessment/ only judges them: each judged key is one the catalogue names.
+TEST(Metrics, EveryJudgedMetricIsOneTheSessionComputes)
+{
+    for (const DefaultRange& r : defaultRanges())
+        EXPECT_NE(haptic::findTraineeMetric(r.key), nullptr) << r.key << " is judged but no session computes it";
+    EXPECT_EQ(haptic::findTraineeMetric("speed_mean"), nullptr); // a key the catalogue does not hold
+}
+
+TEST(Metrics, MetricsJsonHoldsEachFieldUnderItsNameAndKind)
+{
+    // Every field distinct, so that a key wired to the wrong field shows.
+    haptic::TraineeMetrics m;
+    m.success = false;
+    m.duraIntact = true;
+    m.boneContacts = 2;
+    m.pops = 5;
+    m.insertionAngleDeg = 3.25;
+    m.speedMeanMmPerS = 1.5;
+    m.speedVarianceMm2PerS2 = 0.75;
+    m.overshootMm = std::nullopt; // not measured: null
+    m.syrrate = 11.5;
+    m.durationS = 42.5;
+    m.poseFaults = 7;
+    m.forceLimits = 4;
+    m.outcome.targetDistanceMm = 6.5;
+    m.outcome.csfReached = true;
+    m.outcome.criticalBreach = false;
+    m.outcome.reason = "why";
+    const nlohmann::json j = traineeMetricsJson(m);
+    const nlohmann::json expected = {{"success", false}, {"success_dura_intact", true}, {"bone_contacts", 2},
+        {"pops", 5}, {"insertion_angle_deg", 3.25}, {"speed_mean_mm_per_s", 1.5}, {"speed_variance_mm2_per_s2", 0.75},
+        {"epidural_overshoot_mm", nullptr}, {"syrrate_per_m", 11.5}, {"duration_s", 42.5}, {"pose_faults", 7},
+        {"force_limited", 4}, {"target_distance_mm", 6.5}, {"csf_reached", true}, {"critical_breach", false},
+        {"success_rule", haptic::successRuleName(m.outcome.rule)}, {"success_reason", "why"}};
+    EXPECT_EQ(j, expected);
+    // Counts are whole numbers in the file ("5", not "5.0"), as before the catalogue moved.
+    EXPECT_EQ(j.at("pops").dump(), "5");
+    EXPECT_TRUE(j.at("pose_faults").is_number_integer());
+}
+
 } // namespace
 } // namespace voxhap::assessment

@@ -154,27 +154,5 @@ TEST(CrossValidation, SeparatedGroupsAreAllRight)
     EXPECT_THROW(crossValidate(set(x, y), 21), ValueError);
 }
 
-TEST(LabelledCsv, ReadsAndRefusesNamingLineAndColumn)
-{
-    const LabelledSet d =
-        parseLabelledCsv("# a comment\nsession,label,speed,success\na,0,1.5,true\nb,1,6,false\n", "l.csv");
-    ASSERT_EQ(d.features, (std::vector<std::string>{"speed", "success"}));
-    EXPECT_EQ(d.y, (std::vector<int>{0, 1}));
-    EXPECT_EQ(d.x[1], (std::vector<double>{6.0, 0.0}));
-    EXPECT_EQ(d.ids[0], "a");
-    const auto refused = [](const std::string& text, const std::string& what) {
-        try {
-            parseLabelledCsv(text, "l.csv");
-            ADD_FAILURE() << "accepted: " << text;
-        } catch (const ValueError& e) {
-            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-        }
-    };
-    refused("speed,success\n1,2\n", "l.csv: line 1: no 'label' column");
-    refused("label,speed\n2,1\n", "l.csv: line 2: column 'label': '2' is not 0 or 1");
-    refused("label,speed\n1,fast\n", "l.csv: line 2: column 'speed': 'fast' is not a number");
-    refused("label,speed\n1\n", "l.csv: line 2: 1 cells, the header has 2");
-}
-
 } // namespace
 } // namespace voxhap::assessment

@@ -11,6 +11,9 @@ import voxhap
 # Path geometry: segment lengths are differences of depths along one straight line [mm];
 # double round-off over ~100 mm and a few dozen segments.
 GEOMETRY_TOL_MM = 1e-9
+# Markups are written with every digit and read back through one sign flip at most
+# (RAS/LPS): exact, up to the text's last digit of a coordinate of order 100 mm.
+MARKUPS_TOL_MM = 1e-12
 
 
 @pytest.fixture(scope="module")
@@ -54,6 +57,15 @@ def test_plan_search_matches_the_command_line(torso, cli, tmp_path):
         assert a["length_mm"] == b["length_mm"] and a["segments"] == b["segments"] and a["force"] == b["force"]
     for key in ("directions", "analysed", "feasible"):
         assert ours["search"][key] == theirs["search"][key]
+    # The files it wrote read back through the one plan-file reader: the report's
+    # paths in rank order, bit for bit through JSON; the markups' Lines in LPS.
+    from_report = voxhap.load_plan(tmp_path / "plan" / "report.json")
+    assert [p["name"] for p in from_report] == [f"path {i + 1}" for i in range(len(theirs["paths"]))]
+    for read, written in zip(from_report, theirs["paths"]):
+        assert list(read["entry"]) == written["entry"] and list(read["target"]) == written["target"]
+    from_markups = voxhap.load_plan(tmp_path / "plan" / "paths.mrk.json")
+    assert len(from_markups) == len(theirs["paths"])
+    np.testing.assert_allclose(from_markups[0]["entry"], theirs["paths"][0]["entry"], rtol=0, atol=MARKUPS_TOL_MM)
 
 
 def test_planned_path_geometry_adds_up(torso):

@@ -237,9 +237,9 @@ TEST_F(Slices, PathOverlayThroughEntryAndTargetPixels)
     const double px = 0.5;
     const OverlayStyle style;
     // One path in the axial plane of the sphere's centre, one crossing it obliquely.
-    PlannedPath inPlane{"in plane", Vec3d(-20, -35, mPhantom.centre.z()), mPhantom.centre, std::nullopt};
-    PlannedPath oblique{"oblique", Vec3d(15, 5, 25), Vec3d(-10, -30, -15), std::nullopt};
-    for (const PlannedPath& path : {inPlane, oblique}) {
+    planning::PlannedPath inPlane{"in plane", Vec3d(-20, -35, mPhantom.centre.z()), mPhantom.centre, std::nullopt};
+    planning::PlannedPath oblique{"oblique", Vec3d(15, 5, 25), Vec3d(-10, -30, -15), std::nullopt};
+    for (const planning::PlannedPath& path : {inPlane, oblique}) {
         for (const char* name : {"axial", "sagittal", "coronal"}) {
             const ViewFrame f = viewFrame(parseViews(name).front(), mBox, mPhantom.centre, px);
             Image img(f.width, f.height);
@@ -310,7 +310,7 @@ TEST_F(Slices, PointDefaultsToThePathTarget)
 {
     RenderRequest r;
     r.views = {ViewKind::Axial};
-    r.plan.paths = {PlannedPath{"p", Vec3d(0, 5, 0), Vec3d(1, -20, 3), std::nullopt}};
+    r.plan.paths = {planning::PlannedPath{"p", Vec3d(0, 5, 0), Vec3d(1, -20, 3), std::nullopt}};
     Snapshot s(*mVolume, r, table());
     EXPECT_EQ(s.point(), Vec3d(1, -20, 3));
     r.plan.paths.clear();

@@ -63,7 +63,7 @@ TEST(Measurement, AngleBetweenSegments)
 
 TEST(PlanEditor, EntryThenTargetMakesOnePathThatLaterPairsReplace)
 {
-    Plan loaded;
+    planning::Plan loaded;
     loaded.paths.push_back({"L3", Vec3d(0, 0, 0), Vec3d(0, 10, 0), std::nullopt});
     PlanEditor e(loaded);
     EXPECT_EQ(e.click(Vec3d(1, 2, 3)), std::optional<Vec3d>(Vec3d(1, 2, 3))) << "navigate moves the crosshair";
@@ -182,10 +182,11 @@ TEST(ViewerScript, ParsesStepsAndNamesTheBadLine)
 
 TEST(Plan, WrittenPlanReadsBack)
 {
-    Plan p;
+    planning::Plan p;
     p.paths.push_back({"a", Vec3d(1.25, -2, 3), Vec3d(4, 5, -6.5), std::nullopt});
-    p.paths.push_back({"b", Vec3d(0, 0, 0), Vec3d(0, 0, 1), NeedlePose{Vec3d(0, 0, 1), Vec3d(0, 0, 1), 80.0}});
-    const Plan q = parsePlan(planJson(p), "memory");
+    p.paths.push_back(
+        {"b", Vec3d(0, 0, 0), Vec3d(0, 0, 1), planning::NeedlePose{Vec3d(0, 0, 1), Vec3d(0, 0, 1), 80.0}});
+    const planning::Plan q = planning::parsePlan(planning::planJson(p), "memory");
     ASSERT_EQ(q.paths.size(), 2u);
     EXPECT_EQ(q.paths[0].entry, p.paths[0].entry); // JSON keeps doubles exactly (round-trip printing)
     EXPECT_EQ(q.paths[0].target, p.paths[0].target);
@@ -270,7 +271,7 @@ TEST_F(ViewerTest, TwoClicksOnTheAxialSlicePlanAPathAtThoseWorldPoints)
     EXPECT_TRUE(v.handle(click(ViewKind::Axial, px(target))));
     EXPECT_TRUE(v.handle(key("s")));
     EXPECT_NE(v.lastMessage().find("saved"), std::string::npos) << v.lastMessage();
-    const Plan saved = loadPlan(mDir / "plan.json");
+    const planning::Plan saved = planning::loadPlan(mDir / "plan.json");
     ASSERT_EQ(saved.paths.size(), 1u);
     EXPECT_TRUE(nearVec(saved.paths[0].entry, entry, halfVoxel(1.0)));
     EXPECT_TRUE(nearVec(saved.paths[0].target, target, halfVoxel(1.0)));
@@ -343,7 +344,7 @@ TEST_F(ViewerTest, LiveNeedleIsDrawnWhereItsProjectionFalls)
 {
     Viewer v(*mVolume, mOpt, test::table());
     // A vertical needle in the coronal plane through the crosshair (y = −12), away from the crosshair lines.
-    const NeedlePose needle{Vec3d(-10, mPhantom.centre.y(), 5), Vec3d(0, 0, -1), 90.0};
+    const planning::NeedlePose needle{Vec3d(-10, mPhantom.centre.y(), 5), Vec3d(0, 0, -1), 90.0};
     const Vec3d onShaft(-10, mPhantom.centre.y(), 20);
     const Rgb colour = OverlayStyle{}.needle;
     const Image before = v.render();
@@ -373,7 +374,7 @@ TEST_F(ViewerTest, ThreeDPaneUnderXvfbShowsTheVolumeAndTheNeedle)
     };
     const Image first = pane(v.render());
     EXPECT_GT(test::greySpread(first), 5.0) << "blank 3D pane";
-    v.setNeedle(NeedlePose{Vec3d(-10, -12, 5), Vec3d(0, 0, -1), 90.0});
+    v.setNeedle(planning::NeedlePose{Vec3d(-10, -12, 5), Vec3d(0, 0, -1), 90.0});
     const Image second = pane(v.render());
     // The shaft's projection (a parallel view from the front): orange, red well above blue.
     const Vec2d at = expectedPixel("3d", Vec3d(-10, -12, 20), mLo, mHi, v.frame(ViewKind::ThreeD).pixelMm);

@@ -89,7 +89,7 @@ TEST_F(CliGuide, BadGuidesFailInOneLineNamingTheFileAndField)
         run("simulate --scene senac-average --guide bad.json --no-plot -o x"), "bad.json: paths[0].entry: must be");
     write("other.json", R"({"hello": 1})");
     expectFailure(run("simulate --scene senac-average --guide other.json --no-plot -o x"),
-        "other.json: neither a planning report");
+        "other.json: schema: must be \"voxhap-plan/1\" or \"voxhap-plan-report/1\"");
     expectFailure(run("simulate --scene senac-average --guide missing.json --no-plot -o x"), "missing.json");
     expectUsageError(run("simulate --scene senac-average --guide-path 2 --no-plot -o x"), "--guide-path needs --guide");
     expectUsageError(run("serve --scene senac-average --guide-path 2 -o x"), "--guide-path needs --guide");

@@ -12,7 +12,7 @@
 #include "haptic/igtl/PoseStream.h"
 #include "render/ImageFile.h"
 #include "render/Overlays.h"
-#include "render/Plan.h"
+#include "planning/PlanFile.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -120,7 +120,7 @@ TEST_F(CliView, ScriptedClicksWriteThePlanAndASnapshot)
         "--point 0,-20,0 --json");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
-    const auto plan = voxhap::render::loadPlan(mDir / "plan.json");
+    const auto plan = voxhap::planning::loadPlan(mDir / "plan.json");
     ASSERT_EQ(plan.paths.size(), 1u);
     // A click lands on a pixel centre: within half a 0.5 mm pixel, so within half a 1 mm voxel, of the point aimed at.
     EXPECT_TRUE(voxhap::test::nearVec(plan.paths[0].entry, mEntry, voxhap::test::halfVoxel(1.0)));
@@ -199,7 +199,7 @@ TEST_F(CliView, WindowRunsUnderXvfbAndQuitsFromTheScript)
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["ended"], "quit") << "the script's q, not the timeout";
     EXPECT_GE(j["frames"].get<int>(), 1);
-    const auto plan = voxhap::render::loadPlan(mDir / "w.json");
+    const auto plan = voxhap::planning::loadPlan(mDir / "w.json");
     ASSERT_EQ(plan.paths.size(), 1u);
     EXPECT_TRUE(voxhap::test::nearVec(plan.paths[0].target, mTarget, voxhap::test::halfVoxel(1.0)));
 }

@@ -1,20 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
-/// @file Plan.cpp
-#include "render/Plan.h"
+/// @file PlanFile.cpp
+/// @brief The three plan formats read, told apart by content; voxhap-plan/1 written.
+#include "planning/PlanFile.h"
 
-#include "core/BoundedRead.h"
-
-#include "planning/Markups.h"
 #include "core/AtomicFile.h"
+#include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "core/JsonFields.h"
+#include "planning/Markups.h"
 
 #include <nlohmann/json.hpp>
 
 #include <fstream>
 #include <sstream>
 
-namespace voxhap::render {
+namespace voxhap::planning {
 
 namespace {
 
@@ -53,7 +53,10 @@ NeedlePose parseNeedle(Fields n)
 
 Plan parseVoxhapPlan(Fields& top, const std::string& origin)
 {
-    if (top.string("schema", "") != "voxhap-plan/1") top.fail("schema", "must be \"voxhap-plan/1\"");
+    if (top.string("schema", "") != kPlanSchema) {
+        top.fail("schema",
+            std::string("must be \"") + kPlanSchema + "\" or \"" + kReportSchema + "\" (or 3D Slicer markups)");
+    }
     Plan plan;
     forEachObject(top, "paths", origin, "", [&](Fields& p) {
         PlannedPath path;
@@ -68,6 +71,37 @@ Plan parseVoxhapPlan(Fields& top, const std::string& origin)
     return plan;
 }
 
+/// voxhap-plan-report/1: only each path's entry and target are read (a report
+/// holds much more per path), in rank order; no paths is a search that found none.
+Plan parseReportPlan(const nlohmann::json& j, const std::string& origin)
+{
+    const auto fail = [&](const std::string& field, const std::string& why) {
+        throw ValueError(origin + ": " + field + ": " + why);
+    };
+    if (!j.contains("paths") || !j["paths"].is_array()) fail("paths", "must be an array");
+    Plan plan;
+    for (std::size_t i = 0; i < j["paths"].size(); ++i) {
+        const nlohmann::json& path = j["paths"][i];
+        const std::string at = "paths[" + std::to_string(i) + "]";
+        if (!path.is_object()) fail(at, "must be an object");
+        Vec3d pts[2];
+        const char* keys[2] = {"entry", "target"};
+        for (int c = 0; c < 2; ++c) {
+            const std::string field = at + "." + keys[c];
+            const nlohmann::json p = path.contains(keys[c]) ? path[keys[c]] : nlohmann::json();
+            if (!p.is_array() || p.size() != 3) fail(field, "must be [x, y, z] in mm");
+            for (int k = 0; k < 3; ++k) {
+                if (!p[std::size_t(k)].is_number()) fail(field, "must be [x, y, z] in mm");
+                pts[c][k] = p[std::size_t(k)].get<double>();
+            }
+            if (!pts[c].allFinite()) fail(field, "must be finite");
+        }
+        if ((pts[1] - pts[0]).norm() < 1e-6) fail(at, "entry and target coincide");
+        plan.paths.push_back({"path " + std::to_string(i + 1), pts[0], pts[1], std::nullopt});
+    }
+    return plan;
+}
+
 } // namespace
 
 Plan parsePlan(std::string_view json, const std::string& origin)
@@ -78,12 +112,12 @@ Plan parsePlan(std::string_view json, const std::string& origin)
     } catch (const Json::parse_error& e) {
         throw ValueError(origin + ": not valid JSON (" + std::string(e.what()) + ")");
     }
-    if (j.is_object() && j.contains("markups")) { // 3D Slicer markups: the one parser is planning's
+    if (j.is_object() && j.contains("markups")) { // 3D Slicer markups (Markups.h)
         Plan plan;
-        for (auto& l : planning::parseMarkups(json, origin))
-            plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+        for (auto& l : parseMarkups(json, origin)) plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
         return plan;
     }
+    if (j.is_object() && j.contains("schema") && j["schema"] == kReportSchema) return parseReportPlan(j, origin);
     Fields top(j, origin, "");
     return parseVoxhapPlan(top, origin);
 }
@@ -107,7 +141,7 @@ std::string planJson(const Plan& plan)
         }
         paths.push_back(std::move(j));
     }
-    return Json{{"schema", "voxhap-plan/1"}, {"paths", paths}}.dump(2) + "\n";
+    return Json{{"schema", kPlanSchema}, {"paths", paths}}.dump(2) + "\n";
 }
 
 void savePlan(const Plan& plan, const std::filesystem::path& file)
@@ -116,4 +150,4 @@ void savePlan(const Plan& plan, const std::filesystem::path& file)
     writeStreamAtomically(file, [&](std::ostream& out) { out << text; });
 }
 
-} // namespace voxhap::render
+} // namespace voxhap::planning
