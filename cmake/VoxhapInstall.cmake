@@ -8,7 +8,7 @@
 #   P/bin/voxhap                    the command-line program, when it is built
 # An embedding project writes find_package(voxhap REQUIRED [COMPONENTS ...]) and
 # links voxhap::haptic and the rest (examples/device-loop/). voxhap::core, volume,
-# segmentation, haptic, assessment and planning are always there; render and igtl are
+# segmentation, haptic, assessment, planning and batch are always there; render and igtl are
 # components, present when the build had VOXHAP_WITH_RENDER and VOXHAP_WITH_IGTL
 # and loaded (with VTK or OpenIGTLink) only when asked for.
 include(CMakePackageConfigHelpers)
@@ -53,7 +53,7 @@ function(voxhap_install_headers folder)
 endfunction()
 
 # The physics core: no VTK, X11 or OpenIGTLink.
-set(core_targets voxhap_core voxhap_volume voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning)
+set(core_targets voxhap_core voxhap_volume voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning voxhap_batch)
 install(TARGETS ${core_targets} EXPORT voxhapTargets ARCHIVE DESTINATION lib)
 install(EXPORT voxhapTargets NAMESPACE voxhap:: DESTINATION ${VOXHAP_INSTALL_CMAKEDIR})
 voxhap_install_headers(core)
@@ -63,6 +63,7 @@ voxhap_install_headers(segmentation)
 voxhap_install_headers(haptic EXCLUDE igtl devices/drivers) # drivers are built in the tree, not installed
 voxhap_install_headers(assessment)
 voxhap_install_headers(planning)
+voxhap_install_headers(batch)
 
 # The optional components, each with its own export set, so that an embedding
 # project that does not ask for them never looks for VTK or OpenIGTLink.

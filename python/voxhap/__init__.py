@@ -7,3 +7,9 @@ index to world. The calls live in the extension voxhap._voxhap (python/*.cpp).
 """
 from ._voxhap import *  # noqa: F401,F403
 from ._voxhap import __version__  # noqa: F401
+import sys as _sys
+
+# `import voxhap.batch` as well as voxhap.batch: the submodule lives in the extension.
+from ._voxhap import batch  # noqa: E402
+
+_sys.modules[__name__ + ".batch"] = batch

@@ -34,7 +34,7 @@ foreach(f ${cmakedir}/voxhapConfig.cmake ${cmakedir}/voxhapConfigVersion.cmake $
     list(APPEND missing ${f})
   endif()
 endforeach()
-foreach(lib core volume segmentation haptic assessment planning)
+foreach(lib core volume segmentation haptic assessment planning batch)
   if(NOT EXISTS ${prefix}/lib/libvoxhap_${lib}.a)
     list(APPEND missing lib/libvoxhap_${lib}.a)
   endif()
