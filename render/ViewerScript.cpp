@@ -108,4 +108,61 @@ std::vector<ScriptStep> loadViewerScript(const std::filesystem::path& file)
     return parseViewerScript(readBoundedFile(file, "viewer script"), file.string());
 }
 
+ScriptPlayer::ScriptPlayer(std::vector<ScriptStep> steps, std::string origin, bool listening)
+    : mSteps(std::move(steps)), mOrigin(std::move(origin)), mListening(listening)
+{
+}
+
+bool ScriptPlayer::advance(Viewer& viewer, long poses, Clock::time_point now)
+{
+    while (!done()) {
+        const ScriptStep& s = mSteps[mNext];
+        if (s.kind == ScriptStep::Kind::Event) {
+            ++mNext;
+            if (!viewer.handle(s.event)) return false;
+            continue;
+        }
+        if (!mWaitStarted) {
+            mWaitStarted = now;
+            mPosesAtStart = poses;
+        }
+        const double waited = std::chrono::duration<double>(now - *mWaitStarted).count();
+        const bool finished = s.kind == ScriptStep::Kind::Sleep ? waited >= s.seconds : poses > mPosesAtStart;
+        if (!finished && s.kind == ScriptStep::Kind::WaitPose && waited >= s.seconds) {
+            throw IoError(mOrigin + ":" + std::to_string(s.line) + ": wait-pose: no needle pose within " +
+                std::to_string(s.seconds) + " s" + (poses == 0 && !mListening ? " (no --listen)" : ""));
+        }
+        if (!finished) return true;
+        mWaitStarted.reset();
+        ++mNext;
+    }
+    return true;
+}
+
+bool deliver(Viewer& viewer, const WindowInput& in)
+{
+    switch (in.kind) {
+    case WindowInput::Kind::Click:
+        return viewer.clickWindow(in.x, in.y);
+    case WindowInput::Kind::Scroll:
+        viewer.scrollWindow(in.x, in.y, in.steps);
+        return true;
+    case WindowInput::Kind::Motion:
+        viewer.dragWindow(in.x, in.y);
+        return true;
+    case WindowInput::Kind::Release:
+        viewer.releaseWindow();
+        return true;
+    case WindowInput::Kind::Key: {
+        ViewerEvent e;
+        e.kind = ViewerEvent::Kind::Key;
+        e.key = in.key;
+        return viewer.handle(e);
+    }
+    case WindowInput::Kind::Close:
+        return false;
+    }
+    return true;
+}
+
 } // namespace voxhap::render

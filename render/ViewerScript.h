@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file ViewerScript.h
-/// @brief Synthetic input for the viewer: a text file of events, one a line,
-/// played as if a user made them (tests, demos, headless snapshots).
+/// @brief Input for the viewer: a text file of events, one a line, played as
+/// if a user made them (tests, demos, headless snapshots) by ScriptPlayer, and
+/// a window's input delivered to the viewer.
 ///
 /// @code
 /// # comments and blank lines are skipped
@@ -16,8 +17,11 @@
 #pragma once
 
 #include "render/Viewer.h"
+#include "render/ViewerWindow.h"
 
+#include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -42,5 +46,35 @@ std::vector<ScriptStep> parseViewerScript(std::string_view text, const std::stri
 
 /// @brief Read and parse a script file. @throw IoError if unreadable; ValueError as above
 std::vector<ScriptStep> loadViewerScript(const std::filesystem::path& file);
+
+/// @brief Plays a script's steps one at a time, so that a window stays live
+/// while a step waits. Time and the count of needle poses received are the
+/// caller's (a clock and a pose stream), so that playback is the same with a
+/// window, headless, or in a test.
+class ScriptPlayer {
+public:
+    using Clock = std::chrono::steady_clock;
+    /// @p origin names the script in messages; @p listening: whether a pose
+    /// stream is open (a wait-pose's timeout says when it is not).
+    ScriptPlayer(std::vector<ScriptStep> steps, std::string origin, bool listening = false);
+    bool done() const { return mNext >= mSteps.size(); }
+    /// @brief Run steps until one must wait, at time @p now with @p poses
+    /// received so far: events go to @p viewer, a sleep waits its seconds, a
+    /// wait-pose waits for a pose after it began. @return false once a step quits
+    /// @throw IoError "<origin>:<line>: wait-pose: no needle pose within N s" when one times out
+    bool advance(Viewer& viewer, long poses, Clock::time_point now = Clock::now());
+
+private:
+    std::vector<ScriptStep> mSteps;
+    std::string mOrigin;
+    bool mListening;
+    std::size_t mNext = 0;
+    std::optional<Clock::time_point> mWaitStarted;
+    long mPosesAtStart = 0;
+};
+
+/// @brief A window's click, wheel, drag, release, key or close, delivered to
+/// @p viewer. @return false when it ends the viewer (a quit key, the window closed)
+bool deliver(Viewer& viewer, const WindowInput& in);
 
 } // namespace voxhap::render

@@ -24,13 +24,8 @@ struct Scene;
 } // namespace voxhap::haptic
 
 namespace voxhap::render {
-class DisplayGuard;
+struct PlanFiles;
 }
-
-namespace voxhap::planning {
-class Planner;
-struct TrajectoryReport;
-} // namespace voxhap::planning
 
 namespace voxhap::tools {
 
@@ -106,19 +101,7 @@ Action registerRegress(CLI::App& app);
 Action registerBatch(CLI::App& app);
 Action registerAssess(CLI::App& app);
 
-/// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
-struct PlanFiles {
-    std::string report, markups, views, plot; ///< views and plot empty when not written
-    std::string why;                          ///< why there is no plot
-    std::string why3d;                        ///< why views.png has no 3D view (no X display)
-};
-/// @brief report.json, paths.mrk.json, views.png (slices with the paths, when @p views)
-/// and force-depth.png (the first path's predicted profile) in @p outDir.
-/// @param display a display started earlier without waiting (render::DisplayGuard's
-///        wait = false), so that Xvfb came up while the caller loaded and planned;
-///        null: one is started here when the views need it.
-PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<planning::TrajectoryReport>& paths,
-    const nlohmann::json& report, const std::string& outDir, bool views, render::DisplayGuard* display = nullptr);
-void printPlanFiles(std::ostream& os, const PlanFiles& f);
+/// @brief The list of a plan's files, as `voxhap plan` and `voxhap demo` print it.
+void printPlanFiles(std::ostream& os, const render::PlanFiles& f);
 
 } // namespace voxhap::tools

@@ -12,6 +12,7 @@
 #include "haptic/scene/Scene.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
+#include "render/PlanOutputs.h"
 #include "segmentation/Segmentation.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
@@ -120,8 +121,8 @@ int run(const DemoOptions& o)
     report["pareto"] = nlohmann::json::array();
     for (const auto& p : found.pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     report["search"] = planning::searchJson(planner, found, k, sopt);
-    const PlanFiles plan =
-        writePlanOutputs(planner, found.ranked, report, (fs::path(o.outDir) / "plan").string(), true);
+    const render::PlanFiles plan =
+        render::writePlanOutputs(planner, found.ranked, report, (fs::path(o.outDir) / "plan").string(), true);
 
     // 5. The simulated insertion along the best path, at the scene's speed, to the
     //    first bone contact (the model renders bone as contact: §1.3).

@@ -97,53 +97,6 @@ private:
     long mSeen = 0;
 };
 
-/// Plays the script's steps one at a time, so that the window stays live while it waits.
-class ScriptPlayer {
-public:
-    ScriptPlayer(std::vector<render::ScriptStep> steps, std::string origin)
-        : mSteps(std::move(steps)), mOrigin(std::move(origin))
-    {
-    }
-    bool done() const { return mNext >= mSteps.size(); }
-    /// Run steps until one must wait; false once a step asks to quit.
-    /// @throw IoError when a wait-pose step times out
-    bool advance(render::Viewer& viewer, NeedleFeed& feed)
-    {
-        while (!done()) {
-            const render::ScriptStep& s = mSteps[mNext];
-            if (s.kind == render::ScriptStep::Kind::Event) {
-                ++mNext;
-                if (!viewer.handle(s.event)) return false;
-                continue;
-            }
-            if (!mWaitStarted) {
-                mWaitStarted = std::chrono::steady_clock::now();
-                mPosesAtStart = feed.poses();
-            }
-            const double waited = viewSecondsSince(*mWaitStarted);
-            const bool finished =
-                s.kind == render::ScriptStep::Kind::Sleep ? waited >= s.seconds : feed.poses() > mPosesAtStart;
-            if (!finished && s.kind == render::ScriptStep::Kind::WaitPose && waited >= s.seconds) {
-                throw IoError(mOrigin + ":" + std::to_string(s.line) + ": wait-pose: no needle pose within " +
-                    std::to_string(s.seconds) + " s" + (feed.poses() == 0 && !mListening ? " (no --listen)" : ""));
-            }
-            if (!finished) return true;
-            mWaitStarted.reset();
-            ++mNext;
-        }
-        return true;
-    }
-    void setListening(bool l) { mListening = l; }
-
-private:
-    std::vector<render::ScriptStep> mSteps;
-    std::string mOrigin;
-    std::size_t mNext = 0;
-    std::optional<std::chrono::steady_clock::time_point> mWaitStarted;
-    long mPosesAtStart = 0;
-    bool mListening = false;
-};
-
 nlohmann::json paneJson(const render::Viewer& v)
 {
     nlohmann::json panes = nlohmann::json::array();
@@ -173,8 +126,9 @@ int run(const ViewOptions& o)
     vo.labels = !o.noLabels;
     vo.planOut = o.save;
     if (!o.plan.empty()) vo.plan = planning::loadPlan(o.plan);
-    ScriptPlayer script(
-        o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script);
+    render::ScriptPlayer script(
+        o.script.empty() ? std::vector<render::ScriptStep>{} : render::loadViewerScript(o.script), o.script,
+        o.listen >= 0);
     const volume::TissueTable& table = tissueTable(o.common);
     const bool windowed = o.snapshot.empty();
     if (windowed) {
@@ -193,7 +147,6 @@ int run(const ViewOptions& o)
     std::unique_ptr<haptic::PoseReceiver> receiver;
     if (o.listen >= 0) {
         receiver = std::make_unique<haptic::PoseReceiver>(o.listen);
-        script.setListening(true);
         std::cerr << "voxhap view: listening for needle poses (OpenIGTLink TRANSFORM) on 127.0.0.1:" << receiver->port()
                   << '\n';
     }
@@ -223,35 +176,11 @@ int run(const ViewOptions& o)
         bool running = true;
         why = "quit";
         while (running && !InterruptGuard::interrupted()) {
-            for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15)) {
-                switch (in.kind) {
-                case render::WindowInput::Kind::Click:
-                    running = viewer.clickWindow(in.x, in.y) && running;
-                    break;
-                case render::WindowInput::Kind::Scroll:
-                    viewer.scrollWindow(in.x, in.y, in.steps);
-                    break;
-                case render::WindowInput::Kind::Motion:
-                    viewer.dragWindow(in.x, in.y);
-                    break;
-                case render::WindowInput::Kind::Release:
-                    viewer.releaseWindow();
-                    break;
-                case render::WindowInput::Kind::Key: {
-                    render::ViewerEvent e;
-                    e.kind = render::ViewerEvent::Kind::Key;
-                    e.key = in.key;
-                    running = viewer.handle(e) && running;
-                    break;
-                }
-                case render::WindowInput::Kind::Close:
-                    running = false;
-                    break;
-                }
-            }
+            for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15))
+                running = render::deliver(viewer, in) && running;
             feed.pump(viewer);
             viewer.settle(); // full quality once the 3D camera has stopped
-            if (win.mapped() && !script.done()) running = script.advance(viewer, feed) && running;
+            if (win.mapped() && !script.done()) running = script.advance(viewer, feed.poses()) && running;
             if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
                 why = "timeout";
                 break;
@@ -265,7 +194,7 @@ int run(const ViewOptions& o)
         feed.pump(viewer);
         bool running = true;
         while (running && !script.done() && !InterruptGuard::interrupted()) {
-            running = script.advance(viewer, feed);
+            running = script.advance(viewer, feed.poses());
             feed.pump(viewer);
             if (running && !script.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
             if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {

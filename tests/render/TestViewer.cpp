@@ -19,6 +19,7 @@
 #include "render/ViewerScript.h"
 #include "core/Errors.h"
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -324,6 +325,68 @@ TEST_F(ViewerTest, WindowClicksReachThePaneUnderThePointer)
     EXPECT_TRUE(v.clickWindow(int(c3.x()) + 5, int(c3.y()) + 5));
     EXPECT_EQ(v.point(), before);
     EXPECT_NE(v.lastMessage().find("3d pane"), std::string::npos);
+}
+
+TEST_F(ViewerTest, ScriptPlayerWaitsOnTheCallersClockAndPoses)
+{
+    // Time is given, never slept: the player's waits end exactly where the steps say.
+    Viewer v(*mVolume, mOpt, test::table());
+    using Clock = ScriptPlayer::Clock;
+    using std::chrono::milliseconds;
+    const Clock::time_point t0{};
+    ScriptPlayer play(
+        parseViewerScript("key Up\nsleep 0.5\nkey Up\nwait-pose 2\nkey Up\nkey q\nkey Up\n", "ev.txt"), "ev.txt");
+    const double z0 = v.point().z();
+    EXPECT_TRUE(play.advance(v, 0, t0)); // the first key, then the sleep begins
+    EXPECT_NEAR(v.point().z(), z0 + 1.0, 1e-9);
+    EXPECT_TRUE(play.advance(v, 0, t0 + milliseconds(499)));
+    EXPECT_NEAR(v.point().z(), z0 + 1.0, 1e-9) << "the sleep has 1 ms to go";
+    EXPECT_TRUE(play.advance(v, 0, t0 + milliseconds(500))); // the second key; the wait for a pose begins
+    EXPECT_NEAR(v.point().z(), z0 + 2.0, 1e-9);
+    EXPECT_TRUE(play.advance(v, 0, t0 + milliseconds(1500)));
+    EXPECT_NEAR(v.point().z(), z0 + 2.0, 1e-9) << "no pose yet";
+    // A pose arrives: the third key, then q ends the script before the last key.
+    EXPECT_FALSE(play.advance(v, 1, t0 + milliseconds(1600)));
+    EXPECT_NEAR(v.point().z(), z0 + 3.0, 1e-9);
+    EXPECT_FALSE(play.done());
+
+    // Control: no pose within the wait's limit is a failure naming the script's line.
+    ScriptPlayer lost(parseViewerScript("wait-pose 2\n", "ev.txt"), "ev.txt");
+    EXPECT_TRUE(lost.advance(v, 4, t0));
+    EXPECT_TRUE(lost.advance(v, 4, t0 + milliseconds(1999)));
+    try {
+        lost.advance(v, 4, t0 + milliseconds(2000));
+        ADD_FAILURE() << "the wait did not time out";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("ev.txt:1: wait-pose: no needle pose within 2"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST_F(ViewerTest, WindowInputIsDeliveredToThePaneAndCloseEndsTheViewer)
+{
+    Viewer v(*mVolume, mOpt, test::table());
+    const Vec3d p(mPhantom.centre.x(), -30, 20);
+    const Vec2d w = windowPixel(v, ViewKind::Sagittal, p);
+    WindowInput click;
+    click.kind = WindowInput::Kind::Click;
+    click.x = int(std::lround(w.x()));
+    click.y = int(std::lround(w.y()));
+    EXPECT_TRUE(deliver(v, click));
+    EXPECT_TRUE(nearVec(v.point(), p, 0.5 * v.frame(ViewKind::Sagittal).pixelMm));
+    WindowInput key;
+    key.kind = WindowInput::Kind::Key;
+    key.key = "Up";
+    const double z = v.point().z();
+    EXPECT_TRUE(deliver(v, key));
+    EXPECT_NE(v.point(), p) << "the key reached the viewer";
+    EXPECT_NEAR(std::abs(v.point().z() - z) + std::abs(v.point().x() - p.x()), 1.0, 1e-9)
+        << "one slice in the pane last used";
+    WindowInput close;
+    close.kind = WindowInput::Kind::Close;
+    EXPECT_FALSE(deliver(v, close));
+    key.key = "q";
+    EXPECT_FALSE(deliver(v, key));
 }
 
 TEST_F(ViewerTest, DistanceToolShowsItsLengthInTheStatus)
