@@ -95,4 +95,17 @@ nlohmann::json toJson(const SessionAssessment& a)
         {"metrics", std::move(metrics)}};
 }
 
+std::vector<double> modelFeatures(const SessionMetrics& s, const LogisticModel& m, const std::string& modelName)
+{
+    std::vector<double> x;
+    for (const std::string& f : m.features) {
+        const auto it = s.values.find(f);
+        if (it == s.values.end() || !it->second)
+            throw ValueError(
+                s.file + ": " + f + ": not measured in this session, and the model " + modelName + " needs it");
+        x.push_back(*it->second);
+    }
+    return x;
+}
+
 } // namespace voxhap::assessment

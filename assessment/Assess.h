@@ -5,6 +5,7 @@
 /// file) over the defaults (Metrics.h), each with its source.
 #pragma once
 
+#include "assessment/Classifier.h"
 #include "assessment/Metrics.h"
 #include "haptic/scene/Scene.h"
 
@@ -56,5 +57,9 @@ SessionAssessment assessSession(const SessionMetrics& s, const std::vector<Refer
 /// @brief {"file", "scene", "flagged", "metrics": [{"metric", "value", "unit", "min", "max", "verdict", "source",
 /// "range_from"}]}
 nlohmann::json toJson(const SessionAssessment& a);
+
+/// @brief The features @p m reads, from a session's metrics, in the model's order.
+/// @throw ValueError naming the session's file and a feature it did not measure (and @p modelName)
+std::vector<double> modelFeatures(const SessionMetrics& s, const LogisticModel& m, const std::string& modelName);
 
 } // namespace voxhap::assessment

@@ -4,11 +4,14 @@
 
 #include "assessment/SimulatedCohort.h"
 
+#include "assessment/LabelledCsv.h"
 #include "assessment/Metrics.h"
+#include "core/AtomicFile.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/Session.h"
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <random>
 
@@ -83,6 +86,43 @@ nlohmann::json simulateSession(const haptic::SceneInstance& inst, const Simulate
     j["ticks"] = total;
     j["dropped_records"] = loop.droppedRecords();
     return j;
+}
+
+nlohmann::json writeSimulatedCohort(
+    const haptic::Scene& scene, const volume::TissueTable& table, int perClass, const std::filesystem::path& out)
+{
+    namespace fs = std::filesystem;
+    const haptic::SceneInstance inst(scene, nullptr, table);
+    CohortSpec spec;
+    spec.perClass = perClass;
+    spec.approachMm = scene.approachMm;
+    std::vector<nlohmann::json> sessions;
+    for (const SimulatedTrainee& t : simulatedCohort(spec)) sessions.push_back(simulateSession(inst, t));
+    // Columns: the catalogue's metrics that every simulated session measured.
+    std::vector<std::string> columns;
+    for (const DefaultRange& m : defaultRanges()) {
+        if (m.key == "duration_s" || m.key == "pose_faults") continue; // the session's length; faults are not skill
+        bool all = true;
+        for (const auto& j : sessions) all = all && j.contains(m.key) && !j.at(m.key).is_null();
+        if (all) columns.push_back(m.key);
+    }
+    std::vector<LabelledRow> rows;
+    OutputSet outputs; // every session's metrics.json and the table, together
+    for (const auto& j : sessions) {
+        const std::string id = j.at("trainee").get<std::string>();
+        rows.push_back({id, id.rfind("reckless", 0) == 0 ? 1 : 0, j});
+        const std::string text = j.dump(2) + "\n";
+        fs::create_directories(out / id);
+        outputs.addStream(out / id / "metrics.json", [text](std::ostream& os) { os << text; });
+    }
+    const std::string table_ = labelledCsvText(rows, columns,
+        "simulated cohort: careful (label 0) and reckless (label 1) simulated hands on scene " + scene.name +
+            "; not real trainees");
+    outputs.addStream(out / "labelled.csv", [table_](std::ostream& os) { os << table_; });
+    outputs.commit();
+    return {{"simulated_cohort",
+        {{"scene", scene.name}, {"sessions", sessions.size()}, {"labelled_csv", (out / "labelled.csv").string()},
+            {"note", "simulated hands, not real trainees"}}}};
 }
 
 } // namespace voxhap::assessment

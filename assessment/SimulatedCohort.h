@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -52,5 +53,14 @@ std::vector<SimulatedTrainee> simulatedCohort(const CohortSpec& spec);
 /// simulated time; the result has the keys of serve's metrics.json ("scene",
 /// "device": "sim-hand", the trainee metrics, "simulated": true, "trainee": id).
 nlohmann::json simulateSession(const haptic::SceneInstance& inst, const SimulatedTrainee& t);
+
+/// @brief `voxhap assess --simulate-cohort`: @p perClass careful and as many
+/// reckless simulated hands on @p scene, written as @p out/<id>/metrics.json and
+/// @p out/labelled.csv (label 1 reckless; the columns: every assessed metric all
+/// sessions measured, but the duration and pose faults, which are not skill),
+/// together. @return {"simulated_cohort": {scene, sessions, labelled_csv, note}}
+/// @throw IoError naming the file
+nlohmann::json writeSimulatedCohort(
+    const haptic::Scene& scene, const volume::TissueTable& table, int perClass, const std::filesystem::path& out);
 
 } // namespace voxhap::assessment

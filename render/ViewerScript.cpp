@@ -5,10 +5,12 @@
 #include "core/BoundedRead.h"
 
 #include "core/Errors.h"
+#include "render/ImageFile.h"
 
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 namespace voxhap::render {
 
@@ -163,6 +165,62 @@ bool deliver(Viewer& viewer, const WindowInput& in)
         return false;
     }
     return true;
+}
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+} // namespace
+
+ViewerRunEnd runInWindow(Viewer& viewer, ViewerWindow& window, ScriptPlayer& script, const ViewerRunHooks& hooks)
+{
+    const auto start = std::chrono::steady_clock::now();
+    ViewerRunEnd end{0, "quit"};
+    bool running = true;
+    while (running && !hooks.stop()) {
+        for (const WindowInput& in : window.poll(viewer.dirty() ? 0 : 15)) running = deliver(viewer, in) && running;
+        const long poses = hooks.pump(viewer);
+        viewer.settle(); // full quality once the 3D camera has stopped
+        if (window.mapped() && !script.done()) running = script.advance(viewer, poses) && running;
+        if (hooks.timeoutS > 0 && secondsSince(start) >= hooks.timeoutS) {
+            end.why = "timeout";
+            break;
+        }
+        if (viewer.dirty()) {
+            window.show(viewer.render());
+            ++end.frames;
+        }
+    }
+    return end;
+}
+
+ViewerRunEnd runToSnapshot(
+    Viewer& viewer, ScriptPlayer& script, const ViewerRunHooks& hooks, const std::filesystem::path& png)
+{
+    const auto start = std::chrono::steady_clock::now();
+    ViewerRunEnd end{0, "script done"};
+    long poses = hooks.pump(viewer);
+    bool running = true;
+    while (running && !script.done() && !hooks.stop()) {
+        running = script.advance(viewer, poses);
+        poses = hooks.pump(viewer);
+        if (running && !script.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        if (hooks.timeoutS > 0 && secondsSince(start) >= hooks.timeoutS) {
+            end.why = "timeout";
+            break;
+        }
+    }
+    hooks.pump(viewer);
+    viewer.settle(std::chrono::steady_clock::time_point::max()); // the snapshot at full quality
+    // A window shows a failed save in its status bar; a headless run fails on it.
+    if (!viewer.saveError().empty()) throw IoError(viewer.saveError());
+    writePng(viewer.render(), png);
+    ++end.frames;
+    return end;
 }
 
 } // namespace voxhap::render

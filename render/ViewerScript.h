@@ -21,6 +21,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -76,5 +77,30 @@ private:
 /// @brief A window's click, wheel, drag, release, key or close, delivered to
 /// @p viewer. @return false when it ends the viewer (a quit key, the window closed)
 bool deliver(Viewer& viewer, const WindowInput& in);
+
+/// @brief What a run of the viewer needs from its caller.
+struct ViewerRunHooks {
+    /// Hands the latest streamed needle pose to the viewer; returns the poses received so far.
+    std::function<long(Viewer&)> pump = [](Viewer&) { return 0L; };
+    std::function<bool()> stop = [] { return false; }; ///< true: end now (an interrupt)
+    double timeoutS = 0;                               ///< end after this long; 0: never
+};
+
+/// @brief How a run of the viewer ended.
+struct ViewerRunEnd {
+    long frames = 0; ///< images drawn
+    std::string why; ///< "quit", "script done" or "timeout" (and "" when stopped)
+};
+
+/// @brief The viewer in @p window until a key or the window ends it, the
+/// timeout or stop(): input delivered, the script played once the window is
+/// mapped, the 3D pane settled to full quality, a frame shown when it changed.
+ViewerRunEnd runInWindow(Viewer& viewer, ViewerWindow& window, ScriptPlayer& script, const ViewerRunHooks& hooks);
+
+/// @brief Headless: the script played to its end (or the timeout, or stop()),
+/// then the window image at full quality written to @p png.
+/// @throw IoError when a plan save the script asked for failed, or the PNG cannot be written
+ViewerRunEnd runToSnapshot(
+    Viewer& viewer, ScriptPlayer& script, const ViewerRunHooks& hooks, const std::filesystem::path& png);
 
 } // namespace voxhap::render

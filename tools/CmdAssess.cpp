@@ -75,58 +75,6 @@ std::string rangeText(const ReferenceRange& r)
     return os.str();
 }
 
-/// The features a model reads, from a session's metrics. @throw ValueError naming the file and the feature
-std::vector<double> featuresOf(const SessionMetrics& s, const LogisticModel& m, const std::string& modelName)
-{
-    std::vector<double> x;
-    for (const std::string& f : m.features) {
-        const auto it = s.values.find(f);
-        if (it == s.values.end() || !it->second)
-            throw ValueError(
-                s.file + ": " + f + ": not measured in this session, and the model " + modelName + " needs it");
-        x.push_back(*it->second);
-    }
-    return x;
-}
-
-/// Writes a simulated cohort: OUT/<id>/metrics.json per simulated trainee and OUT/labelled.csv.
-nlohmann::json writeCohort(const AssessOptions& o, const volume::TissueTable& table)
-{
-    const haptic::Scene scene = loadSceneSayingDefaults(o.scene);
-    const haptic::SceneInstance inst(scene, nullptr, table);
-    CohortSpec spec;
-    spec.perClass = o.cohort;
-    spec.approachMm = scene.approachMm;
-    std::vector<nlohmann::json> sessions;
-    for (const SimulatedTrainee& t : simulatedCohort(spec)) sessions.push_back(simulateSession(inst, t));
-    // Columns: the catalogue's metrics that every simulated session measured.
-    std::vector<std::string> columns;
-    for (const DefaultRange& m : defaultRanges()) {
-        if (m.key == "duration_s" || m.key == "pose_faults") continue; // the session's length; faults are not skill
-        bool all = true;
-        for (const auto& j : sessions) all = all && j.contains(m.key) && !j.at(m.key).is_null();
-        if (all) columns.push_back(m.key);
-    }
-    std::vector<LabelledRow> rows;
-    OutputSet outputs;
-    for (const auto& j : sessions) {
-        const std::string id = j.at("trainee").get<std::string>();
-        rows.push_back({id, id.rfind("reckless", 0) == 0 ? 1 : 0, j});
-        const std::string text = j.dump(2) + "\n";
-        fs::create_directories(fs::path(o.out) / id);
-        outputs.addStream(fs::path(o.out) / id / "metrics.json", [text](std::ostream& out) { out << text; });
-    }
-    const std::string table_ = labelledCsvText(rows, columns,
-        "simulated cohort: careful (label 0) and reckless (label 1) simulated hands on scene " + scene.name +
-            "; not real trainees");
-    outputs.addStream(fs::path(o.out) / "labelled.csv", [table_](std::ostream& out) { out << table_; });
-    outputs.commit();
-    return {{"simulated_cohort",
-        {{"scene", scene.name}, {"sessions", sessions.size()},
-            {"labelled_csv", (fs::path(o.out) / "labelled.csv").string()},
-            {"note", "simulated hands, not real trainees"}}}};
-}
-
 int run(const AssessOptions& o, const CLI::App& cmd)
 {
     if (o.sessions.empty() && o.train.empty() && o.cohort == 0)
@@ -139,7 +87,7 @@ int run(const AssessOptions& o, const CLI::App& cmd)
     const volume::TissueTable& table = tissueTable(o.common);
     nlohmann::json report = nlohmann::json::object();
 
-    if (o.cohort > 0) report.update(writeCohort(o, table));
+    if (o.cohort > 0) report.update(writeSimulatedCohort(loadSceneSayingDefaults(o.scene), table, o.cohort, o.out));
 
     std::optional<LogisticModel> model;
     std::string modelName;
@@ -193,7 +141,7 @@ int run(const AssessOptions& o, const CLI::App& cmd)
             const SessionAssessment a = assessSession(s, rangesOf[key]);
             nlohmann::json j = toJson(a);
             if (model) {
-                const double p = model->probability(featuresOf(s, *model, modelName));
+                const double p = model->probability(modelFeatures(s, *model, modelName));
                 j["classifier"] = {{"probability_label_1", p}, {"predicted_label", p >= 0.5 ? 1 : 0}};
             }
             flaggedSessions += a.flagged() > 0;

@@ -9,7 +9,6 @@
 
 #include "haptic/igtl/PoseStream.h"
 #include "render/Display.h"
-#include "render/ImageFile.h"
 #include "planning/PlanFile.h"
 #include "render/Viewer.h"
 #include "render/ViewerScript.h"
@@ -19,14 +18,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <thread>
 
 namespace voxhap::tools {
 
@@ -59,11 +56,6 @@ std::pair<int, int> parseSize(const std::string& text)
         throw UsageError("--size: '" + text + "' is not WIDTHxHEIGHT with each side in 100..8192");
     }
     return {w, h};
-}
-
-double viewSecondsSince(std::chrono::steady_clock::time_point t)
-{
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 /// Hands the latest streamed pose to the viewer, and says how the stream is doing.
@@ -168,47 +160,22 @@ int run(const ViewOptions& o)
     render::Viewer viewer(v, vo, table);
 
     const InterruptGuard guard;
-    const auto start = std::chrono::steady_clock::now();
-    long frames = 0;
-    std::string why = "script done";
+    render::ViewerRunHooks hooks;
+    hooks.pump = [&feed](render::Viewer& v) {
+        feed.pump(v);
+        return feed.poses();
+    };
+    hooks.stop = [] { return InterruptGuard::interrupted(); };
+    hooks.timeoutS = o.timeoutS;
+    render::ViewerRunEnd end;
     if (windowed) {
         render::ViewerWindow win(width, height, "voxhap view: " + o.input);
-        bool running = true;
-        why = "quit";
-        while (running && !InterruptGuard::interrupted()) {
-            for (const render::WindowInput& in : win.poll(viewer.dirty() ? 0 : 15))
-                running = render::deliver(viewer, in) && running;
-            feed.pump(viewer);
-            viewer.settle(); // full quality once the 3D camera has stopped
-            if (win.mapped() && !script.done()) running = script.advance(viewer, feed.poses()) && running;
-            if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
-                why = "timeout";
-                break;
-            }
-            if (viewer.dirty()) {
-                win.show(viewer.render());
-                ++frames;
-            }
-        }
+        end = render::runInWindow(viewer, win, script, hooks);
     } else {
-        feed.pump(viewer);
-        bool running = true;
-        while (running && !script.done() && !InterruptGuard::interrupted()) {
-            running = script.advance(viewer, feed.poses());
-            feed.pump(viewer);
-            if (running && !script.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-            if (o.timeoutS > 0 && viewSecondsSince(start) >= o.timeoutS) {
-                why = "timeout";
-                break;
-            }
-        }
-        feed.pump(viewer);
-        viewer.settle(std::chrono::steady_clock::time_point::max()); // the snapshot at full quality
-        // A window shows a failed save in its status bar; a headless run fails on it.
-        if (!viewer.saveError().empty()) throw IoError(viewer.saveError());
-        render::writePng(viewer.render(), o.snapshot);
-        ++frames;
+        end = render::runToSnapshot(viewer, script, hooks, o.snapshot);
     }
+    const long frames = end.frames;
+    std::string why = end.why;
     if (InterruptGuard::interrupted()) why = "interrupted";
 
     if (o.common.json) {
