@@ -5,6 +5,8 @@
 #include "core/Format.h"
 #include "tools/InfoReport.h"
 
+#include "tools/FusionReport.h"
+
 #include "volume/phantoms/Phantoms.h"
 
 #include <cstdio>
@@ -89,6 +91,7 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
         if (k != volume::kLayersKey) extra[k] = v;
     }
     j["metadata"] = extra;
+    if (info.metadata.fusion) j["fusion"] = volume::toJson(*info.metadata.fusion);
     return j;
 }
 
@@ -159,6 +162,10 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
                << std::right << std::setw(12) << l.voxels << " voxels " << std::setw(10) << fixed(l.volumeMl, 2)
                << " ml\n";
         }
+    }
+    if (info.metadata.fusion) {
+        os << "registration (MR onto CT, voxhap fuse)\n";
+        printFusionRecord(os, *info.metadata.fusion, "  ");
     }
     if (info.layers) {
         os << "layers along the reference path (depth from its entry):\n";

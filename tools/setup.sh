@@ -26,6 +26,8 @@ packages=(
   libopenimageio-dev openimageio-tools
   # DICOM
   libgdcm-dev
+  # CT-MR registration (ITK 5.2's v4 framework); elastix, the independent reference of its tests and bench
+  libinsighttoolkit5-dev elastix
   # gzip-encoded .nrrd; NIfTI headers (qform/sform)
   zlib1g-dev libnifti2-dev
   # device link

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "core/Math.h"
+#include "volume/FusionRecord.h"
 
 #include <openvdb/math/Transform.h>
 
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -102,6 +104,8 @@ struct VolumeMetadata {
     /// Further keys (saved as "voxhap.<key>"), e.g. "layers": a phantom's layer
     /// table along its reference path, as JSON.
     std::map<std::string, std::string> extra;
+    /// A fused CT and MR (registration/Fusion.h): the registration and the channels' sources.
+    std::optional<FusionRecord> fusion;
 
     bool operator==(const VolumeMetadata&) const = default;
 };

@@ -8,6 +8,7 @@
 #include "core/Errors.h"
 #include "volume/Grids.h"
 
+#include <nlohmann/json.hpp>
 #include <openvdb/io/File.h>
 
 #include <algorithm>
@@ -577,6 +578,7 @@ void saveVdb(const Volume& v, const std::filesystem::path& file)
     putString(meta, "intensity_units", md.intensityUnits);
     putString(meta, "mr_weighting", md.mrWeighting);
     for (const auto& [key, value] : md.extra) putString(meta, "extra." + key, value);
+    if (md.fusion) putString(meta, "fusion", toJson(*md.fusion).dump());
     meta.insertMeta("voxhap.index_min", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().min.data())));
     meta.insertMeta("voxhap.index_max", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().max.data())));
 
@@ -685,6 +687,15 @@ Volume loadVdb(const std::filesystem::path& file, std::uint64_t memoryCapBytes)
     md.t1Units = getString(*meta, "t1_units", "ms");
     md.intensityUnits = getString(*meta, "intensity_units", "arbitrary units");
     md.mrWeighting = getString(*meta, "mr_weighting");
+    if (const std::string fusion = getString(*meta, "fusion"); !fusion.empty()) {
+        const auto j = nlohmann::json::parse(fusion, nullptr, false);
+        if (j.is_discarded()) throw IoError(file.string() + ": voxhap.fusion: not JSON");
+        try {
+            md.fusion = fusionRecordFromJson(j, file.string());
+        } catch (const ValueError& e) {
+            throw IoError(e.what());
+        }
+    }
     const std::string extraPrefix = std::string(kPrefix) + "extra.";
     for (auto it = meta->beginMeta(); it != meta->endMeta(); ++it) {
         if (it->first.rfind(extraPrefix, 0) == 0) {
