@@ -10,6 +10,7 @@
 #include "RenderFixtures.h"
 
 #include "common/BuiltinTable.h"
+#include "common/Prerequisites.h"
 #include "common/Tolerances.h"
 #include "render/Display.h"
 #include "render/OrbitCamera.h"
@@ -102,8 +103,7 @@ class Interactive3d : public testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        sDisplay = new DisplayGuard();
-        if (!sDisplay->available()) GTEST_FAIL() << "no display for the 3D view: " << sDisplay->why();
+        sDisplay = new DisplayGuard(); // SetUp skips or fails each test without one
     }
     static void TearDownTestSuite()
     {
@@ -112,7 +112,7 @@ protected:
     }
     void SetUp() override
     {
-        if (!sDisplay->available()) GTEST_SKIP() << sDisplay->why();
+        VOXHAP_REQUIRE(sDisplay->available(), "a display for the 3D view (xvfb): " << sDisplay->why());
         volume::GridSpec grid;
         grid.spacing = Vec3d(0.5, 0.5, 0.5);
         mVolume = std::make_unique<volume::Volume>(mPhantom.make(grid));

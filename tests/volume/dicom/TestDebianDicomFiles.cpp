@@ -6,7 +6,7 @@
 /// objects a folder may hold (RT dose, plan and structure set, a structured
 /// report, a segmentation, an ECG waveform).
 
-#include "common/SharedData.h"
+#include "common/Prerequisites.h"
 #include "common/TempDirTest.h"
 
 #include "volume/dicom/DicomSeries.h"
@@ -42,7 +42,7 @@ protected:
 
 TEST_F(DebianDicomFiles, OneImageInEveryEncodingGivesTheSameVoxels)
 {
-    VOXHAP_REQUIRE_DIR(kFiles);
+    VOXHAP_REQUIRE(fs::is_directory(kFiles), "pydicom's test files (python3-pydicom) at " << kFiles);
     const Volume reference = loadDicom({folder("le", {"MR_small.dcm"})}, keepEveryVoxel());
     ASSERT_TRUE(reference.has(Channel::Intensity) || reference.has(Channel::T1));
     const auto values = [](const Volume& v) { return v.has(Channel::Intensity) ? intensityGrid(v) : t1Grid(v); };
@@ -62,7 +62,7 @@ TEST_F(DebianDicomFiles, OneImageInEveryEncodingGivesTheSameVoxels)
 
 TEST_F(DebianDicomFiles, AFolderOfEverythingLoadsItsImagesAndSaysWhatItSetAside)
 {
-    VOXHAP_REQUIRE_DIR(kFiles);
+    VOXHAP_REQUIRE(fs::is_directory(kFiles), "pydicom's test files (python3-pydicom) at " << kFiles);
     const fs::path dir = folder("mixed",
         {"CT_small.dcm", "MR_small.dcm", "MR_truncated.dcm", "rtdose.dcm", "rtplan.dcm", "rtstruct.dcm", "test-SR.dcm",
             "liver_1frame.dcm", "waveform_ecg.dcm"});
