@@ -84,9 +84,12 @@ function(voxhap_add_test name)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest_main)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  # The same definitions on every test target, so that they share precompiled headers.
+  # VOXHAP_PYTHON: Debian's python3, for tests that take pydicom as their reference.
   target_compile_definitions(${name} PRIVATE
     VOXHAP_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-    VOXHAP_BINARY_DIR="${PROJECT_BINARY_DIR}")
+    VOXHAP_BINARY_DIR="${PROJECT_BINARY_DIR}"
+    VOXHAP_PYTHON="${VOXHAP_PYTHON}")
   voxhap_warnings(${name})
   voxhap_glue_optimization(${name})
   if(NOT ARG_PCH STREQUAL "none") # core's tests: the test header brings OpenVDB, which core does not link
