@@ -619,6 +619,7 @@ ClosedFormCheck closedForm(
     const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples)
 {
     const Lookup in{recorded, current};
+    if (c.sweep) return ClosedFormCheck::none("a palpation sweep (§7 has no profile across the back)");
     const std::string model = in.text("scene.model"), layersFrom = in.text("scene.layers");
     if (model == "lumbar-puncture" && layersFrom == "table") return lumbarPunctureStack(c, in, samples);
     if (model == "conci" && layersFrom == "table") return conciProfile(c, in, samples);
