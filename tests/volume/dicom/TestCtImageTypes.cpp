@@ -218,7 +218,8 @@ TEST_F(CtImageTypes, ThinAddAndThickSlicesAtDistinctPositionsLoadAsOneStack)
             }
         }
     }
-    EXPECT_EQ(box.max.z() - box.min.z(), int(std::floor(169.5 / 3.0))) << "3 mm planes from the first slice to the last";
+    EXPECT_EQ(box.max.z() - box.min.z(), int(std::floor(169.5 / 3.0)))
+        << "3 mm planes from the first slice to the last";
     EXPECT_GT(compared, 5000);
     EXPECT_GT(blended, 2000) << "the thick part is compared too";
 }
