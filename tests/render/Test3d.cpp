@@ -6,6 +6,8 @@
 
 #include "RenderFixtures.h"
 
+#include "common/Prerequisites.h"
+
 #include "render/Display.h"
 #include "render/RenderVolume.h"
 #include "render/VolumeView3d.h"
@@ -35,8 +37,7 @@ class View3d : public testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        sDisplay = new DisplayGuard();
-        if (!sDisplay->available()) GTEST_FAIL() << "no display for the 3D view: " << sDisplay->why();
+        sDisplay = new DisplayGuard(); // SetUp skips or fails each test without one
     }
     static void TearDownTestSuite()
     {
@@ -45,7 +46,7 @@ protected:
     }
     void SetUp() override
     {
-        if (!sDisplay->available()) GTEST_SKIP() << sDisplay->why();
+        VOXHAP_REQUIRE(sDisplay->available(), "a display for the 3D view (xvfb): " << sDisplay->why());
         mPhantom.graded = true;
         mPhantom.radius = 6.0;
         mPhantom.box = {Vec3d(-12, -30, -14), Vec3d(22, 0, 18)};
