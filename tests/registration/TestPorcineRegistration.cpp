@@ -7,6 +7,7 @@
 /// elastix to the final metric recorded with them, then measures the mean
 /// distance between the two transforms over the CT body's voxels (HU > −500).
 
+#include "common/Prerequisites.h"
 #include "common/SharedData.h"
 #include "common/TempDirTest.h"
 #include "registration/Registration.h"
@@ -80,10 +81,7 @@ TEST_F(PorcineRegistration, AgreesWithElastixOverTheBody)
 {
     VOXHAP_REQUIRE_DIR(porcineDir() / "ct");
     VOXHAP_REQUIRE_DIR(porcineDir() / "mr-t2");
-    if (!onPath("elastix") || !onPath("transformix")) {
-        if (test::sharedDataRequired()) FAIL() << "elastix and transformix are needed (Debian package elastix)";
-        GTEST_SKIP() << "elastix not installed (skipped locally; CI requires it)";
-    }
+    VOXHAP_REQUIRE(onPath("elastix") && onPath("transformix"), "elastix and transformix (Debian package elastix)");
     const volume::Volume ct = volume::loadVolume(porcineDir() / "ct");
     const volume::Volume mr = volume::loadVolume(porcineDir() / "mr-t2");
     ASSERT_TRUE(mr.has(volume::Channel::Intensity)) << "a T2-weighted MR is an intensity grid";
