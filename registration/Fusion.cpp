@@ -46,7 +46,9 @@ void checkFusionInputs(const Volume& ct, const Volume& mr, const FusionOptions& 
     }
     if (ctIsMr) {
         throw ValueError(o.ctFile + ": given as the CT, but it is an MR (" +
-            (ct.metadata().mrWeighting.empty() ? std::string("no hu grid") : ct.metadata().mrWeighting) + ")");
+            (ct.metadata().mrWeighting ? std::string(volume::mrWeightingName(*ct.metadata().mrWeighting))
+                                       : std::string("no hu grid")) +
+            ")");
     }
     if (!ct.has(Channel::Hu)) throw ValueError(o.ctFile + ": given as the CT, but it has no hu grid");
     if (mrIsCt) throw ValueError(o.mrFile + ": given as the MR, but it is a CT (an hu grid, no MR channel)");
@@ -99,7 +101,14 @@ FusionResult fuse(const Volume& ct, const Volume& mr, const FusionOptions& o)
 
     volume::VolumeMetadata& md = out.volume.metadata();
     md = ct.metadata();
+    // The MR's facts that decide its material: what it is, what its t1 grid
+    // holds, and the field strength whose T1 law applies (physics.md §5.4).
     md.mrWeighting = mr.metadata().mrWeighting;
+    md.t1Kind = mr.metadata().t1Kind;
+    md.fieldStrength = mr.metadata().fieldStrength;
+    md.fieldStrengthSource = mr.metadata().fieldStrengthSource;
+    md.fieldStrengthTesla = mr.metadata().fieldStrengthTesla;
+    md.bodyWidthMm = mr.metadata().bodyWidthMm;
     md.description = "CT " + o.ctFile + " with MR " + o.mrFile + " registered onto it";
     volume::FusionRecord rec;
     const RegistrationResult& r = out.registration;

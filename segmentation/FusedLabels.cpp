@@ -37,7 +37,8 @@ FusedLabelReport labelFused(
     out.ct = segment(v, table, options); // the hu grid is preferred: CT rules
     if (!v.has(Channel::T1)) {
         out.note = v.has(Channel::Intensity) ? "the MR is " +
-                (v.metadata().mrWeighting.empty() ? std::string("of unknown weighting") : v.metadata().mrWeighting) +
+                (v.metadata().mrWeighting ? std::string(volume::mrWeightingName(*v.metadata().mrWeighting))
+                                          : std::string("of unknown weighting")) +
                 ", not T1: the labels come from the CT alone"
                                              : "no MR channel: the labels come from the CT alone";
         return out;

@@ -1,23 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file CmdFuse.cpp
 /// @brief `voxhap fuse CT MR --out patient.vdb`: one patient's CT and MR in one
-/// volume (registration/Fusion.h, segmentation/FusedLabels.h), with its ITK
-/// transform file beside it.
+/// volume (fusion/PatientFusion.h), with its ITK transform file beside it.
 
 #include "tools/Cli.h"
 #include "tools/FusionReport.h"
 #include "tools/LoadOptions.h"
 
-#include "core/AtomicFile.h"
 #include "core/Format.h"
-#include "registration/Fusion.h"
-#include "segmentation/FusedLabels.h"
-#include "volume/VolumeFile.h"
-#include "volume/dicom/DicomIdentity.h"
+#include "fusion/PatientFusion.h"
+#include "haptic/materials/MaterialField.h"
 
 #include <nlohmann/json.hpp>
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -36,89 +31,55 @@ struct FuseOptions {
     std::string start = "auto";
 };
 
-/// One input loaded, with what its DICOM headers say of the patient and frame.
-struct Input {
-    volume::Volume volume;
-    volume::DicomLoadReport report;
-    volume::DicomIdentity identity;
-    std::string source; ///< "DICOM series #2 (CT, 205 slices)"; empty for files
-};
-
-Input load(const std::string& path, ReaderOptions opts, const std::string& series, std::size_t volumeIndex, bool bar)
-{
-    opts.series = series;
-    opts.volume = volumeIndex;
-    volume::DicomLoadReport report;
-    volume::Volume v = loadVolumeWithProgress(path, opts, bar, &report);
-    Input in{std::move(v), report, {}, {}};
-    if (!report.series.files.empty()) {
-        try {
-            in.identity = volume::readDicomIdentity(report.series.files.front());
-        } catch (const IoError&) {
-            // The loader read the file; an identity it cannot parse is unknown, not a refusal.
-        }
-        in.source = "DICOM series #" + std::to_string(report.series.index) + ", " + report.series.modality + ", " +
-            std::to_string(report.series.slices) + " slices" +
-            (report.volume ? ", volume " + std::to_string(report.volume) : "");
-    }
-    return in;
-}
-
 int run(const FuseOptions& o)
 {
     if (volume::formatOf(o.out) != volume::VolumeFormat::Vdb) {
         throw UsageError("--out '" + o.out + "': expected a .vdb file name");
     }
     const bool bar = stderrIsTerminal() && !o.common.json;
-    ReaderOptions mrReader = o.reader;
     ReaderOptions ctReader = o.reader;
     ctReader.t1Map = ctReader.t1Weighted = false; // MR declarations are the MR's
-    Input ct = load(o.ct, ctReader, o.ctSeries, 0, bar);
-    Input mr = load(o.mr, mrReader, o.mrSeries, o.mrVolume, bar);
+    ctReader.series = o.ctSeries;
+    ctReader.volume = 0;
+    ReaderOptions mrReader = o.reader;
+    mrReader.series = o.mrSeries;
+    mrReader.volume = o.mrVolume;
 
-    registration::FusionOptions fo;
-    fo.ctFile = o.ct;
-    fo.mrFile = o.mr;
-    fo.ctSource = ct.source;
-    fo.mrSource = mr.source;
+    fusion::PatientFusionOptions fo;
+    fo.ct = o.ct;
+    fo.mr = o.mr;
+    fo.ctLoad = loadOptions(ctReader, bar);
+    fo.mrLoad = loadOptions(mrReader, bar);
     fo.registration.affine = o.affine;
-    if (!o.differentPatients) {
-        registration::checkSamePatient(
-            {ct.identity.patientId, ct.identity.patientName}, {mr.identity.patientId, mr.identity.patientName}, fo);
-    }
-    const bool sameFrame =
-        !ct.identity.frameOfReferenceUid.empty() && ct.identity.frameOfReferenceUid == mr.identity.frameOfReferenceUid;
-    fo.registration.start = o.start == "geometry" || (o.start == "auto" && sameFrame)
-        ? registration::StartRule::Geometry
-        : registration::StartRule::Search;
+    fo.start = o.start == "search" ? fusion::Start::Search
+        : o.start == "geometry"    ? fusion::Start::Geometry
+                                   : fusion::Start::Auto;
+    fo.differentPatients = o.differentPatients;
+    fo.table = &tissueTable(o.common);
     if (bar) {
         fo.registration.progress = [](double f, std::string_view step) {
             std::cerr << "\rregistering: " << step << " " << int(f * 100) << "%   " << std::flush;
         };
     }
-    registration::FusionResult fused = registration::fuse(ct.volume, mr.volume, fo);
-    if (bar) std::cerr << "\r\033[K" << std::flush;
-    ct.volume = volume::Volume(volume::Geometry{}, volume::IndexBox{}); // the inputs' memory back
-    mr.volume = volume::Volume(volume::Geometry{}, volume::IndexBox{});
-
-    const auto& table = tissueTable(o.common);
-    const volume::FieldStrength field = volume::FieldStrength::T1_5; // PLACEHOLDER until the typed field strength lands
-    const segmentation::FusedLabelReport labels = segmentation::labelFused(fused.volume, table, field);
-    auto& record = *fused.volume.metadata().fusion;
-    record.mrPath = std::filesystem::absolute(o.mr).lexically_normal().string();
-    record.mrSeries = o.mrSeries;
-    record.mrVolume = std::int64_t(o.mrVolume);
-    record.channelSources["label"] = "CT rules on hu; " +
-        (labels.note.empty()
-                ? "fat and muscle from the MR's T1 where it exists (split at " + fixed(labels.thresholdMs, 0) + " ms)"
-                : labels.note);
-
-    std::filesystem::path tfm = o.out;
-    tfm.replace_extension(".tfm");
-    OutputSet outputs;
-    outputs.add(o.out, [&](const std::filesystem::path& tmp) { volume::saveVolume(fused.volume, tmp); });
-    outputs.addStream(tfm, [&](std::ostream& os) { os << fused.transformText; });
-    outputs.commit();
+    fusion::PatientFusion fused = [&] {
+        try {
+            fusion::PatientFusion f = fusion::fusePatient(fo);
+            clearProgress();
+            return f;
+        } catch (...) {
+            clearProgress();
+            throw;
+        }
+    }();
+    const std::filesystem::path tfm = fusion::writeFusion(fused, o.out);
+    const volume::FusionRecord& record = *fused.volume.metadata().fusion;
+    const segmentation::FusedLabelReport& labels = fused.labels;
+    // Where the needle's damping will come from (physics.md §5.5): the same
+    // material field simulate and plan build from this file.
+    haptic::MaterialOptions mo;
+    mo.needs.damping = true;
+    const haptic::DampingSources sources =
+        haptic::MaterialField(fused.volume, tissueTable(o.common), mo).dampingSources();
 
     if (o.common.json) {
         nlohmann::json j = volume::toJson(record);
@@ -129,14 +90,19 @@ int run(const FuseOptions& o)
         j["registration_seconds"] = fused.registration.seconds;
         j["labels_changed_by_mr"] = labels.changed;
         j["soft_tissue_voxels_with_t1"] = labels.withT1;
+        j["damping_from_t1_voxels"] = sources.fromT1Voxels;
+        j["damping_from_table_voxels"] = sources.fromTableVoxels;
+        j["damping_from_t1_fraction"] = sources.t1Fraction();
         std::cout << j.dump(2) << '\n';
         return 0;
     }
-    std::cout << "CT   " << o.ct << (ct.source.empty() ? "" : " (" + ct.source + ")") << '\n';
-    std::cout << "MR   " << o.mr << (mr.source.empty() ? "" : " (" + mr.source + ")") << '\n';
+    std::cout << "CT   " << o.ct << (fused.ctSource.empty() ? "" : " (" + fused.ctSource + ")") << '\n';
+    std::cout << "MR   " << o.mr << (fused.mrSource.empty() ? "" : " (" + fused.mrSource + ")") << '\n';
     printFusionRecord(std::cout, record, "  ");
     std::cout << "labels: " << labels.withT1 << " of " << labels.softTissueVoxels << " soft-tissue voxels have T1, "
               << labels.changed << " relabelled by it\n";
+    std::cout << "damping: " << fixed(100.0 * sources.t1Fraction(), 1) << " % of the body from T1 (Eq. 4), "
+              << fixed(100.0 * (1.0 - sources.t1Fraction()), 1) << " % from the tissue table by label\n";
     std::cout << "time: registration " << fixed(fused.registration.seconds, 2) << " s (orientation search "
               << fixed(fused.registration.searchSeconds, 2) << " s), resampling " << fixed(fused.resample.seconds, 2)
               << " s\n";

@@ -13,6 +13,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cmath>
+#include <sstream>
 
 namespace voxhap::haptic {
 
@@ -23,11 +24,25 @@ using namespace voxhap::volume;
 /// The bone threshold without labels: about 150 HU (physics.md §5.2 [chosen]).
 constexpr double kBoneHuThreshold = 150.0;
 
-FieldStrength fieldOf(const Volume& v, const MaterialOptions& o)
+/// The field strength of the T1 law (MaterialOptions::field), or nothing when
+/// the metadata record a field that has no law.
+std::optional<FieldStrength> fieldOf(const Volume& v, const MaterialOptions& o)
 {
     if (o.field) return *o.field;
-    const auto it = v.metadata().extra.find("field_strength");
-    return (it != v.metadata().extra.end() && it->second == "3T") ? FieldStrength::T3 : FieldStrength::T1_5;
+    const VolumeMetadata& md = v.metadata();
+    if (md.fieldStrength) return *md.fieldStrength;
+    if (md.fieldStrengthTesla) return std::nullopt;
+    return FieldStrength::T1_5;
+}
+
+/// Why T1 cannot be read for a field without a law, for messages.
+std::string noLawReason(const VolumeMetadata& md)
+{
+    std::ostringstream s;
+    s << "the MR's field strength (" << md.fieldStrengthTesla.value_or(0.0) << " T, from the "
+      << factSourceName(md.fieldStrengthSource)
+      << ") is neither 1.5 T nor 3 T, the fields the T1 damping law is fitted at (physics.md §5.4)";
+    return s.str();
 }
 
 void checkLabelRange(const LabelGrid& labels)
@@ -167,7 +182,8 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
 {
     initializeOpenVdb();
     fillPerLabel(table);
-    mLaw = t1DampingLaw(fieldOf(v, options));
+    const std::optional<FieldStrength> field = fieldOf(v, options);
+    mLaw = t1DampingLaw(field.value_or(FieldStrength::T1_5));
     const auto labels = labelGrid(v);
     if (labels) {
         checkLabelRange(*labels);
@@ -178,18 +194,23 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
         if (!labels && !v.has(Channel::T1)) {
             if (v.has(Channel::Intensity)) {
                 // MR that is not T1 (MrMaterial.h): never read as T1 silently.
-                const std::string w = v.metadata().mrWeighting.empty() ? "unknown" : v.metadata().mrWeighting;
+                const std::string w(mrWeightingName(v.metadata().mrWeighting.value_or(MrWeightingKind::Unknown)));
                 throw ValueError("material field: tissue damping needs T1 or tissue labels, and this MR (" + w +
                     ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
                     "image with --t1-weighted or a T1 map with --t1-map");
             }
             throw ValueError("material field: tissue damping needs a label or t1 grid (segment the volume first)");
         }
+        const bool t1 = v.has(Channel::T1) && v.metadata().t1Units == "ms";
+        if (t1 && !field && !labels) {
+            throw ValueError("material field: tissue damping needs T1 with a law or tissue labels, and " +
+                noLawReason(v.metadata()) + ": segment it (labels carry the tissue's damping)");
+        }
         BetaRule rule;
         rule.perLabel = &mPerLabel;
         rule.law = mLaw;
         rule.haveLabels = labels != nullptr;
-        rule.haveT1 = v.has(Channel::T1) && v.metadata().t1Units == "ms";
+        rule.haveT1 = t1 && field; // without a law, fat and muscle take the table's β as every other label
         for (const char* name : {"fat", "muscle"}) {
             if (const Tissue* t = table.find(name); t && t->id < kMaxLabels) rule.fromT1[std::size_t(t->id)] = true;
         }

@@ -32,8 +32,10 @@ struct MaterialNeeds {
 /// @brief How image values map to mechanics.
 struct MaterialOptions {
     MaterialNeeds needs;
-    /// T1 law of this field strength (physics.md §5.4); by default the one the
-    /// volume's metadata names ("field_strength"), else 1.5 T.
+    /// T1 law of this field strength (physics.md §5.4); by default the volume's
+    /// VolumeMetadata::fieldStrength, else 1.5 T when the metadata record none.
+    /// A field they record as neither 1.5 T nor 3 T has no law: T1 is not read,
+    /// and damping comes from the labels alone (refused without labels).
     std::optional<volume::FieldStrength> field;
     ModulusLaw modulusLaw = ModulusLaw::Kopperdahl2002; ///< QCT density, as HU gives (§5.3)
     double tipAreaMm2 = 1.27;                           ///< needle tip area [mm²]: 18 G (physics.md §1.3)

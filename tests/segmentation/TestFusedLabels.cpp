@@ -93,7 +93,7 @@ TEST(FusedLabels, AnMrThatIsNotT1LeavesTheCtLabelsAndSaysWhy)
     auto intensity = volume::FloatGrid::create(volume::kAirIntensity);
     intensity->tree().topologyUnion(volume::huGrid(phantom)->tree());
     v.setGrid(Channel::Intensity, intensity);
-    v.metadata().mrWeighting = "T2-weighted";
+    v.metadata().mrWeighting = volume::MrWeightingKind::T2Weighted;
     const FusedLabelReport r = labelFused(v, table, FieldStrength::T3);
     EXPECT_EQ(r.note, "the MR is T2-weighted, not T1: the labels come from the CT alone");
     EXPECT_EQ(r.changed, 0);

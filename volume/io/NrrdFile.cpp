@@ -122,8 +122,8 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
                      : c == Channel::Intensity ? v.metadata().intensityUnits
                                                : std::string("tissue id"))
           << "\n";
-        if (!v.metadata().mrWeighting.empty()) h << "voxhap_mr_weighting:=" << v.metadata().mrWeighting << "\n";
-        if (!v.metadata().modality.empty()) h << "voxhap_modality:=" << v.metadata().modality << "\n";
+        // The typed facts (VolumeMetadata.h), one line each: their texts hold no line break.
+        for (const auto& [name, text] : metadataFacts(v.metadata())) h << "voxhap_" << name << ":=" << text << "\n";
     }
     h << "\n";
 
@@ -197,15 +197,25 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     src.finish(); // the whole compressed stream must check out, not just the bytes the voxels took
     auto& md = v.metadata();
     md.source = file.filename().string();
-    if (auto it = h.keyValues.find("voxhap_modality"); it != h.keyValues.end()) md.modality = it->second;
     if (auto it = h.keyValues.find("voxhap_units"); it != h.keyValues.end()) {
         (channel == Channel::T1                 ? md.t1Units
                 : channel == Channel::Intensity ? md.intensityUnits
                                                 : md.huUnits) = it->second;
     }
-    if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end())
-        md.extra["declared_channel"] = it->second;
-    if (auto it = h.keyValues.find("voxhap_mr_weighting"); it != h.keyValues.end()) md.mrWeighting = it->second;
+    for (const auto& [key, text] : h.keyValues) {
+        if (key.rfind("voxhap_", 0) != 0) continue;
+        try {
+            setMetadataFact(md, std::string_view(key).substr(7), text, name);
+        } catch (const ValueError& e) {
+            throw IoError(e.what());
+        }
+    }
+    // A voxhap NRRD that names its channel hu says it holds CT numbers: the
+    // loaders take it as CT without looking at the values.
+    if (channel == Channel::Hu && h.keyValues.count("voxhap_channel")) {
+        md.modalitySource = FactSource::Header;
+        md.modalityReason = "declared by the file's voxhap_channel:=hu";
+    }
     return v;
 }
 

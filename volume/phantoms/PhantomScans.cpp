@@ -113,20 +113,27 @@ Volume phantomMrScan(
     mr.setGrid(Channel::T1, grid);
     VolumeMetadata& md = mr.metadata();
     md.modality = "MR";
-    md.mrWeighting = "T1 map";
+    md.mrWeighting = MrWeightingKind::T1Map;
+    md.t1Kind = T1Kind::Map;
+    recordFieldStrength(md, scan.field == FieldStrength::T3 ? 3.0 : 1.5, FactSource::Generator, scan.field);
     md.description = "MR T1 map of the " + model.kind + " phantom, moved, with Rician noise";
     return mr;
 }
 
-void writePhantomMrScan(const Volume& mr, FieldStrength field, const std::filesystem::path& nrrd)
+std::string phantomMrSidecar(FieldStrength field)
 {
-    saveNrrd(mr, Channel::T1, nrrd, NrrdEncoding::Gzip, NrrdKeys::Plain);
     nlohmann::json sidecar;
     sidecar["Modality"] = "MR";
     sidecar["MagneticFieldStrength"] = field == FieldStrength::T3 ? 3.0 : 1.5;
     sidecar["ImageType"] = {"DERIVED", "PRIMARY", "T1MAP"};
     sidecar["SeriesDescription"] = "T1 map (voxhap phantom)";
-    writeStreamAtomically(bidsSidecarPath(nrrd), [&](std::ostream& out) { out << sidecar.dump(2) << '\n'; });
+    return sidecar.dump(2) + '\n';
+}
+
+void writePhantomMrScan(const Volume& mr, FieldStrength field, const std::filesystem::path& nrrd)
+{
+    saveNrrd(mr, Channel::T1, nrrd, NrrdEncoding::Gzip, NrrdKeys::Plain);
+    writeStreamAtomically(bidsSidecarPath(nrrd), [&](std::ostream& out) { out << phantomMrSidecar(field); });
 }
 
 } // namespace voxhap::volume

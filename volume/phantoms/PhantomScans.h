@@ -45,6 +45,9 @@ Volume phantomCtScan(const PhantomModel& model, const GridSpec& grid, const Tiss
 Volume phantomMrScan(
     const PhantomModel& model, const TissueTable& table, const PhantomMrScan& scan, PhantomScanTruth* truth = nullptr);
 
+/// @brief The BIDS sidecar of a phantom MR: an MR T1 map at @p field, as JSON text.
+std::string phantomMrSidecar(FieldStrength field);
+
 /// @brief Write @p mr as a scanner's export: a plain .nrrd (no voxhap keys) and a
 /// BIDS sidecar beside it declaring an MR T1 map at its field strength.
 /// @throw IoError naming the file

@@ -9,10 +9,11 @@
 #include "common/Layers.h"
 #include "common/Tolerances.h"
 
+#include "haptic/devices/ReplayDevice.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/Session.h"
-#include "haptic/servo/SimulatedDevices.h"
 
 #include <gtest/gtest.h>
 

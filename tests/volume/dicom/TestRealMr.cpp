@@ -45,7 +45,7 @@ TEST(RealMr, MprageIsT1WeightedWithItsAirInactiveAndNotPinnedAsATrunk)
     VOXHAP_REQUIRE_DIR(voxhap::test::mprageDir());
     DicomLoadReport report;
     const Volume v = loadDicom({voxhap::test::mprageDir()}, {}, &report);
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     // A head: the per-scan rule would pin white matter as fat (physics.md
     // §5.1 pins a trunk's fat and muscle), so it stays an intensity grid and
     // says why (BodyWidth.h).
@@ -53,7 +53,8 @@ TEST(RealMr, MprageIsT1WeightedWithItsAirInactiveAndNotPinnedAsATrunk)
     ASSERT_TRUE(v.has(Channel::Intensity));
     const std::string why = v.metadata().extra.at("t1_norm_refused");
     EXPECT_NE(why.find("mm across"), std::string::npos) << why;
-    const int width = std::stoi(v.metadata().extra.at("body_width_mm"));
+    ASSERT_TRUE(v.metadata().bodyWidthMm);
+    const int width = int(std::lround(*v.metadata().bodyWidthMm));
     EXPECT_GT(width, 131); // ANSUR II head breadth 131-180 mm; a fiducial and the ears add a little
     EXPECT_LT(width, 240);
     // Issue 27 item 7's targets: at most half the voxels active, sparse at
@@ -101,8 +102,10 @@ TEST(RealMr, FieldMapIsNeverT1AndNeverOneVolumeOfTwoEchoes)
         const Volume v = loadDicom({dir}, o, &report);
         EXPECT_FALSE(v.has(Channel::T1));
         ASSERT_TRUE(v.has(Channel::Intensity));
-        EXPECT_EQ(v.metadata().mrWeighting, "field map");
-        EXPECT_NE(v.metadata().extra.at("volume").find("echo " + std::to_string(echo)), std::string::npos);
+        EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::FieldMap);
+        ASSERT_TRUE(v.metadata().volumeChoice);
+        EXPECT_EQ(v.metadata().volumeChoice->index, int(echo));
+        EXPECT_NE(v.metadata().volumeChoice->label.find("echo " + std::to_string(echo)), std::string::npos);
         slices += std::stoul(v.metadata().extra.at("slices"));
     }
     EXPECT_EQ(slices, 36u); // the two echoes hold every file once
@@ -187,15 +190,15 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     // Every volume loads, b = 1000 after the b = 0.
     o.volume = 13;
     const Volume last = loadDicom({dir}, o);
-    EXPECT_NE(last.metadata().extra.at("volume").find("13 of 13 (b=1000)"), std::string::npos)
-        << last.metadata().extra.at("volume");
+    ASSERT_TRUE(last.metadata().volumeChoice);
+    EXPECT_EQ(volumeChoiceText(*last.metadata().volumeChoice), "13 of 13 (b=1000)");
 }
 
 TEST(RealMr, Flash2dIsT1WeightedAndAHead)
 {
     VOXHAP_REQUIRE_DIR(voxhap::test::flash2dDir());
     const Volume v = loadDicom({voxhap::test::flash2dDir()});
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     EXPECT_FALSE(v.has(Channel::T1)); // a head, as above
     EXPECT_TRUE(v.has(Channel::Intensity));
     EXPECT_EQ(v.indexBox().dims(), voxhap::Vec3i(256, 256, 35));
