@@ -17,6 +17,8 @@
 #include <optional>
 #include <sstream>
 
+#include <tbb/task_group.h>
+
 namespace voxhap::registration {
 
 using volume::Channel;
@@ -39,6 +41,8 @@ constexpr double kBarelyMoved = 1e-3;
 constexpr int kSearchIterations = 40;
 constexpr int kSearchKept = 3;
 constexpr int kRefineIterations = 60;
+/// Parallel lanes of the orientation search: the machine's two cores.
+constexpr int kSearchLanes = 2;
 
 /// The metric's window on CT numbers: air to dense cortical bone. Metal and
 /// contrast beyond it would spread the histogram's bins over values no MR shows.
@@ -223,27 +227,38 @@ RegistrationResult registerMrToCt(const Volume& ct, const Volume& mr, const Regi
         const auto ts = Clock::now();
         progress(0.05, "orientation search");
         const Level& coarse = levels.front();
-        const detail::MetricPair coarsePair(coarse.ct, coarse.mr, kMaskMarginMm);
         const Vec3d ctCentre = coarse.ct.bodyCentroid();
         const Vec3d mrCentre = coarse.mr.bodyCentroid();
         detail::StageSettings s = settingsAt(o, 0, coarse);
         s.iterations = kSearchIterations;
-        std::vector<AffineMap> runs;
-        for (const Mat3d& r : axisTurns()) {
-            OrientationCandidate c;
-            c.rotation = r;
-            c.name = describeRotation(r);
-            const AffineMap from = AffineMap::rotationAbout(r, ctCentre, mrCentre - ctCentre);
-            try {
-                const detail::StageResult run = coarsePair.run(from, ctCentre, s);
-                c.metric = run.finalMetric;
-                runs.push_back(run.map);
-            } catch (const ValueError&) {
-                c.metric = 0.0; // no overlap at all: the worst value mutual information takes
-                runs.push_back(from);
-            }
-            result.candidates.push_back(c);
+        const std::vector<Mat3d> turns = axisTurns();
+        std::vector<AffineMap> runs(turns.size());
+        result.candidates.resize(turns.size());
+        // The candidates are independent: kSearchLanes lanes run them, each
+        // with its own copy of the coarsest level's ITK images (ITK's objects
+        // are not shared between threads) and a single-threaded metric, so the
+        // answer does not depend on the lanes' timing.
+        tbb::task_group lanes;
+        for (int lane = 0; lane < kSearchLanes; ++lane) {
+            lanes.run([&, lane] {
+                const detail::MetricPair coarsePair(coarse.ct, coarse.mr, kMaskMarginMm);
+                for (std::size_t i = std::size_t(lane); i < turns.size(); i += kSearchLanes) {
+                    OrientationCandidate& c = result.candidates[i];
+                    c.rotation = turns[i];
+                    c.name = describeRotation(turns[i]);
+                    const AffineMap from = AffineMap::rotationAbout(turns[i], ctCentre, mrCentre - ctCentre);
+                    try {
+                        const detail::StageResult run = coarsePair.run(from, ctCentre, s);
+                        c.metric = run.finalMetric;
+                        runs[i] = run.map;
+                    } catch (const ValueError&) {
+                        c.metric = 0.0; // no overlap at all: the worst value mutual information takes
+                        runs[i] = from;
+                    }
+                }
+            });
         }
+        lanes.wait();
         std::vector<std::size_t> order(result.candidates.size());
         std::iota(order.begin(), order.end(), std::size_t(0));
         std::stable_sort(order.begin(), order.end(),

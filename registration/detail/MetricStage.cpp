@@ -27,7 +27,34 @@ namespace {
 using ImageF = itk::Image<float, 3>;
 using MaskImage = itk::Image<unsigned char, 3>;
 using MaskObject = itk::ImageMaskSpatialObject<3>;
-using Metric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
+using MattesMetric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
+
+/// ITK's Mattes mutual information on one work unit. With more, each work unit
+/// fills its own derivative buffer and adds it to the shared one under a
+/// try-lock, in whatever order the units reach it: the sums, and from them the
+/// optimiser's path, change from run to run (the porcine pair's answer moved by
+/// a millimetre). `SetMaximumNumberOfWorkUnits` caps the threads, not the work
+/// units, so the units are set here on the metric's own threaders. The
+/// orientation search runs its candidates in parallel instead (Registration.cpp).
+class SerialMattes : public MattesMetric {
+public:
+    ITK_DISALLOW_COPY_AND_MOVE(SerialMattes);
+    using Self = SerialMattes;
+    using Superclass = MattesMetric;
+    using Pointer = itk::SmartPointer<Self>;
+    using ConstPointer = itk::SmartPointer<const Self>;
+    itkNewMacro(Self);
+    itkTypeMacro(SerialMattes, MattesMutualInformationImageToImageMetricv4);
+
+protected:
+    SerialMattes()
+    {
+        this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+        this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+    }
+    ~SerialMattes() override = default;
+};
+using Metric = SerialMattes;
 using PointSet = Metric::FixedSampledPointSetType;
 using Optimizer = itk::RegularStepGradientDescentOptimizerv4<double>;
 using Rigid = itk::Euler3DTransform<double>;
@@ -206,6 +233,7 @@ struct MetricPair::Impl {
         m->SetFixedSampledPointSet(samples(s.samples, s.seed));
         m->SetUseSampledPointSet(true);
         m->SetVirtualDomainFromImage(fixed);
+        m->SetMaximumNumberOfWorkUnits(1); // and one thread for it (SerialMattes says why)
         m->Initialize();
         return m;
     }
@@ -260,11 +288,12 @@ StageResult MetricPair::run(const AffineMap& start, const Vec3d& centre, const S
         auto metric = mImpl->metric(xform.GetPointer(), settings);
         r.startMetric = metric->GetValue();
         auto opt = Optimizer::New();
+        opt->SetNumberOfWorkUnits(1);
         opt->SetMetric(metric);
         opt->SetScales(scalesFor(settings.kind, mImpl->radius));
         opt->SetLearningRate(settings.stepMm);
         opt->SetMinimumStepLength(settings.minimumStepMm);
-        opt->SetRelaxationFactor(0.5);
+        opt->SetRelaxationFactor(settings.relaxation);
         opt->SetGradientMagnitudeTolerance(1e-12);
         opt->SetNumberOfIterations(itk::SizeValueType(settings.iterations));
         opt->SetDoEstimateLearningRateAtEachIteration(false);

@@ -24,11 +24,17 @@ enum class StageKind {
 
 struct StageSettings {
     StageKind kind = StageKind::Rigid;
-    int iterations = 200;          ///< the optimiser's limit
-    int samples = 4000;            ///< fixed-image body samples, drawn once per stage
-    int bins = 32;                 ///< histogram bins of the mutual information
-    double stepMm = 2.0;           ///< the optimiser's first step, as a shift of the body [mm]
-    double minimumStepMm = 0.01;   ///< it stops once its step falls below this [mm]
+    int iterations = 200;        ///< the optimiser's limit
+    int samples = 4000;          ///< fixed-image body samples, drawn once per stage
+    int bins = 32;               ///< histogram bins of the mutual information
+    double stepMm = 2.0;         ///< the optimiser's first step, as a shift of the body [mm]
+    double minimumStepMm = 0.01; ///< it stops once its step falls below this [mm]
+    /// The step's factor each time the gradient turns back [chosen: ITK's 0.5
+    /// stopped the finest level of the porcine pair after 10–20 iterations,
+    /// wherever the sampled metric's noise first turned it; 0.8 lets it average
+    /// over three times as many, and its answer moved half a millimetre closer
+    /// to elastix's on every seed of elastix tried].
+    double relaxation = 0.8;
     std::uint32_t seed = 20261127; ///< the samples' generator: the same run gives the same answer
 };
 

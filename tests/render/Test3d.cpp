@@ -13,11 +13,13 @@
 #include "render/VolumeView3d.h"
 #include "core/Errors.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <unistd.h>
 
 namespace voxhap::render {
@@ -241,6 +243,12 @@ TEST(Display, AStartBegunWithoutWaitingIsFinishedByWaitOrStoppedUnwaited)
     const int before = xvfbChildren();
     {
         DisplayGuard guard(10.0, false);
+        // Forked at once; its name reads Xvfb once the child has exec'd, which a
+        // loaded machine may delay: poll for it (a guard that never started one
+        // fails after the deadline).
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+        while (xvfbChildren() != before + 1 && std::chrono::steady_clock::now() < deadline)
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
         EXPECT_EQ(xvfbChildren(), before + 1) << "the server is started at once";
     }
     EXPECT_EQ(xvfbChildren(), before) << "stopped and reaped (a zombie still counts)";
