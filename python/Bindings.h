@@ -25,6 +25,8 @@ void bindHaptic(py::module_& m);
 void bindPlanning(py::module_& m);
 /// @brief The submodule voxhap.batch: cohorts of jobs run by the voxhap program (batch/Batch.h).
 void bindBatch(py::module_& m);
+/// @brief CT and MR fusion (built with the registration library).
+void bindFusion(py::module_& m);
 
 /// @brief A JSON value as the Python value json.loads gives (dict, list, float, ...).
 py::object toPython(const nlohmann::json& j);

@@ -53,6 +53,9 @@ PYBIND11_MODULE(_voxhap, m)
     python::bindServo(m);
     python::bindPlanning(m);
     python::bindBatch(m);
+#ifdef VOXHAP_PYTHON_WITH_FUSION
+    python::bindFusion(m);
+#endif
 #ifdef VOXHAP_PYTHON_WITH_IGTL
     // Device kinds of the libraries this module links, by their explicit call (DeviceSpec.h says why).
     haptic::registerIgtlDevice();

@@ -58,6 +58,7 @@ struct CaseReport {
     std::vector<std::string> peakDiffs;
     std::vector<std::string> inputDiffs; ///< "skin.cutting_force 2 → 2.1 N"
     std::optional<double> closedFormMaxDeltaN;
+    std::string closedForm;  ///< "closed form: R1", or "no closed form: <why>" (ClosedFormCheck::line)
     std::string digest;      ///< of this run's profile (CaseRunner.h)
     std::string png;         ///< the failing case's plot, when drawn
     std::string plotProblem; ///< why it was not drawn (gnuplot missing or failing)

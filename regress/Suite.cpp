@@ -136,6 +136,20 @@ Case parseCase(
         if (!k.script.empty() && (k.speedMmPerS || k.depthMm))
             i.fail("script", "a script gives the motion: speed_mm_per_s and depth_mm do not apply");
     }
+    if (c.has("palpation_sweep")) {
+        if (c.has("insertion")) c.fail("palpation_sweep", "a sweep is its own motion: give no insertion");
+        Fields w = c.sub("palpation_sweep");
+        PalpationSweep s;
+        s.from = w.vec3("from");
+        s.to = w.vec3("to");
+        s.pressMm = w.number("press_mm", s.pressMm, true);
+        s.speedMmPerS = w.number("speed_mm_per_s", s.speedMmPerS, true);
+        s.aboveMm = w.number("above_mm", s.aboveMm, true);
+        if ((s.to - s.from).norm() < 1e-6) w.fail("to", "must differ from from: a sweep moves across the skin");
+        k.sweep = s;
+        // The skin map is the servo model's (SceneInstance): a sweep runs what the servo loop runs.
+        if (c.string("strategy", "servo") != "servo") c.fail("strategy", "a palpation sweep runs the servo's model");
+    }
     k.strategy = c.string("strategy", k.strategy);
     if (std::find(kStrategies.begin(), kStrategies.end(), k.strategy) == kStrategies.end()) {
         std::string names;

@@ -50,6 +50,18 @@ struct VolumeSpec {
 inline const std::vector<std::string> kStrategies = {
     "servo", "exact-voxel", "exact-trilinear", "march-trilinear", "march-nearest"};
 
+/// @brief A palpation sweep across the back (a case kind of its own): the
+/// fingertip comes down onto the skin at @ref from, presses @ref pressMm in along
+/// the scene's path direction, slides to @ref to at that depth and lifts, at a
+/// constant speed. The profile is the push out of the skin against the distance
+/// travelled; the scene must turn palpation on.
+struct PalpationSweep {
+    Vec3d from{0, 0, 0}, to{0, 0, 0}; ///< points on the skin [mm, LPS]
+    double pressMm = 2.0;             ///< indentation below them, along the path direction [mm]
+    double speedMmPerS = 10.0;        ///< along the whole motion [mm/s]
+    double aboveMm = 5.0;             ///< the motion starts and ends this far outside the skin [mm]
+};
+
 /// @brief One regression case.
 struct Case {
     std::string name;                          ///< unique; [a-z0-9._-]; also the baseline's file name
@@ -60,6 +72,7 @@ struct Case {
     std::string entryLandmark, targetLandmark; ///< override the scene's landmarks
     std::optional<double> speedMmPerS, depthMm; ///< else the scene's
     std::string script;                         ///< motion script CSV (relative to the suite); empty: constant speed
+    std::optional<PalpationSweep> sweep;        ///< a palpation sweep instead of an insertion
     std::string strategy = "servo";
     double sampleMm = 0.2; ///< spacing of the stored profile samples along the depth [mm]
     Tolerance tolerance;

@@ -100,6 +100,7 @@ Action registerPlan(CLI::App& app);
 Action registerRegress(CLI::App& app);
 Action registerBatch(CLI::App& app);
 Action registerAssess(CLI::App& app);
+Action registerFuse(CLI::App& app);
 
 /// @brief The list of a plan's files, as `voxhap plan` and `voxhap demo` print it.
 void printPlanFiles(std::ostream& os, const render::PlanFiles& f);

@@ -196,10 +196,12 @@ Action registerServe(CLI::App& app)
     // The devices of libraries that add kinds, by their explicit call (DeviceSpec.h says why).
     haptic::registerIgtlDevice();
     auto o = std::make_shared<ServeOptions>();
+    std::string names; // the palpation scenes among them: the back felt before the needle
+    for (const auto& n : haptic::builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
     CLI::App* cmd = app.add_subcommand("serve",
         "Run the haptic servo loop in real time against a device; Ctrl-C stops "
         "and writes the session and trainee metrics");
-    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name")->required();
+    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name (" + names + ")")->required();
     cmd->add_option("--device", o->device,
         "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion), "
         "igtl[:PORT] (an OpenIGTLink server on loopback, default port 18944) or replay:FILE (a recorded "

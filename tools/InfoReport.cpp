@@ -5,6 +5,10 @@
 #include "core/Format.h"
 #include "tools/InfoReport.h"
 
+#include "tools/FusionReport.h"
+
+#include "volume/phantoms/Phantoms.h"
+
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -100,8 +104,9 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
     // The typed facts by their names (the layers are above), then the notes.
     Json facts = Json::object();
     for (const auto& [k, v] : volume::metadataFacts(info.metadata)) {
-        if (k != "modality" && k != "mr_weighting" && k != "layers") facts[k] = v;
+        if (k != "modality" && k != "mr_weighting" && k != "layers" && k != "fusion") facts[k] = v;
     }
+    if (info.metadata.fusion) j["fusion"] = volume::toJson(*info.metadata.fusion);
     for (const auto& [k, v] : info.metadata.extra) facts[k] = v;
     j["metadata"] = facts;
     return j;
@@ -175,6 +180,10 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
                << std::right << std::setw(12) << l.voxels << " voxels " << std::setw(10) << fixed(l.volumeMl, 2)
                << " ml\n";
         }
+    }
+    if (info.metadata.fusion) {
+        os << "registration (MR onto CT, voxhap fuse)\n";
+        printFusionRecord(os, *info.metadata.fusion, "  ");
     }
     if (info.layers) {
         os << "layers along the reference path (depth from its entry):\n";

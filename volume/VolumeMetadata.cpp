@@ -299,6 +299,7 @@ std::vector<std::pair<std::string, std::string>> metadataFacts(const VolumeMetad
     }
     if (md.phantomLayers) put("layers", layersText(*md.phantomLayers));
     if (!md.landmarks.empty()) put("landmarks", landmarksText(md.landmarks));
+    if (md.fusion) put("fusion", toJson(*md.fusion).dump());
     return out;
 }
 
@@ -340,6 +341,10 @@ bool setMetadataFact(VolumeMetadata& md, std::string_view name, const std::strin
         md.phantomLayers = parseLayers(text, where, name);
     } else if (name == "landmarks") {
         md.landmarks = parseLandmarks(text, where, name);
+    } else if (name == "fusion") {
+        const auto j = nlohmann::json::parse(text, nullptr, false);
+        if (j.is_discarded()) throw ValueError(where + ": fusion: not JSON");
+        md.fusion = fusionRecordFromJson(j, where);
     } else {
         return false;
     }

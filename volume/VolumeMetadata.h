@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/Math.h"
+#include "volume/FusionRecord.h"
 
 #include <map>
 #include <optional>
@@ -179,6 +180,8 @@ struct VolumeMetadata {
     /// Display only: further notes (saved as "voxhap.extra.<key>"), e.g. how
     /// the MR background was removed. Code never decides on them.
     std::map<std::string, std::string> extra;
+    /// A fused CT and MR (fusion/PatientFusion.h): the registration and the channels' sources.
+    std::optional<FusionRecord> fusion;
 
     bool operator==(const VolumeMetadata&) const = default;
 };
@@ -196,7 +199,7 @@ void recordFieldStrength(VolumeMetadata& md, std::optional<double> tesla, FactSo
 /// "modality_source", "modality_reason", "mr_weighting", "t1_kind",
 /// "field_strength", "field_strength_source", "field_strength_tesla",
 /// "body_width_mm", "series_uid", "volume", "volume_count", "volume_label",
-/// "layers" (JSON), "landmarks" (JSON). Source, description and units are not
+/// "layers" (JSON), "landmarks" (JSON), "fusion" (JSON, FusionRecord.h). Source, description and units are not
 /// among them: each file format keeps its own keys for those.
 std::vector<std::pair<std::string, std::string>> metadataFacts(const VolumeMetadata& md);
 /// @brief Set the fact @p name from its text.

@@ -63,9 +63,12 @@ struct BetaRule {
     bool haveLabels = false, haveT1 = false;
 
     bool usesT1(int label) const { return haveT1 && (!haveLabels || fromT1[std::size_t(label)]); }
-    float operator()(int label, float t1) const
+    /// @param t1 the voxel's T1, or nothing where the t1 grid is inactive: outside
+    ///        the MR's field of view or body in a fused volume (§5.5), where the
+    ///        table's value by label stands in
+    float operator()(int label, std::optional<float> t1) const
     {
-        if (usesT1(label)) return float(law.dampingNsPerMm2(t1));
+        if (t1 && usesT1(label)) return float(law.dampingNsPerMm2(*t1));
         const double b = (*perLabel)[std::size_t(label)].dampingNsPerMm2;
         return std::isfinite(b) ? float(b) : 0.0f;
     }
@@ -79,7 +82,13 @@ struct SourceReader {
     {
     }
     int label(const openvdb::Coord& c) { return labelAcc ? labelAcc->getValue(c) : 1; }
-    float t1(const openvdb::Coord& c) { return t1Acc ? t1Acc->getValue(c) : 0.0f; }
+    /// T1 where the t1 grid is active; nothing elsewhere (and without a t1 grid).
+    std::optional<float> t1(const openvdb::Coord& c)
+    {
+        float v = 0.0f;
+        if (t1Acc && t1Acc->probeValue(c, v)) return v;
+        return std::nullopt;
+    }
 
     std::optional<LabelGrid::ConstAccessor> labelAcc;
     std::optional<FloatGrid::ConstAccessor> t1Acc;
@@ -101,7 +110,40 @@ void fillLeaves(FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid
     });
 }
 
-FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
+/// How many of the β grid's voxels took T1 and how many the table (after the
+/// fill: every tile left is uniform in label and in T1's presence).
+DampingSources countSources(
+    const FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid* labels, const FloatGrid* t1)
+{
+    DampingSources out;
+    auto fromT1 = [&](SourceReader& r, const openvdb::Coord& c) { return rule.usesT1(r.label(c)) && r.t1(c); };
+    {
+        SourceReader r(labels, t1);
+        auto it = tree.cbeginValueOn();
+        it.setMaxDepth(FloatGrid::TreeType::ValueOnCIter::LEAF_DEPTH - 1);
+        for (; it; ++it) {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            (fromT1(r, it.getCoord()) ? out.fromT1Voxels : out.fromTableVoxels) += std::int64_t(box.volume());
+        }
+    }
+    tbb::enumerable_thread_specific<SourceReader> readers([&] { return SourceReader(labels, t1); });
+    tbb::enumerable_thread_specific<DampingSources> counts;
+    openvdb::tree::LeafManager<const FloatGrid::TreeType> leaves(tree);
+    leaves.foreach ([&](const FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        SourceReader& r = readers.local();
+        DampingSources& c = counts.local();
+        for (auto it = leaf.cbeginValueOn(); it; ++it)
+            ++(fromT1(r, it.getCoord()) ? c.fromT1Voxels : c.fromTableVoxels);
+    });
+    for (const DampingSources& c : counts) {
+        out.fromT1Voxels += c.fromT1Voxels;
+        out.fromTableVoxels += c.fromTableVoxels;
+    }
+    return out;
+}
+
+FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule, DampingSources& sources)
 {
     const auto labels = labelGrid(v);
     const auto t1 = t1Grid(v);
@@ -127,6 +169,7 @@ FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
     }
     if (nonUniform) tree->voxelizeActiveTiles(); // rare; tiles already filled become equal voxels
     fillLeaves(*tree, rule, labels.get(), t1.get());
+    sources = countSources(*tree, rule, labels.get(), t1.get());
     tree->prune(); // exact: tolerance 0
     auto grid = FloatGrid::create(tree);
     grid->setTransform(v.transform().copy());
@@ -171,7 +214,7 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
         for (const char* name : {"fat", "muscle"}) {
             if (const Tissue* t = table.find(name); t && t->id < kMaxLabels) rule.fromT1[std::size_t(t->id)] = true;
         }
-        auto beta = buildDamping(v, rule);
+        auto beta = buildDamping(v, rule, mSources);
         mMaxBeta = beta->activeVoxelCount() ? double(openvdb::tools::minMax(beta->tree()).max()) : 0.0;
         mBeta = beta;
     }

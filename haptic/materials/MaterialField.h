@@ -64,6 +64,19 @@ struct StiffnessReport {
     double deviceLimitNPerMm = 0;
 };
 
+/// @brief Where the damping of the body came from (physics.md §5.5): T1 through
+/// Eq. 4 (fat and muscle where the t1 grid is active), or the table by label.
+struct DampingSources {
+    std::int64_t fromT1Voxels = 0;
+    std::int64_t fromTableVoxels = 0;
+    /// The fraction of the body's voxels whose β came from T1 (0 for an empty body).
+    double t1Fraction() const
+    {
+        const std::int64_t n = fromT1Voxels + fromTableVoxels;
+        return n ? double(fromT1Voxels) / double(n) : 0.0;
+    }
+};
+
 /// @brief Mechanical property grids and per-label parameters of one volume.
 /// @note Immutable after construction; share it between threads freely.
 class MaterialField {
@@ -88,6 +101,8 @@ public:
     const T1DampingLaw& t1Law() const { return mLaw; }
     /// @brief Largest β anywhere in the field [N·s/mm²] (for error bounds).
     double maxDamping() const { return mMaxBeta; }
+    /// @brief Where β came from, voxel by voxel (zero when no damping grid was built).
+    const DampingSources& dampingSources() const { return mSources; }
 
 private:
     void fillPerLabel(const volume::TissueTable& table);
@@ -97,6 +112,7 @@ private:
     StiffnessReport mStiffnessReport;
     T1DampingLaw mLaw;
     double mMaxBeta = 0;
+    DampingSources mSources;
 };
 
 } // namespace voxhap::haptic

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # Every #include between the project's libraries must point down the documented
 # order (README "Layout"; issue 24 item 5):
-#   core <- volume <- segmentation <- haptic <- assessment <- planning <- batch <- render <- regress <- bench <- tools <- python
+#   core <- volume <- registration <- segmentation <- fusion <- haptic <- assessment <- planning <- batch <- render <- regress <- bench <- tools <- python
 # (python/, the Python module, binds the physics core and planning; nothing includes it;
 # regress/ plots its failing cases with render/; nothing below tools includes it)
 # and inside volume/ and haptic/ down their own orders (below). A source of
@@ -25,7 +25,7 @@ function(line_number text line out)
 endfunction()
 
 # Rank of a path among the libraries.
-set(order core volume segmentation haptic assessment planning batch render regress bench tools python)
+set(order core volume registration segmentation fusion haptic assessment planning batch render regress bench tools python)
 function(library_rank path out)
   string(REGEX MATCH "^([a-z_]+)/" m "${path}")
   list(FIND order "${CMAKE_MATCH_1}" r)

@@ -90,7 +90,7 @@ template <typename GridT> void writeVoxels(const GridT& grid, const IndexBox& bo
 
 } // namespace
 
-void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding)
+void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding, NrrdKeys keys)
 {
     if (!v.has(c))
         throw ValueError(file.string() + ": the volume has no '" + std::string(channelName(c)) + "' grid to save");
@@ -114,15 +114,17 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
     h << "\nkinds: domain domain domain\nendian: little\n";
     h << "encoding: " << (encoding == NrrdEncoding::Gzip ? "gzip" : "raw") << "\n";
     h << "space origin: (" << origin.x() << ',' << origin.y() << ',' << origin.z() << ")\n";
-    h << "voxhap_channel:=" << channelName(c) << "\n";
-    h << "voxhap_units:="
-      << (c == Channel::Hu                 ? v.metadata().huUnits
-                 : c == Channel::T1        ? v.metadata().t1Units
-                 : c == Channel::Intensity ? v.metadata().intensityUnits
-                                           : std::string("tissue id"))
-      << "\n";
-    // The typed facts (VolumeMetadata.h), one line each: their texts hold no line break.
-    for (const auto& [name, text] : metadataFacts(v.metadata())) h << "voxhap_" << name << ":=" << text << "\n";
+    if (keys == NrrdKeys::Voxhap) {
+        h << "voxhap_channel:=" << channelName(c) << "\n";
+        h << "voxhap_units:="
+          << (c == Channel::Hu                 ? v.metadata().huUnits
+                     : c == Channel::T1        ? v.metadata().t1Units
+                     : c == Channel::Intensity ? v.metadata().intensityUnits
+                                               : std::string("tissue id"))
+          << "\n";
+        // The typed facts (VolumeMetadata.h), one line each: their texts hold no line break.
+        for (const auto& [name, text] : metadataFacts(v.metadata())) h << "voxhap_" << name << ":=" << text << "\n";
+    }
     h << "\n";
 
     writeStreamAtomically(file, [&](std::ostream& out) {

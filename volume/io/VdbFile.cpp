@@ -8,6 +8,7 @@
 #include "core/Errors.h"
 #include "volume/Grids.h"
 
+#include <nlohmann/json.hpp>
 #include <openvdb/io/File.h>
 
 #include <algorithm>

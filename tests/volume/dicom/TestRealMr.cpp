@@ -13,7 +13,10 @@
 #include <gdcmImageReader.h>
 
 #include <fstream>
+#include <optional>
 #include <regex>
+#include <set>
+#include <vector>
 
 namespace {
 
@@ -130,26 +133,39 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     // CSA series header lists each slice's centre (sSliceArray.asSlice[k].sPosition).
     const fs::path first = dicomFiles(dir).front();
     const std::string bytes = readAll(first);
-    const auto coordinate = [&](int k, const char* axis) {
+    // Siemens writes no field whose value is 0: dSag is absent from every slice of
+    // this series (sagittal offset 0), and an absent component means 0. dCor and
+    // dTra must be found for every slice, or the check below compares nothing.
+    const auto coordinate = [&](int k, const char* axis) -> std::optional<double> {
         const std::regex re(
             "sSliceArray\\.asSlice\\[" + std::to_string(k) + "\\]\\.sPosition\\." + axis + "\\s*=\\s*([-0-9.eE]+)");
         std::smatch m;
-        return std::regex_search(bytes, m, re) ? std::stod(m[1]) : 0.0; // an absent coordinate is 0
+        if (!std::regex_search(bytes, m, re)) return std::nullopt;
+        return std::stod(m[1]);
     };
+    std::vector<Vec3d> centres;
+    for (int k = 0; k < 25; ++k) {
+        const auto cor = coordinate(k, "dCor"), tra = coordinate(k, "dTra");
+        ASSERT_TRUE(cor) << "slice " << k << ": no sPosition.dCor in the protocol";
+        ASSERT_TRUE(tra) << "slice " << k << ": no sPosition.dTra in the protocol";
+        centres.emplace_back(coordinate(k, "dSag").value_or(0.0), *cor, *tra);
+    }
     // The protocol's centres are stored to 10 digits; the slice grid's centre
     // lies half a pixel from the geometric centre of an even matrix or not,
     // depending on the convention: within half a pixel (0.86 mm) in plane,
     // and 0.01 mm along the normal.
     const Vec3d normal = b0.geometry().direction.col(2);
+    std::set<long> planes;
     for (int k = 0; k < 25; ++k) {
         // The slice is at index z where its centre projects.
-        const Vec3d centre(coordinate(k, "dSag"), coordinate(k, "dCor"), coordinate(k, "dTra"));
-        const Vec3d ijk = b0.worldToIndex(centre);
+        const Vec3d ijk = b0.worldToIndex(centres[std::size_t(k)]);
+        planes.insert(std::lround(ijk.z()));
         EXPECT_NEAR(ijk.z(), std::round(ijk.z()), 0.01 / 5.2) << "slice " << k;
         EXPECT_NEAR(ijk.x(), 63.5, 0.5 + 1e-6) << "slice " << k;
         EXPECT_NEAR(ijk.y(), 63.5, 0.5 + 1e-6) << "slice " << k;
         (void)normal;
     }
+    EXPECT_EQ(planes.size(), 25u) << "each protocol slice on a plane of its own"; // not all at 0
 
     // Values: tile k of the stored mosaic (read here with GDCM) is slice k in
     // acquisition order, placed along the CSA slice normal.
@@ -162,8 +178,7 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     const auto* mosaic = reinterpret_cast<const std::uint16_t*>(raw.data());
     auto acc = intensityGrid(b0)->getConstAccessor();
     for (int k = 0; k < 25; ++k) {
-        const Vec3d centre(coordinate(k, "dSag"), coordinate(k, "dCor"), coordinate(k, "dTra"));
-        const int z = int(std::lround(b0.worldToIndex(centre).z()));
+        const int z = int(std::lround(b0.worldToIndex(centres[std::size_t(k)]).z()));
         const int tileRow = k / 5, tileCol = k % 5;
         for (int j = 0; j < 128; j += 9) {
             for (int i = 0; i < 128; i += 7) {
