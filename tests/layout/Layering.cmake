@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
-# Every #include between the project's libraries must point down the documented
-# order (README "Layout"; issue 24 item 5):
-#   core <- volume <- registration <- segmentation <- fusion <- haptic <- assessment <- planning <- batch <- render <- regress <- bench <- tools <- python
+# Every #include between the project's libraries must point down the order of
+# cmake/LibraryOrder.cmake, which the README's "Layout" and docs/architecture.md show
+# (checked here too)
 # (python/, the Python module, binds the physics core and planning; nothing includes it;
 # regress/ plots its failing cases with render/; nothing below tools includes it)
 # and inside volume/ and haptic/ down their own orders (below). A source of
@@ -25,7 +25,18 @@ function(line_number text line out)
 endfunction()
 
 # Rank of a path among the libraries.
-set(order core volume registration segmentation fusion haptic assessment planning batch render regress bench tools python)
+include(${SOURCE}/cmake/LibraryOrder.cmake)
+set(order ${VOXHAP_LIBRARY_ORDER})
+
+# The documents show the same chain.
+list(JOIN order " ← " chain)
+foreach(doc README.md docs/architecture.md)
+  file(READ ${SOURCE}/${doc} text)
+  string(FIND "${text}" "${chain}\n" at)
+  if(at LESS 0)
+    message(FATAL_ERROR "${doc} does not show the libraries' order of cmake/LibraryOrder.cmake: ${chain}")
+  endif()
+endforeach()
 function(library_rank path out)
   string(REGEX MATCH "^([a-z_]+)/" m "${path}")
   list(FIND order "${CMAKE_MATCH_1}" r)
@@ -100,6 +111,10 @@ function(check root prefix rank what)
       endif()
     endforeach()
   endforeach()
+  # A folder without sources or without includes is a wrong name, not a pass.
+  if(NOT sources OR n EQUAL checked)
+    message(FATAL_ERROR "${root}/: no sources or no includes found to check (${what})")
+  endif()
   set(bad ${bad} ${found} PARENT_SCOPE)
   set(checked ${n} PARENT_SCOPE)
 endfunction()
