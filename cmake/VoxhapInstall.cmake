@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-# The installed CMake package (issue 22 item 1). `cmake --install build --prefix P`
+# The installed CMake package (README "Using voxhap from your own CMake project"). `cmake --install build --prefix P`
 # puts
 #   P/include/voxhap/<folder>/...   the public headers (a detail/ header only where
 #                                   a public one includes it)
