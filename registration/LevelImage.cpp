@@ -7,8 +7,6 @@
 #include "core/Errors.h"
 #include "volume/Grids.h"
 
-#include <openvdb/tree/LeafManager.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -21,7 +19,7 @@ using volume::FloatGrid;
 
 namespace {
 
-/// Sums and active counts per output voxel, one set per thread.
+/// Sums and active counts per output voxel.
 struct Accumulator {
     explicit Accumulator(std::size_t n) : sum(n, 0.0), active(n, 0) { }
     std::vector<double> sum;
@@ -125,49 +123,35 @@ LevelImage blockAverage(const volume::Volume& v, Channel c, const Vec3i& factors
     const std::size_t n = std::size_t(out.count());
     const Vec3i last = box.min + out.dims.cwiseProduct(factors) - Vec3i::Ones(); // inclusive, full blocks only
 
-    auto cellOf = [&](const openvdb::Coord& c) -> std::int64_t {
-        const Vec3i ijk(c.x(), c.y(), c.z());
-        if ((ijk.array() < box.min.array()).any() || (ijk.array() > last.array()).any()) return -1;
-        const Vec3i cell = (ijk - box.min).cwiseQuotient(factors);
-        return out.index(cell.x(), cell.y(), cell.z());
-    };
-
-    tbb::enumerable_thread_specific<Accumulator> local([n] { return Accumulator(n); });
-    openvdb::tree::LeafManager<const FloatGrid::TreeType> leaves(grid->tree());
-    leaves.foreach ([&](const FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
-        Accumulator& acc = local.local();
-        for (auto it = leaf.cbeginValueOn(); it; ++it) {
-            const std::int64_t cell = cellOf(it.getCoord());
-            if (cell < 0) continue;
-            acc.sum[std::size_t(cell)] += double(*it);
-            ++acc.active[std::size_t(cell)];
+    // Each output slab gathers its blocks through its own accessor: a fixed
+    // summing order (the same answer every run) and no per-thread copies of
+    // the level, which at the finest level would cost more than the level.
+    Accumulator total(n);
+    tbb::parallel_for(tbb::blocked_range<int>(0, out.dims.z()), [&](const tbb::blocked_range<int>& ks) {
+        auto acc = grid->getConstAccessor();
+        for (int k = ks.begin(); k != ks.end(); ++k) {
+            for (int j = 0; j < out.dims.y(); ++j) {
+                for (int i = 0; i < out.dims.x(); ++i) {
+                    const auto cell = std::size_t(out.index(i, j, k));
+                    const Vec3i first = box.min + Vec3i(i, j, k).cwiseProduct(factors);
+                    double sum = 0.0;
+                    std::uint32_t active = 0;
+                    for (int c = 0; c < factors.z(); ++c)
+                        for (int b = 0; b < factors.y(); ++b)
+                            for (int a = 0; a < factors.x(); ++a) {
+                                float value;
+                                if (acc.probeValue(
+                                        openvdb::Coord(first.x() + a, first.y() + b, first.z() + c), value)) {
+                                    sum += double(value);
+                                    ++active;
+                                }
+                            }
+                    total.sum[cell] = sum;
+                    total.active[cell] = active;
+                }
+            }
         }
     });
-    // Active tiles (uniform regions of phantoms, rarely of scans): voxel by voxel.
-    {
-        Accumulator& acc = local.local();
-        auto it = grid->tree().cbeginValueOn();
-        it.setMaxDepth(FloatGrid::TreeType::ValueOnCIter::LEAF_DEPTH - 1);
-        for (; it; ++it) {
-            openvdb::CoordBBox tile;
-            it.getBoundingBox(tile);
-            for (auto c = tile.begin(); c; ++c) {
-                const std::int64_t cell = cellOf(*c);
-                if (cell < 0) continue;
-                acc.sum[std::size_t(cell)] += double(*it);
-                ++acc.active[std::size_t(cell)];
-            }
-        }
-    }
-    Accumulator total(n);
-    for (const Accumulator& acc : local) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                total.sum[i] += acc.sum[i];
-                total.active[i] += acc.active[i];
-            }
-        });
-    }
     return finish(std::move(out), total, std::uint32_t(factors.prod()), background);
 }
 
@@ -220,17 +204,27 @@ template <typename F> void forFaceNeighbours(const Vec3i& d, std::int64_t at, F&
 }
 
 /// One pass of 6-neighbour erosion (grow = false), or of dilation within @p limit.
+/// Row by row, so that a voxel's neighbours are offsets, not divisions.
 std::vector<std::uint8_t> morphologyPass(
     const std::vector<std::uint8_t>& in, const Vec3i& d, bool grow, const std::vector<std::uint8_t>* limit)
 {
     std::vector<std::uint8_t> out = in;
-    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, std::int64_t(in.size())), [&](const auto& r) {
-        for (std::int64_t at = r.begin(); at != r.end(); ++at) {
-            const auto m = std::size_t(at);
-            if (grow ? in[m] || (limit && !(*limit)[m]) : !in[m]) continue;
-            bool hit = false;
-            forFaceNeighbours(d, at, [&](std::int64_t q) { hit |= (in[std::size_t(q)] != 0) == grow; });
-            if (hit) out[m] = grow ? 1 : 0;
+    const std::int64_t nx = d.x(), nxy = std::int64_t(d.x()) * d.y();
+    const std::uint8_t want = grow ? 1 : 0; // a neighbour in this state changes the voxel
+    tbb::parallel_for(tbb::blocked_range<int>(0, d.z()), [&](const tbb::blocked_range<int>& ks) {
+        for (int k = ks.begin(); k != ks.end(); ++k) {
+            for (int j = 0; j < d.y(); ++j) {
+                const std::int64_t row = k * nxy + j * nx;
+                for (int i = 0; i < d.x(); ++i) {
+                    const auto m = std::size_t(row + i);
+                    if (grow ? in[m] || (limit && !(*limit)[m]) : !in[m]) continue;
+                    const auto is = [&](std::int64_t q) { return (in[std::size_t(q)] != 0) == (want != 0); };
+                    const std::int64_t at = row + i;
+                    const bool hit = (i > 0 && is(at - 1)) || (i + 1 < d.x() && is(at + 1)) || (j > 0 && is(at - nx)) ||
+                        (j + 1 < d.y() && is(at + nx)) || (k > 0 && is(at - nxy)) || (k + 1 < d.z() && is(at + nxy));
+                    if (hit) out[m] = want;
+                }
+            }
         }
     });
     return out;

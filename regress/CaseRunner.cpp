@@ -11,6 +11,7 @@
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/shaft/LabelTrace.h"
+#include "registration/Resample.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
@@ -147,6 +148,12 @@ void recordVolume(const VolumeSpec& v, Inputs& in)
         std::string layers;
         for (const auto& [t, mm] : v.layers) layers += (layers.empty() ? "" : ", ") + t + " " + numberText(mm) + " mm";
         putText(in, "phantom.layers", layers.empty() ? "default" : layers);
+        if (v.fusedMr) {
+            putNumber(in, "phantom.fused_mr.turn_deg", v.fusedMr->turnDeg, "deg");
+            putText(in, "phantom.fused_mr.shift_mm", vecText(v.fusedMr->shiftMm));
+            if (v.fusedMr->mapErrorMm != Vec3d::Zero())
+                putText(in, "phantom.fused_mr.map_error_mm", vecText(v.fusedMr->mapErrorMm));
+        }
     } else if (v.kind == "sphere") {
         putText(in, "phantom.slab_tissue", v.slabTissue);
         putText(in, "phantom.sphere_tissue", v.sphereTissue);
@@ -412,7 +419,24 @@ void buildVolume(
         model.bounds.min = model.bounds.min.cwiseMax(crop->min);
         model.bounds.max = model.bounds.max.cwiseMin(crop->max);
     }
-    b.volume = std::make_shared<const volume::Volume>(volume::makePhantom(model, grid, table));
+    volume::Volume ct = volume::makePhantom(model, grid, table);
+    if (v.fusedMr) {
+        // The MR: the same phantom on a grid turned about the layers' normal,
+        // its frame then moved by the shift, so that the CT point x is the MR
+        // point x + shift; fused through that map as `voxhap fuse` resamples.
+        volume::GridSpec mrGrid = grid;
+        mrGrid.direction =
+            Eigen::AngleAxisd(v.fusedMr->turnDeg * 3.14159265358979323846 / 180.0, Vec3d::UnitY()).toRotationMatrix();
+        const volume::Volume scanned = volume::makePhantom(model, mrGrid, table);
+        volume::Geometry g = scanned.geometry();
+        g.origin += v.fusedMr->shiftMm;
+        volume::Volume mr(g, scanned.indexBox());
+        mr.setGrid(volume::Channel::T1,
+            std::const_pointer_cast<openvdb::GridBase>(scanned.grid(volume::Channel::T1))->deepCopyGrid());
+        const registration::AffineMap map{Mat3d::Identity(), v.fusedMr->shiftMm + v.fusedMr->mapErrorMm};
+        ct.setGrid(volume::Channel::T1, registration::resampleOnto(ct, mr, volume::Channel::T1, map));
+    }
+    b.volume = std::make_shared<const volume::Volume>(std::move(ct));
 }
 
 /// The path of a case: its points, else landmarks (the case's, else the

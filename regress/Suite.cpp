@@ -67,6 +67,27 @@ VolumeSpec parseVolume(Fields& c)
                 s.layers.emplace_back(l[0].get<std::string>(), l[1].get<double>());
             }
         }
+        if (v.has("fused_mr")) {
+            Fields f = v.sub("fused_mr");
+            VolumeSpec::FusedMr m;
+            if (f.has("turn_deg")) { // may be negative
+                const Json& t = f.raw("turn_deg");
+                if (!t.is_number() || !(std::abs(t.get<double>()) <= 180.0))
+                    f.fail("turn_deg", "must be a number of degrees within ±180");
+                m.turnDeg = t.get<double>();
+            }
+            if (f.has("shift_mm")) m.shiftMm = f.vec3("shift_mm");
+            if (f.has("map_error_mm")) m.mapErrorMm = f.vec3("map_error_mm");
+            // Layer-aligned grids: the MR's voxel centres across the layers fall
+            // on the CT's, so its t1 is the layers' own everywhere but at the
+            // block's sides, and R1 holds as on the slab itself.
+            if (s.tiltDeg != 0.0 || s.rotationDeg.norm() != 0.0)
+                f.fail("", "needs the layers along the grid: tilt_deg and rotation_deg 0");
+            const double across = m.shiftMm.y() / s.spacingMm.y();
+            if (std::abs(across - std::round(across)) > 1e-9)
+                f.fail("shift_mm", "its y (across the layers) must be a whole number of voxels (layer-aligned grids)");
+            s.fusedMr = m;
+        }
     } else if (phantom == "sphere") {
         s.slabTissue = v.string("slab_tissue", s.slabTissue);
         s.sphereTissue = v.string("sphere_tissue", s.sphereTissue);

@@ -42,6 +42,18 @@ struct VolumeSpec {
     std::string slabTissue = "fat", sphereTissue = "muscle"; ///< sphere phantom
     double radiusMm = 10, slabThicknessMm = 40;              ///< sphere phantom [mm]
     double lesionRadiusMm = 8;                               ///< torso [mm]
+    /// slab: fuse a second scan of the phantom as the MR (docs/physics.md §7
+    /// R1, "Fused"): the phantom rasterised again on a grid turned by turnDeg
+    /// about the layers' normal (y), its frame moved by shiftMm, and its t1
+    /// resampled onto the CT's grid through that exact map (no registration),
+    /// or through it with mapErrorMm added: a registration error whose effect
+    /// on the force a case can show.
+    struct FusedMr {
+        double turnDeg = 0;
+        Vec3d shiftMm = Vec3d::Zero();
+        Vec3d mapErrorMm = Vec3d::Zero();
+    };
+    std::optional<FusedMr> fusedMr;
 };
 
 /// @brief The shaft-integration strategies a case may name ("sampler strategies").

@@ -11,13 +11,15 @@
 #include <itkCommand.h>
 #include <itkEuler3DTransform.h>
 #include <itkImage.h>
-#include <itkImageMaskSpatialObject.h>
+#include <itkSpatialObject.h>
 #include <itkMattesMutualInformationImageToImageMetricv4.h>
 #include <itkRegularStepGradientDescentOptimizerv4.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <tuple>
 #include <random>
 
 namespace voxhap::registration::detail {
@@ -25,8 +27,6 @@ namespace voxhap::registration::detail {
 namespace {
 
 using ImageF = itk::Image<float, 3>;
-using MaskImage = itk::Image<unsigned char, 3>;
-using MaskObject = itk::ImageMaskSpatialObject<3>;
 using MattesMetric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
 
 /// ITK's Mattes mutual information on one work unit. With more, each work unit
@@ -88,13 +88,56 @@ ImageF::Pointer toItk(const LevelImage& li)
     return img;
 }
 
+/// A body mask as the metric asks it, "is this world point inside?", answered
+/// as ImageMaskSpatialObject answers it (the nearest voxel, rounding halves up)
+/// but from a precomputed world-to-index map: ITK's own object went through its
+/// object-to-world transforms and image at every sample and took a seventh of
+/// the registration's time.
+class LevelMask : public itk::SpatialObject<3> {
+public:
+    ITK_DISALLOW_COPY_AND_MOVE(LevelMask);
+    using Self = LevelMask;
+    using Superclass = itk::SpatialObject<3>;
+    using Pointer = itk::SmartPointer<Self>;
+    using ConstPointer = itk::SmartPointer<const Self>;
+    itkNewMacro(Self);
+    itkTypeMacro(LevelMask, SpatialObject);
+
+    void set(const LevelImage& li, const std::vector<std::uint8_t>& mask)
+    {
+        mMask = mask;
+        mDims = li.dims;
+        mOrigin = li.geometry.origin;
+        mWorldToIndex = (li.geometry.direction * li.geometry.spacing.asDiagonal()).inverse();
+    }
+    bool IsInsideInObjectSpace(const PointType& p) const override
+    {
+        const Vec3d c = mWorldToIndex * (Vec3d(p[0], p[1], p[2]) - mOrigin);
+        const Vec3i i((c.array() + 0.5).floor().cast<int>());
+        if ((i.array() < 0).any() || (i.array() >= mDims.array()).any()) return false;
+        return mMask[std::size_t((std::int64_t(i.z()) * mDims.y() + i.y()) * mDims.x() + i.x())] != 0;
+    }
+    bool IsInsideInWorldSpace(const PointType& p, unsigned int, const std::string&) const override
+    {
+        return IsInsideInObjectSpace(p); // object space is world space here
+    }
+
+protected:
+    LevelMask() = default;
+    ~LevelMask() override = default;
+
+private:
+    std::vector<std::uint8_t> mMask;
+    Vec3i mDims = Vec3i::Zero();
+    Vec3d mOrigin = Vec3d::Zero();
+    Mat3d mWorldToIndex = Mat3d::Identity();
+};
+using MaskObject = LevelMask;
+
 MaskObject::Pointer toMask(const LevelImage& li, const std::vector<std::uint8_t>& mask)
 {
-    auto img = emptyImage<MaskImage>(li);
-    std::copy(mask.begin(), mask.end(), img->GetBufferPointer());
     auto object = MaskObject::New();
-    object->SetImage(img);
-    object->Update();
+    object->set(li, mask);
     return object;
 }
 
@@ -116,9 +159,10 @@ Optimizer::ScalesType scalesFor(StageKind kind, double radius)
     return s;
 }
 
-/// An ITK transform starting at @p map with rotations about @p centre.
-itk::MatrixOffsetTransformBase<double, 3, 3>::Pointer makeTransform(
-    StageKind kind, const AffineMap& map, const Vec3d& centre)
+using TransformBase = itk::MatrixOffsetTransformBase<double, 3, 3>;
+
+/// Set @p xform (made by makeTransform for @p kind) to @p map with rotations about @p centre.
+void assignTransform(TransformBase& xform, StageKind kind, const AffineMap& map, const Vec3d& centre)
 {
     itk::Matrix<double, 3, 3> m;
     itk::Point<double, 3> c;
@@ -129,18 +173,26 @@ itk::MatrixOffsetTransformBase<double, 3, 3>::Pointer makeTransform(
         t[a] = translation[int(a)];
         for (unsigned b = 0; b < 3; ++b) m(a, b) = map.linear(int(a), int(b));
     }
+    xform.SetCenter(c);
     if (kind == StageKind::Rigid) {
-        auto rigid = Rigid::New();
-        rigid->SetCenter(c);
-        rigid->SetMatrix(m, 1e-6); // the start is a rotation: orthonormal to rounding
-        rigid->SetTranslation(t);
-        return rigid;
+        static_cast<Rigid&>(xform).SetMatrix(m, 1e-6); // the start is a rotation: orthonormal to rounding
+    } else {
+        xform.SetMatrix(m);
     }
-    auto affine = Affine::New();
-    affine->SetCenter(c);
-    affine->SetMatrix(m);
-    affine->SetTranslation(t);
-    return affine;
+    xform.SetTranslation(t);
+}
+
+/// An ITK transform starting at @p map with rotations about @p centre.
+TransformBase::Pointer makeTransform(StageKind kind, const AffineMap& map, const Vec3d& centre)
+{
+    TransformBase::Pointer xform;
+    if (kind == StageKind::Rigid) {
+        xform = Rigid::New();
+    } else {
+        xform = Affine::New();
+    }
+    assignTransform(*xform, kind, map, centre);
+    return xform;
 }
 
 AffineMap mapOf(const itk::MatrixOffsetTransformBase<double, 3, 3>& xform)
@@ -195,7 +247,7 @@ public:
 struct MetricPair::Impl {
     LevelImage fixedLevel;
     ImageF::Pointer fixed, moving;
-    MaskObject::Pointer fixedMask, movingMask;
+    MaskObject::Pointer movingMask;
     std::vector<Vec3d> candidates; ///< index positions of the fixed body (dilated), for sampling
     double radius = 1.0;           ///< RMS distance of the fixed body from its centroid [mm]
     Vec3d centroid = Vec3d::Zero();
@@ -217,7 +269,32 @@ struct MetricPair::Impl {
         return points;
     }
 
-    Metric::Pointer metric(itk::MatrixOffsetTransformBase<double, 3, 3>* xform, const StageSettings& s) const
+    /// A metric with its transform, kept per stage setting: ITK's Mattes metric
+    /// scans every voxel of both images (through their masks) for their value
+    /// ranges when it is initialised, which at the finest level cost more than
+    /// the optimisation itself; a pair initialises it once per setting.
+    struct Prepared {
+        TransformBase::Pointer xform;
+        Metric::Pointer metric;
+    };
+    mutable std::map<std::tuple<int, int, int, std::uint32_t>, Prepared> prepared;
+
+    Prepared& prepare(const AffineMap& map, const Vec3d& centre, const StageSettings& s) const
+    {
+        const auto key = std::make_tuple(int(s.kind), s.samples, s.bins, s.seed);
+        auto it = prepared.find(key);
+        if (it == prepared.end()) {
+            Prepared p;
+            p.xform = makeTransform(s.kind, map, centre);
+            p.metric = metric(p.xform.GetPointer(), s);
+            it = prepared.emplace(key, std::move(p)).first;
+        } else {
+            assignTransform(*it->second.xform, s.kind, map, centre);
+        }
+        return it->second;
+    }
+
+    Metric::Pointer metric(TransformBase* xform, const StageSettings& s) const
     {
         auto m = Metric::New();
         m->SetNumberOfHistogramBins(itk::SizeValueType(s.bins));
@@ -227,7 +304,8 @@ struct MetricPair::Impl {
         m->SetUseFixedImageGradientFilter(false);
         m->SetFixedImage(fixed);
         m->SetMovingImage(moving);
-        m->SetFixedImageMask(fixedMask);
+        // No fixed mask: the samples are drawn from the fixed body (grown by
+        // the margin) and jittered within their own voxel, so each is inside it.
         m->SetMovingImageMask(movingMask);
         m->SetMovingTransform(xform);
         m->SetFixedSampledPointSet(samples(s.samples, s.seed));
@@ -250,7 +328,6 @@ MetricPair::MetricPair(const LevelImage& fixed, const LevelImage& moving, double
         return std::max(1, int(std::lround(marginMm / l.geometry.spacing.minCoeff())));
     };
     const auto fixedBody = grownBody(fixed, voxels(fixed));
-    p.fixedMask = toMask(fixed, fixedBody);
     p.movingMask = toMask(moving, grownBody(moving, voxels(moving)));
     for (int k = 0; k < fixed.dims.z(); ++k) {
         for (int j = 0; j < fixed.dims.y(); ++j) {
@@ -272,9 +349,8 @@ MetricPair::~MetricPair() = default;
 
 double MetricPair::metricAt(const AffineMap& map, const Vec3d& centre, const StageSettings& settings) const
 {
-    auto xform = makeTransform(settings.kind, map, centre);
     try {
-        return mImpl->metric(xform.GetPointer(), settings)->GetValue();
+        return mImpl->prepare(map, centre, settings).metric->GetValue();
     } catch (const itk::ExceptionObject& e) {
         throw ValueError(std::string("registration: the metric cannot be evaluated here (") + e.GetDescription() + ")");
     }
@@ -283,9 +359,11 @@ double MetricPair::metricAt(const AffineMap& map, const Vec3d& centre, const Sta
 StageResult MetricPair::run(const AffineMap& start, const Vec3d& centre, const StageSettings& settings) const
 {
     StageResult r;
-    auto xform = makeTransform(settings.kind, start, centre);
+    TransformBase::Pointer xform;
     try {
-        auto metric = mImpl->metric(xform.GetPointer(), settings);
+        Impl::Prepared& prepared = mImpl->prepare(start, centre, settings);
+        xform = prepared.xform;
+        const Metric::Pointer metric = prepared.metric;
         r.startMetric = metric->GetValue();
         auto opt = Optimizer::New();
         opt->SetNumberOfWorkUnits(1);

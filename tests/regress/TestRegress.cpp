@@ -698,3 +698,47 @@ TEST_F(RegressBaselines, TruncatedBaselineIsRefusedNamingTheFile)
 }
 
 } // namespace
+
+namespace {
+
+/// A fused slab (docs/physics.md §7 R1, "Fused"): its t1 comes from a second
+/// scan of the phantom, turned and moved, resampled through the exact map. It
+/// is held to R1 like the slab itself; the same fusion through a map 1.5 mm off
+/// across the layers moves every fat–muscle boundary of the t1 grid, and R1
+/// catches it (the control: R1 sees the fused t1, not the table's).
+TEST(RegressClosedForm, AFusedSlabHoldsToR1AndAMisregisteredOneDoesNot)
+{
+    const auto suite = [](const std::string& error) {
+        return parseSuite(std::string(kHeader) +
+                R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+            "fused_mr": {"turn_deg": 20, "shift_mm": [3.3, 2.0, -4.7], "map_error_mm": )" +
+                error + R"(}}}]})",
+            "my-suite.json", ".");
+    };
+    const auto worstExcess = [](const Suite& s) {
+        Runner runner(s, {0}, {});
+        const CaseRun run = runner.run().at(0);
+        const auto cf = closedForm(s.cases[0], {}, run.inputs, run.profile.samples);
+        EXPECT_TRUE(cf) << cf.line();
+        double worst = -1e300;
+        for (std::size_t i = 0; cf && i < run.profile.samples.size(); ++i) {
+            if (!std::isfinite(cf->toleranceN[i])) continue;
+            worst = std::max(worst, std::abs(run.profile.samples[i].modelN - cf->modelN[i]) - cf->toleranceN[i]);
+        }
+        return worst;
+    };
+    EXPECT_LE(worstExcess(suite("[0, 0, 0]")), 0.0) << "the exact map: within R1's tolerance everywhere";
+    EXPECT_GT(worstExcess(suite("[0, 1.5, 0]")), 0.0) << "1.5 mm off across the layers: past it somewhere";
+}
+
+TEST(RegressSuite, AFusedSlabNeedsLayerAlignedGrids)
+{
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+        "fused_mr": {"shift_mm": [0, 0.3, 0]}}}]})",
+        "whole number of voxels");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+        "tilt_deg": 10, "fused_mr": {"shift_mm": [0, 1, 0]}}}]})",
+        "tilt_deg and rotation_deg 0");
+}
+
+} // namespace
