@@ -51,6 +51,15 @@ NeedleForceModel::NeedleForceModel(ForceModelSetup setup)
     if (mTerms.guidance.on)
         mGuide.emplace(
             mTerms.guidance.params, setup.guide.value_or(GuideLine{mPath.origin, mPath.origin + mPath.direction}));
+    if (mTerms.bending.on) {
+        // §9.5: the beam's foundation holds the shaft where the pivot correction did, and
+        // the lock's straight line is one a bent shaft leaves.
+        if (mTerms.lock.on || mTerms.pivot.on)
+            throw ValueError("force model: bending replaces the pivot correction and cannot run beside the lock");
+        if (!setup.foundation) throw ValueError("force model: bending needs the tissue's foundation");
+        mBeam = std::make_unique<BentNeedle>(
+            BeamParams::fromNeedle(mNeedle), std::move(setup.foundation), bevelReferenceAxis(mPath.direction));
+    }
     mIntegral.reset();
 }
 
@@ -68,6 +77,7 @@ void NeedleForceModel::reset() noexcept
     mLockAnchor = Vec3d::Zero();
     if (mPalp) mPalp->reset();
     if (mGuide) mGuide->reset();
+    if (mBeam) mBeam->reset();
     mPalpating = false;
     mLastDirection = 1;
     mLastTimeS = 0;
@@ -151,13 +161,21 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     // 1. Kinematics along the path.
     const Vec3d& u = mPath.direction;
     const Vec3d dir = in.direction / dirNorm;
-    const double d = (in.tip - mPath.origin).dot(u);
+    const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
+    // A bending needle (§9): the device holds the hub, the terms read the bent tip.
+    NeedleInput bent;
+    if (mBeam) {
+        mBeam->update(hub, dir);
+        bent = in;
+        bent.tip = mBeam->tip();
+    }
+    const NeedleInput& reading = mBeam ? bent : in;
+    const double d = (reading.tip - mPath.origin).dot(u);
     const double v = in.velocity.dot(u);
     if (v > 0.0)
         mLastDirection = 1;
     else if (v < 0.0)
         mLastDirection = -1;
-    const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
     ForceBreakdown& f = out.terms;
 
     // Palpation (issue 23, Palpation.h): before the needle touches the skin the tip is
@@ -183,7 +201,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         if (mTerms.lor.on) out.plungerN = mLor.update(0.0, dt);
     } else {
         if (mPalp) mPalp->reset();
-        needleTerms(in, t, dt, d, v, dir, hub, out);
+        needleTerms(reading, t, dt, d, v, dir, hub, out);
     }
     if (mGuide) f.guidance = mGuide->update(in.tip, t);
 
@@ -236,12 +254,19 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
         // planned path: a spring stretched at entry would store energy nobody put in (§1.1).
         if (e.type == EventType::SkinEntry) mLockAnchor = lateralOf(in.tip - mPath.origin, u);
         popped = popped || e.type == EventType::Pop;
+        if (mBeam) bendingEvent(e, in.tip, d, dir);
     }
 
     // After skin entry the needle is tied to its line: the profile answers in O(1) (it
-    // rebuilds itself, without allocating, if the shaft strays from the line).
+    // rebuilds itself, without allocating, if the shaft strays from the line). A bent
+    // shaft is integrated along its polyline (§9.5).
     ShaftIntegrator* integ = mLocked && mState.skinEntered() ? mLocked.get() : mIntegrator.get();
-    if (integ && (mTerms.damping.on || mTerms.critical)) integ->integrate(Segment{hub, in.tip}, mIntegral);
+    if (integ && (mTerms.damping.on || mTerms.critical)) {
+        if (mBeam && mBeam->entered())
+            integ->integratePolyline(mBeam->shaft(), mIntegral);
+        else
+            integ->integrate(Segment{hub, in.tip}, mIntegral);
+    }
 
     // 3. Force terms, axial resistance positive outward.
     ForceBreakdown& f = out.terms;
@@ -294,6 +319,19 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
     if (mTerms.lor.on)
         out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
     out.tip = tip;
+}
+
+void NeedleForceModel::bendingEvent(const Event& e, const Vec3d& tip, double d, const Vec3d& dir) noexcept
+{
+    if (e.type == EventType::SkinEntry) {
+        // The track starts on the skin: back along the shaft from the tip by its depth
+        // past the surface (the needle is straight until it enters).
+        const double along = dir.dot(mPath.direction);
+        const double back = along > 0.1 ? std::max(0.0, d - mState.surfaceMm()) / along : 0.0;
+        mBeam->enter(tip - back * dir);
+    } else if (e.type == EventType::Withdrawn) {
+        mBeam->withdraw();
+    }
 }
 
 } // namespace voxhap::haptic

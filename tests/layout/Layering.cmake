@@ -51,11 +51,11 @@ function(volume_rank path out)
 endfunction()
 
 # haptic/: the root's shared types (device limits, events, layers, the needle)
-# <- materials <- shaft <- models <- force <- scene <- servo <- igtl.
+# <- materials <- shaft <- beam <- models <- force <- scene <- servo <- igtl.
 function(haptic_rank path out)
   set(r 0)
   set(i 1)
-  foreach(sub materials shaft models force scene servo igtl)
+  foreach(sub materials shaft beam models force scene servo igtl)
     if(path MATCHES "^haptic/${sub}/")
       set(r ${i})
     endif()
