@@ -616,7 +616,14 @@ CaseRun Runner::runOne(std::size_t k) const
             }
         }
     }
-    for (const std::string& name : used) recordTissue(p.table->at(name), in);
+    for (const std::string& name : used) {
+        const volume::Tissue& t = p.table->at(name);
+        recordTissue(t, in);
+        // A bending needle reads the foundation (physics.md §9.2); a straight one does
+        // not, so the fingerprints of the other cases stay as they were.
+        if (scene.terms.bending.on && t.foundationModulus)
+            putNumber(in, t.name + ".foundation_modulus", t.foundationModulus->value, "N/mm²");
+    }
     out.elapsedS = std::chrono::duration<double>(Clock::now() - t0).count();
     return out;
 }

@@ -88,6 +88,7 @@ void BentNeedle::enter(const Vec3d& entry) noexcept
 
 void BentNeedle::straight() noexcept
 {
+    mScale = 1.0;
     const double h = mBeam.elementLengthMm();
     for (std::size_t i = 0; i < mNodes.size(); ++i) {
         mAxial[i] = double(i) * h;
@@ -112,7 +113,7 @@ Vec3d BentNeedle::nodeAt(double x) const noexcept
     const double axial = mAxial[std::size_t(e)] + f * (mAxial[std::size_t(e + 1)] - mAxial[std::size_t(e)]);
     double w1 = 0.0, w2 = 0.0;
     mBeam.deflectionAt(x, w1, w2);
-    return mHub + axial * mU + w1 * mE1 + w2 * mE2;
+    return mHub + axial * mU + mScale * (w1 * mE1 + w2 * mE2);
 }
 
 bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
@@ -168,23 +169,33 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
         return false;
     }
 
+    // Small-slope theory holds while the shaft's slope to the hub's axis is small; a
+    // solution steeper than kMaxSlope (a stiff tissue's bevel force on a thin needle,
+    // a hand that levers the hub far off the track) is outside it, and is held at
+    // that slope, scaled as a whole, rather than followed (physics.md §9.4).
+    double steepest = 0.0;
+    for (int i = 0; i <= mBeam.elements(); ++i)
+        steepest = std::max(steepest, std::hypot(mBeam.slope(i, 0), mBeam.slope(i, 1)));
+    mScale = steepest > kMaxSlope ? kMaxSlope / steepest : 1.0;
+
     // The polyline: the lateral deflections, each element kept its length along
     // the bent shaft (the axis gives way by what the deflection takes).
     const double h = mBeam.elementLengthMm();
+    const auto w = [&](int node, int c) { return mScale * mBeam.deflection(node, c); };
     for (std::size_t i = 0; i < mNodes.size(); ++i) {
         const int node = int(i);
         if (i > 0) {
-            const double d1 = mBeam.deflection(node, 0) - mBeam.deflection(node - 1, 0);
-            const double d2 = mBeam.deflection(node, 1) - mBeam.deflection(node - 1, 1);
+            const double d1 = w(node, 0) - w(node - 1, 0), d2 = w(node, 1) - w(node - 1, 1);
             mAxial[i] = mAxial[i - 1] + std::sqrt(std::max(0.0, h * h - d1 * d1 - d2 * d2));
         }
-        mNodes[i] = hub + mAxial[i] * mU + mBeam.deflection(node, 0) * mE1 + mBeam.deflection(node, 1) * mE2;
+        mNodes[i] = hub + mAxial[i] * mU + w(node, 0) * mE1 + w(node, 1) * mE2;
     }
     const int last = mBeam.elements();
-    mTipDirection = (mU + mBeam.slope(last, 0) * mE1 + mBeam.slope(last, 1) * mE2).normalized();
+    mTipDirection = (mU + mScale * (mBeam.slope(last, 0) * mE1 + mBeam.slope(last, 1) * mE2)).normalized();
     mBevelForce = p1 * mE1 + p2 * mE2;
     double f1 = 0.0, f2 = 0.0, m1 = 0.0, m2 = 0.0;
     mBeam.startReaction(f1, f2, m1, m2);
+    f1 *= mScale, f2 *= mScale, m1 *= mScale, m2 *= mScale;
     // The clamp's moment m_c turns the shaft toward e_c: about u × e1 = e2 and u × e2 = −e1.
     mHubForce = -(f1 * mE1 + f2 * mE2);
     mHubTorque = -(m1 * mE2 - m2 * mE1);

@@ -51,6 +51,11 @@ Vec3d bevelReferenceAxis(const Vec3d& pathDirection) noexcept;
 
 class BentNeedle {
 public:
+    /// The steepest slope [rad] of the shaft to the hub's axis the small-slope
+    /// theory is followed to; a steeper solution is scaled down to it (§9.4) [chosen:
+    /// θ²/2, the theory's error, reaches 12 % there].
+    static constexpr double kMaxSlope = 0.5;
+
     /// @param foundation the tissue's modulus (owned)
     /// @param referenceAxis the lateral direction of bevel orientation 0, taken ⟂
     ///        to the shaft each tick (a direction along the shaft falls back to another axis)
@@ -86,6 +91,8 @@ public:
     const Vec3d& hubTorque() const noexcept { return mHubTorque; }
     /// @brief Lateral offset of the tip from the hub's axis [mm].
     double tipDeflectionMm() const noexcept;
+    /// @brief This tick's solution was steeper than kMaxSlope and held there.
+    bool slopeLimited() const noexcept { return mScale < 1.0; }
     const CutTrack& track() const noexcept { return mTrack; }
     const BeamParams& params() const noexcept { return mParams; }
     const WinklerBeam& beam() const noexcept { return mBeam; }
@@ -110,6 +117,7 @@ private:
     Vec3d mTipDirection{0, 0, 1};
     Vec3d mBevelForce{0, 0, 0}, mHubForce{0, 0, 0}, mHubTorque{0, 0, 0};
     double mInserted = 0.0;
+    double mScale = 1.0; ///< this tick's solution, scaled to kMaxSlope when steeper
 };
 
 } // namespace voxhap::haptic

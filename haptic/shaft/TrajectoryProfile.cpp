@@ -354,7 +354,8 @@ void TrajectoryProfile::integratePolyline(std::span<const Vec3d> points, ShaftIn
     Impl& m = *mImpl;
     out.reset(m.labels);
     out.labelsValid = m.labels;
-    detail::polylineChordPass(*m.xform, points, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
+    // The exact traversal's own index map: the same answer as ExactVoxel, bit for bit.
+    detail::polylineChordPass(m.src.indexMap, points, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
 }
 
 void TrajectoryProfile::fillLabels(

@@ -8,6 +8,9 @@
 #include "haptic/beam/BentNeedle.h"
 #include "core/Errors.h"
 #include "core/Math.h"
+#include "volume/TissueTable.h"
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
@@ -198,6 +201,37 @@ TEST(BentNeedle, SectionFromGaugeWallAndStylet)
         bad.bevelAngleDeg = a;
         EXPECT_TRUE(refused(bad, "needle.bevel_angle_deg")) << a;
     }
+}
+
+// The measured deflections of physics.md §9.2. Rand et al. 2016: a 22 G Quincke
+// needle 8.89 ± 0.17 mm off its line at 80 mm in ballistic gel. The table's muscle
+// modulus was fitted on that datum (gel is the muscle simulant), so that case only
+// pins the fit: within the measurement's standard deviation. The check is the data
+// not fitted: Drummond & Scott 1980, 22 and 25 G Quincke needles (8.9 cm) through
+// beef, "about 1 mm for each centimetre" of travel, against the slope the model
+// gives past 40 mm (1.26 and 0.95 mm/cm when written): within 30 %.
+TEST(BentNeedle, MeasuredDeflectionsInGelAndBeef)
+{
+    const double muscle = volume::TissueTable::builtin().at("muscle").foundationModulus->value;
+    const auto deflection = [muscle](int gauge, double length, double depth) {
+        Needle n = quincke22();
+        n.gauge = gauge;
+        n.lengthMm = length;
+        Insertion ins(n, muscle);
+        ins.advance(depth);
+        return ins.needle.tipDeflectionMm();
+    };
+    EXPECT_NEAR(deflection(22, 90.0, 80.0), 8.89, 0.17) << "the fitted datum (Rand 2016)";
+    constexpr double kDrummondRelative = 0.3; // the deviation reported in physics.md §9.2, with room
+    for (const int gauge : {22, 25}) {
+        for (const double depth : {40.0, 50.0}) {
+            const double slope = deflection(gauge, 89.0, depth) / (depth / 10.0);
+            EXPECT_NEAR(slope, 1.0, kDrummondRelative) << gauge << " G at " << depth << " mm [mm/cm]";
+        }
+    }
+    // Control: at 10 mm, where the free shaft is long, the model's slope is far above
+    // Drummond's (2.8 mm/cm for 22 G): the comparison can fail.
+    EXPECT_GT(deflection(22, 89.0, 10.0) / 1.0, 1.0 + kDrummondRelative);
 }
 
 TEST(BentNeedle, AtLeastAMillimetreOfNeedlePerNodeAndAtMost150Nodes)
