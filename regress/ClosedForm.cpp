@@ -549,6 +549,9 @@ std::optional<ClosedForm> closedForm(
     const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples)
 {
     const Lookup in{recorded, current};
+    // The closed forms are those of a straight needle; a bending one's tip lags them by
+    // what its deflection takes from the depth (physics.md §9.1).
+    if (termOn(in, "bending")) return std::nullopt;
     if (in.text("scene.model") == "lumbar-puncture" && in.text("scene.layers") == "table")
         return lumbarPunctureStack(c, in, samples);
     if (in.text("scene.model") == "conci" && in.text("scene.layers") == "table") return conciProfile(c, in, samples);

@@ -23,8 +23,6 @@ namespace {
 
 using voxhap::test::table;
 
-const SceneInstance& instance(const std::string& name) { return test::sceneInstance(name); }
-
 /// Bounds every output of one bent solve must keep: finite, and the bevel force
 /// within the stiffest tissue's k times the bevel's factor.
 void expectSane(const BentNeedle& b, double kMax, const char* what)
@@ -137,7 +135,7 @@ TEST(BendingStress, HostilePosesGiveAStraightFiniteNeedle)
 TEST(BendingStress, RandomStatesOfBendingScenesStayWithinThePeak)
 {
     for (const char* name : {"lumbar-puncture-bending", "kyung-bending"}) {
-        const SceneInstance& inst = instance(name);
+        const SceneInstance& inst = test::sceneInstance(name);
         auto model = inst.makeModel();
         ASSERT_NE(model->bentNeedle(), nullptr);
         const double peak = inst.scene().device.maxForceN;
@@ -163,7 +161,7 @@ TEST(BendingStress, RandomStatesOfBendingScenesStayWithinThePeak)
 // layers give way. Every tick finite and within the peak; the tick allocates nothing.
 TEST(BendingStress, APopWhileBentAndTheBentTickNeverAllocates)
 {
-    const SceneInstance& inst = instance("lumbar-puncture-bending");
+    const SceneInstance& inst = test::sceneInstance("lumbar-puncture-bending");
     auto model = inst.makeModel();
     const double peak = inst.scene().device.maxForceN;
     const Vec3d entry = inst.entry(), dir = (inst.target() - inst.entry()).normalized();

@@ -63,9 +63,9 @@ double first(const SceneRun& r, EventType t)
 TEST(Scenes, AllBuiltinScenesParse)
 {
     const std::vector<std::string> names = builtinSceneNames();
-    for (const char* expected : {"kyung", "kyung-damping", "senac-average", "senac-overweight", "senac-calcified",
-             "conci", "conci-labels", "lumbar-puncture", "lumbar-puncture-labels", "kyung-bending",
-             "lumbar-puncture-bending"}) {
+    for (const char* expected :
+        {"kyung", "kyung-damping", "senac-average", "senac-overweight", "senac-calcified", "conci", "conci-labels",
+            "lumbar-puncture", "lumbar-puncture-labels", "kyung-bending", "lumbar-puncture-bending"}) {
         EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
     }
     for (const std::string& n : names) EXPECT_NO_THROW(loadScene(n)) << n;
