@@ -8,6 +8,7 @@
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "core/Version.h"
+#include "haptic/beam/Foundation.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/shaft/LabelTrace.h"
@@ -220,7 +221,9 @@ std::unique_ptr<haptic::NeedleForceModel> makeModel(const haptic::SceneInstance&
         .needle = s.needle,
         .device = s.device,
         .integrator = std::move(integrator),
-        .field = inst.field()});
+        .field = inst.field(),
+        // A bending needle's tissue (physics.md §9.2), as the scene builds it.
+        .foundation = s.terms.bending.on ? haptic::makeLabelFoundation(*inst.field()) : nullptr});
 }
 
 /// The stored profile: a sample every @p stepMm of travel, and the last tick; the
