@@ -565,6 +565,7 @@ CaseRun Runner::runOne(std::size_t k) const
 
     CaseRun out;
     out.profile = profileOf(r, c.sampleMm);
+    if (r.summary.bending) out.tipDeviationMm = r.summary.tipDeviationMm;
     for (const haptic::Layer& l : inst.layers()) {
         if (l.role != haptic::LayerRole::Air) out.layers.push_back({l.name, l.startMm, l.endMm});
     }

@@ -11,6 +11,7 @@
 #include "tools/LoadOptions.h"
 
 #include "planning/Markups.h"
+#include "planning/Deflection.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
 #include "render/Display.h"
@@ -91,6 +92,17 @@ void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
         os << (i ? " > " : "") << r.segments[i].tissue << " " << fixed(r.segments[i].lengthMm());
     }
     os << "\n";
+    if (const auto& d = r.deflection) { // physics.md §9.6
+        const planning::BevelChoice& b = d->best;
+        os << "     bent needle: tip " << fixed(b.tipToTargetMm, 1) << " mm from the target ("
+           << fixed(b.tipDeviationMm, 1) << " mm off the line) with the bevel at " << fixed(b.orientationDeg, 0)
+           << " deg" << (std::isfinite(b.turnDepthMm) ? ", turned 180 deg at " + fixed(b.turnDepthMm, 0) + " mm" : "");
+        for (const auto& c : d->tried) {
+            if (!std::isfinite(c.turnDepthMm))
+                os << "; " << fixed(c.tipDeviationMm, 1) << " mm at " << fixed(c.orientationDeg, 0) << " deg unturned";
+        }
+        os << "\n";
+    }
     for (const auto& w : r.warnings) os << "     warning: " << w.message << "\n";
 }
 
@@ -179,7 +191,18 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
                 f.why3d = x->why();
             }
             req.point = paths.front().target;
-            for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+            for (std::size_t i = 0; i < lines.size(); ++i) {
+                render::PlannedPath p{lines[i].name, lines[i].entry, lines[i].target, std::nullopt};
+                if (const auto& d = paths[i].deflection) { // the predicted bent needle (physics.md §9.6)
+                    render::NeedlePose pose;
+                    pose.tip = d->bentShaft.back();
+                    pose.direction = (d->bentShaft.back() - d->bentShaft.front()).normalized();
+                    pose.lengthMm = planner.scene().needle.lengthMm;
+                    pose.shaft = d->bentShaft;
+                    p.needle = pose;
+                }
+                req.plan.paths.push_back(std::move(p));
+            }
             render::Snapshot snap(planner.volume(), req, planner.table());
             std::vector<render::Image> images;
             for (render::ViewKind k : snap.views()) images.push_back(snap.render(k));
@@ -285,6 +308,9 @@ int run(const PlanCliOptions& o)
         report["pareto"] = nlohmann::json::array();
         for (const auto& p : found->pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     }
+    // A bending needle: where its tip will end on each path, per bevel orientation
+    // and turn depth (physics.md §9.6); only for the paths reported.
+    planning::predictDeflections(planner, paths);
     report["paths"] = nlohmann::json::array();
     for (std::size_t i = 0; i < paths.size(); ++i) report["paths"].push_back(planning::pathJson(paths[i], int(i) + 1));
 

@@ -30,6 +30,7 @@ pictures=(
   regress-failure.png     # voxhap regress: a tissue edit caught, where and by how much
   bench-sampler.png       # voxhap bench sampler: runtime against error, Pareto front
   python-plan-force.png   # examples/python/plan_and_plot.py: predicted and rendered force, phantom and CT
+  plan-bending-views.png  # voxhap plan with a bending needle: the predicted bent needles on the CT
 )
 
 while (($#)); do
@@ -93,6 +94,10 @@ step "the Python example: plan on the phantom and the CT, insert, plot force aga
   { echo "make-pictures: no Python module in $build_dir/python (VOXHAP_WITH_PYTHON=ON builds it)" >&2; exit 2; }
 PYTHONPATH="$build_dir/python" MPLBACKEND=Agg /usr/bin/python3 "$here/examples/python/plan_and_plot.py" \
   --ct "$ct" --target 4,128,296 --allow-bone --out python-plan-force.png >/dev/null
+
+step "plan on the CT with a needle that bends"
+"$voxhap" plan "$ct" --target 4,128,296 --allow-bone --scene kyung-bending --top 3 --out plan-bend >plan-bend.txt
+cp plan-bend/views.png plan-bending-views.png
 
 mkdir -p "$out"
 for p in "${pictures[@]}"; do

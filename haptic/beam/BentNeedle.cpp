@@ -73,6 +73,15 @@ BentNeedle::BentNeedle(const BeamParams& params, std::unique_ptr<Foundation> fou
     straight();
 }
 
+BentNeedle::BentNeedle(const BentNeedle& o)
+    : mParams(o.mParams), mBeam(o.mBeam), mTrack(o.mTrack), mFoundation(o.mFoundation->clone()),
+      mReference(o.mReference), mRoll(o.mRoll), mHub(o.mHub), mU(o.mU), mE1(o.mE1), mE2(o.mE2), mCutAhead(o.mCutAhead),
+      mNodes(o.mNodes), mAxial(o.mAxial), mTipDirection(o.mTipDirection), mBevelForce(o.mBevelForce),
+      mHubForce(o.mHubForce), mHubTorque(o.mHubTorque), mInserted(o.mInserted), mHubStiffness(o.mHubStiffness),
+      mScale(o.mScale)
+{
+}
+
 void BentNeedle::reset() noexcept
 {
     mTrack.clear();
@@ -97,6 +106,7 @@ void BentNeedle::straight() noexcept
     mTipDirection = mU;
     mBevelForce = mHubForce = mHubTorque = Vec3d::Zero();
     mInserted = 0.0;
+    mHubStiffness = 0.0;
 }
 
 double BentNeedle::tipDeflectionMm() const noexcept
@@ -199,6 +209,7 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
     // The clamp's moment m_c turns the shaft toward e_c: about u × e1 = e2 and u × e2 = −e1.
     mHubForce = -(f1 * mE1 + f2 * mE2);
     mHubTorque = -(m1 * mE2 - m2 * mE1);
+    mHubStiffness = mScale * mBeam.startTranslationStiffness();
     extendTrack(inserted);
     return true;
 }

@@ -61,6 +61,11 @@ public:
     ///        to the shaft each tick (a direction along the shaft falls back to another axis)
     /// @throw ValueError on bad parameters or a null foundation
     BentNeedle(const BeamParams& params, std::unique_ptr<Foundation> foundation, const Vec3d& referenceAxis);
+    /// @brief A copy in the same state, with its own copy of the foundation (the
+    /// planner branches a needle at a depth to try a turn there). Allocates.
+    BentNeedle(const BentNeedle& o);
+    BentNeedle& operator=(const BentNeedle&) = delete;
+    BentNeedle(BentNeedle&&) noexcept = default;
 
     /// @brief No track, a straight needle.
     void reset() noexcept;
@@ -89,6 +94,9 @@ public:
     /// the hub: the clamp's reaction, reversed (physics.md §9.5).
     const Vec3d& hubForce() const noexcept { return mHubForce; }
     const Vec3d& hubTorque() const noexcept { return mHubTorque; }
+    /// @brief The hub's lateral stiffness this tick [N/mm]: the force per mm the hub
+    /// is moved sideways with the track held (§9.5; zero before the needle enters).
+    double hubStiffnessNPerMm() const noexcept { return mHubStiffness; }
     /// @brief Lateral offset of the tip from the hub's axis [mm].
     double tipDeflectionMm() const noexcept;
     /// @brief This tick's solution was steeper than kMaxSlope and held there.
@@ -117,6 +125,7 @@ private:
     Vec3d mTipDirection{0, 0, 1};
     Vec3d mBevelForce{0, 0, 0}, mHubForce{0, 0, 0}, mHubTorque{0, 0, 0};
     double mInserted = 0.0;
+    double mHubStiffness = 0.0;
     double mScale = 1.0; ///< this tick's solution, scaled to kMaxSlope when steeper
 };
 

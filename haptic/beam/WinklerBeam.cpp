@@ -6,6 +6,7 @@
 
 #include "core/Errors.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace voxhap::haptic {
@@ -25,6 +26,7 @@ WinklerBeam::WinklerBeam(int elements, double lengthMm, double eiNmm2, bool clam
     mBase.assign(rows * (kBand + 1), 0.0);
     mBand.assign(rows * (kBand + 1), 0.0);
     for (auto& r : mRhs) r.assign(rows, 0.0);
+    mScratch.assign(rows, 0.0);
     for (auto& u : mU) u.assign(std::size_t(2 * (elements + 1)), 0.0);
     const std::array<double, 4> none{};
     mBand.swap(mBase); // scatter() writes mBand: build the base there
@@ -42,6 +44,7 @@ std::array<double, 4> WinklerBeam::shape(double t, double h) noexcept
 void WinklerBeam::begin() noexcept
 {
     std::copy(mBase.begin(), mBase.end(), mBand.begin());
+    mFactored = false;
     for (auto& r : mRhs) std::fill(r.begin(), r.end(), 0.0);
     mStartFoundation = Local{};
     mStartLoad = {};
@@ -84,12 +87,15 @@ void WinklerBeam::addEndForce(double f1, double f2) noexcept
 bool WinklerBeam::solve() noexcept
 {
     for (auto& u : mU) std::fill(u.begin(), u.end(), 0.0);
+    mFactored = false;
     if (!choleskyBand<kBand>(mBand.data(), mUnknowns)) return false;
+    mFactored = true;
     for (std::size_t c = 0; c < 2; ++c) {
         solveBand<kBand>(mBand.data(), mUnknowns, mRhs[c].data());
         for (int i = 0; i < mUnknowns; ++i) {
             if (!std::isfinite(mRhs[c][std::size_t(i)])) {
                 for (auto& u : mU) std::fill(u.begin(), u.end(), 0.0);
+                mFactored = false;
                 return false;
             }
             mU[c][std::size_t(i + mOffset)] = mRhs[c][std::size_t(i)];
@@ -123,6 +129,21 @@ void WinklerBeam::startReaction(double& f1, double& f2, double& m1, double& m2) 
         }
     }
     f1 = r[0][0], m1 = r[0][1], f2 = r[1][0], m2 = r[1][1];
+}
+
+double WinklerBeam::startTranslationStiffness() noexcept
+{
+    if (!mClamped || !mFactored) return 0.0;
+    // Translate the start by 1 with its slope held: the free unknowns answer
+    // K_ff·x = −K_f0, and the start's force is K_00 + K_0f·x. Only element 0 couples
+    // the start's deflection (local 0) to the free unknowns (local 2 and 3).
+    const auto k = [&](std::size_t a, std::size_t b) { return mElement[a][b] + mStartFoundation[a][b]; };
+    std::fill(mScratch.begin(), mScratch.end(), 0.0);
+    mScratch[0] = -k(2, 0);
+    mScratch[1] = -k(3, 0);
+    solveBand<kBand>(mBand.data(), mUnknowns, mScratch.data());
+    const double stiffness = k(0, 0) + k(0, 2) * mScratch[0] + k(0, 3) * mScratch[1];
+    return std::isfinite(stiffness) ? std::max(0.0, stiffness) : 0.0;
 }
 
 } // namespace voxhap::haptic

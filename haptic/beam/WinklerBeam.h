@@ -53,6 +53,11 @@ public:
     /// @brief What the clamp at x = 0 applies to the beam: the lateral force [N]
     /// and the moment [N·mm] in each direction's plane (zero for a free start).
     void startReaction(double& f1, double& f2, double& m1, double& m2) const noexcept;
+    /// @brief After a successful solve(): the force [N/mm] per unit lateral
+    /// translation of the clamped start, its slope held (the Schur complement of
+    /// the free unknowns; one more band solve on the factor). The same in both
+    /// directions; 0 for a free start. Never allocates.
+    double startTranslationStiffness() noexcept;
 
 private:
     using Local = std::array<std::array<double, 4>, 4>;
@@ -68,6 +73,8 @@ private:
     Local mElement{};                            ///< the bending stiffness of one element
     std::vector<double> mBase, mBand;            ///< lower band, (kBand + 1) per row
     std::array<std::vector<double>, 2> mRhs, mU; ///< per direction; mU over every node's (w, w')
+    std::vector<double> mScratch;                ///< a third right-hand side (startTranslationStiffness)
+    bool mFactored = false;                      ///< mBand holds this load case's factor
     Local mStartFoundation{};                    ///< element 0's foundation, for the clamp's reaction
     std::array<std::array<double, 4>, 2> mStartLoad{};
 };

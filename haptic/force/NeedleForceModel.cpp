@@ -139,6 +139,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     out.events.clear();
     out.terms = ForceBreakdown{};
     out.fault = out.critical = out.palpating = false;
+    out.hubTorque = Vec3d::Zero();
     out.palpation = PalpationOutput{};
     const double t = std::isfinite(in.timeS) ? in.timeS : mLastTimeS;
     const double dt = std::isfinite(in.dtS) && in.dtS > 0.0 ? std::min(in.dtS, mSafety.params().maxDtS) : 0.0;
@@ -165,6 +166,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     // A bending needle (§9): the device holds the hub, the terms read the bent tip.
     NeedleInput bent;
     if (mBeam) {
+        mBeam->setRoll(in.rollRad); // a NaN keeps the last roll
         mBeam->update(hub, dir);
         bent = in;
         bent.tip = mBeam->tip();
@@ -215,6 +217,16 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     }
     out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
     Vec3d model = -out.axialN * u + f.lateral;
+    if (mBeam) { // only here, so that a straight needle's sum keeps its bits
+        // §9.5: the beam's hub force reaches the hand through a virtual coupling at the
+        // device's stiffness k_c in series with the hub's own K: K·k_c/(K + k_c) is
+        // below both, whatever the free span.
+        const double kc = mDevice.maxStiffnessNPerMm, kHub = mBeam->hubStiffnessNPerMm();
+        const double share = kc > 0.0 ? kc / (kHub + kc) : 0.0;
+        f.bending = mPalpating ? Vec3d::Zero() : Vec3d(share * mBeam->hubForce());
+        out.hubTorque = mPalpating ? Vec3d::Zero() : mBeam->hubTorque();
+        model += f.bending;
+    }
     if (mPalp) model += f.palpation;
     if (mGuide) model += f.guidance;
     // §1.1 Eq. 1: F = F_R + F_C + F_G. A critical structure zeroes the tissue's forces;
@@ -256,6 +268,9 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
         popped = popped || e.type == EventType::Pop;
         if (mBeam) bendingEvent(e, in.tip, d, dir);
     }
+    // Backed off a tenting skin before its puncture: no Withdrawn event, but nothing
+    // was cut either.
+    if (mBeam && mBeam->entered() && !mState.skinEntered() && d < mState.surfaceMm()) mBeam->withdraw();
 
     // After skin entry the needle is tied to its line: the profile answers in O(1) (it
     // rebuilds itself, without allocating, if the shaft strays from the line). A bent
@@ -323,9 +338,12 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
 
 void NeedleForceModel::bendingEvent(const Event& e, const Vec3d& tip, double d, const Vec3d& dir) noexcept
 {
-    if (e.type == EventType::SkinEntry) {
+    // The track starts where the tip first meets the tissue, before a tenting skin is
+    // punctured (§9.5): the deflection is made in the first millimetres (§9.2), and
+    // a track started at the puncture would hold the tip straight through the tent.
+    if (e.type == EventType::SkinContact || (e.type == EventType::SkinEntry && !mBeam->entered())) {
         // The track starts on the skin: back along the shaft from the tip by its depth
-        // past the surface (the needle is straight until it enters).
+        // past the surface (the needle is straight until it touches).
         const double along = dir.dot(mPath.direction);
         const double back = along > 0.1 ? std::max(0.0, d - mState.surfaceMm()) / along : 0.0;
         mBeam->enter(tip - back * dir);

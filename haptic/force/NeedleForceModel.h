@@ -23,6 +23,7 @@
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/force/StickSlipProxy.h"
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -91,6 +92,10 @@ struct NeedleInput {
     Vec3d tip{0, 0, 0};       ///< [mm, LPS]
     Vec3d direction{0, 0, 1}; ///< shaft direction, hub to tip (normalised here)
     Vec3d velocity{0, 0, 0};  ///< tip velocity [mm/s]
+    /// The needle's roll about its axis [rad], NaN when the device senses none: a
+    /// bending needle's bevel turns with it (physics.md §9.3); without a roll it
+    /// keeps the scene's bevel orientation and the last roll read.
+    double rollRad = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// @brief Each term's axial share [N] (positive pushes out) and the lateral terms.
@@ -100,6 +105,8 @@ struct ForceBreakdown {
     Vec3d gravity{0, 0, 0};   ///< Kyung's F_G = −m·g holding up the handle (§1.1 Eq. 1) [N]
     Vec3d palpation{0, 0, 0}; ///< the skin's push on the palpating tip [N]
     Vec3d guidance{0, 0, 0};  ///< the guidance fixture's pull toward the planned line [N]
+    /// A bending needle's lateral force at the hub through the virtual coupling (§9.5) [N]
+    Vec3d bending{0, 0, 0};
 };
 
 struct NeedleOutput {
@@ -114,6 +121,9 @@ struct NeedleOutput {
     double plungerN = 0;    ///< syringe plunger force [N]
     double speedMmPerS = 0; ///< along the path [mm/s]
     TipState tip;
+    /// A bending needle's torque at the hub [N·mm] (§9.5): recorded for a device
+    /// with a torque channel; none of the presets has one, so it is not rendered.
+    Vec3d hubTorque{0, 0, 0};
     bool critical = false; ///< force zeroed by a critical structure
     bool fault = false;    ///< latched safety fault
     /// Palpating: the tip is felt against the skin map, not yet a needle on its

@@ -162,6 +162,44 @@ TEST(WinklerBeam, FiniteFreeFreeBeamMatchesItsClosedForm)
     }
 }
 
+// The hub's lateral stiffness (§9.5): the clamped start translated, its slope held.
+// In air the needle moves as a whole: no force. On a long Winkler beam, Hetényi's
+// semi-infinite beam with a guided end (y' = 0) under P: y(0) = Pλ/k, so K = k/λ = 4EIλ³.
+TEST(WinklerBeam, ClampedStartTranslationStiffness)
+{
+    const double L = 60.0;
+    for (const int elements : {1, 6, 60}) {
+        WinklerBeam beam(elements, L, kEi, /*clampedStart=*/true);
+        beam.begin();
+        ASSERT_TRUE(beam.solve());
+        // A rigid translation: zero to round-off of the band solve (K's terms are EI/h³).
+        const double scale = 12.0 * kEi * std::pow(elements / L, 3);
+        EXPECT_NEAR(beam.startTranslationStiffness(), 0.0, kSolveRelative * scale) << elements;
+    }
+    for (const double k : {0.1, 1.0}) {
+        const Hetenyi h(k);
+        const double length = 8.0 / h.lambda;
+        const int elements = int(std::ceil(length * h.lambda / 0.1));
+        WinklerBeam beam(elements, length, kEi, /*clampedStart=*/true);
+        beam.begin();
+        beam.addFoundation(0.0, [k](double, double& kk, double& r1, double& r2) { kk = k, r1 = r2 = 0.0; });
+        ASSERT_TRUE(beam.solve());
+        const double form = k / h.lambda;
+        const double tol = std::exp(-h.lambda * length) + discretisation(h.lambda * length / elements);
+        EXPECT_NEAR(beam.startTranslationStiffness(), form, tol * form) << "k = " << k;
+        // Control: the free end's stiffness k/(2λ) (y(0) = 2Pλ/k) is half: the test
+        // tells a guided start from a free one.
+        EXPECT_GT(std::abs(form - k / (2.0 * h.lambda)), 10.0 * tol * form);
+    }
+    // A free start has no clamp to translate; an unsolved load case has no factor.
+    WinklerBeam free(10, L, kEi, /*clampedStart=*/false);
+    free.begin();
+    EXPECT_EQ(free.startTranslationStiffness(), 0.0);
+    WinklerBeam unsolved(10, L, kEi, /*clampedStart=*/true);
+    unsolved.begin();
+    EXPECT_EQ(unsolved.startTranslationStiffness(), 0.0);
+}
+
 TEST(WinklerBeam, RefusesABeamWithoutLengthOrStiffness)
 {
     EXPECT_THROW(WinklerBeam(0, 10.0, kEi, true), ValueError);
