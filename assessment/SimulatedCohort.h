@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file SimulatedCohort.h
 /// @brief Simulated trainees for testing the assessment: careful and reckless
-/// simulated hands (haptic/servo/SimulatedDevices.h) with varied speed, grip and
+/// simulated hands (haptic/devices/SimulatedDevices.h) with varied speed, grip and
 /// reaction time, each run through a scene's force model in simulated time, giving
 /// the metrics.json fields `voxhap serve` writes.
 ///
@@ -11,7 +11,7 @@
 #pragma once
 
 #include "haptic/scene/Scene.h"
-#include "haptic/servo/SimulatedDevices.h"
+#include "haptic/devices/SimulatedDevices.h"
 
 #include <nlohmann/json.hpp>
 

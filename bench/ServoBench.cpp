@@ -6,7 +6,7 @@
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
-#include "haptic/servo/SimulatedDevices.h"
+#include "haptic/devices/SimulatedDevices.h"
 
 #include <igtlTransformMessage.h>
 

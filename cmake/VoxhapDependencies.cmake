@@ -28,6 +28,13 @@ set(CMAKE_MESSAGE_LOG_LEVEL NOTICE)
 find_package(GDCM 3.0 CONFIG REQUIRED)         # gdcmMSFF (un-namespaced; brings its includes)
 unset(CMAKE_MESSAGE_LOG_LEVEL)
 
+if(VOXHAP_WITH_REGISTRATION)
+  voxhap_wrap_itk(VOXHAP_HAVE_ITK) # voxhap_itk
+  if(NOT VOXHAP_HAVE_ITK)
+    message(FATAL_ERROR "ITK 5.2 not found: install libinsighttoolkit5-dev or configure with -DVOXHAP_WITH_REGISTRATION=OFF")
+  endif()
+endif()
+
 if(VOXHAP_WITH_IGTL)
   voxhap_wrap_openigtlink(VOXHAP_HAVE_IGTL) # voxhap_openigtlink
   if(NOT VOXHAP_HAVE_IGTL)

@@ -60,7 +60,7 @@ voxhap_install_headers(core)
 install(FILES ${PROJECT_BINARY_DIR}/core/include/core/Version.h DESTINATION ${VOXHAP_INSTALL_INCLUDEDIR}/core)
 voxhap_install_headers(volume)
 voxhap_install_headers(segmentation)
-voxhap_install_headers(haptic EXCLUDE igtl)
+voxhap_install_headers(haptic EXCLUDE igtl devices/drivers) # drivers are built in the tree, not installed
 voxhap_install_headers(assessment)
 voxhap_install_headers(planning)
 

@@ -50,3 +50,24 @@ function(voxhap_wrap_openigtlink found)
     INTERFACE_LINK_LIBRARIES "${VOXHAP_IGTL_LIBRARY};Threads::Threads")
   set(${found} TRUE PARENT_SCOPE)
 endfunction()
+
+# voxhap_itk: the ITK 5.2 modules registration/ uses, without ITK's use-file
+# (which would register every IO factory through generated code and add its
+# include directories to every target). Transform IO is registered by hand
+# (registration/TransformFile.cpp).
+function(voxhap_wrap_itk found)
+  if(TARGET voxhap_itk)
+    set(${found} TRUE PARENT_SCOPE)
+    return()
+  endif()
+  find_package(ITK 5.2 QUIET COMPONENTS ITKCommon ITKRegistrationMethodsv4 ITKMetricsv4 ITKOptimizersv4
+    ITKTransform ITKSpatialObjects ITKDistanceMap ITKIOTransformBase ITKIOTransformInsightLegacy)
+  if(NOT ITK_FOUND)
+    set(${found} FALSE PARENT_SCOPE)
+    return()
+  endif()
+  add_library(voxhap_itk INTERFACE IMPORTED)
+  target_include_directories(voxhap_itk SYSTEM INTERFACE ${ITK_INCLUDE_DIRS})
+  target_link_libraries(voxhap_itk INTERFACE ${ITK_LIBRARIES})
+  set(${found} TRUE PARENT_SCOPE)
+endfunction()

@@ -6,7 +6,7 @@
 /// so the candidate search (Search.h) calls it from many TBB tasks.
 #pragma once
 
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "planning/Trajectory.h"

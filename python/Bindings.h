@@ -23,6 +23,8 @@ void bindVolume(py::module_& m);
 void bindHaptic(py::module_& m);
 /// @brief Segmentation and path planning.
 void bindPlanning(py::module_& m);
+/// @brief CT and MR fusion (built with the registration library).
+void bindFusion(py::module_& m);
 
 /// @brief A JSON value as the Python value json.loads gives (dict, list, float, ...).
 py::object toPython(const nlohmann::json& j);

@@ -3,7 +3,7 @@
 /// @brief Python: the material field, shaft integration, scenes, one step of
 /// the force model and a scripted insertion (simulate).
 
-#include "python/Bindings.h"
+#include "python/HapticBindings.h"
 
 #include "core/Errors.h"
 #include "haptic/DeviceLimits.h"
@@ -42,19 +42,6 @@ struct PyIntegrator {
     std::shared_ptr<const PyMaterialField> field;
     std::unique_ptr<haptic::ShaftIntegrator> integrator;
     haptic::ShaftIntegral result; // reused: integrate() does not allocate
-};
-
-/// A scene made ready to run (volume, materials, layers); models are made from it.
-struct PyScene {
-    std::shared_ptr<const Volume> volume; // the caller's, or null: the scene's own
-    std::unique_ptr<haptic::SceneInstance> instance;
-};
-
-/// One force model; it reads the scene's material field, so it keeps the scene alive.
-struct PyForceModel {
-    std::shared_ptr<const PyScene> scene;
-    std::unique_ptr<haptic::NeedleForceModel> model;
-    haptic::NeedleOutput out;
 };
 
 haptic::Strategy strategyOf(const std::string& s)
@@ -117,6 +104,9 @@ py::list layersList(const std::vector<haptic::Layer>& layers)
     return out;
 }
 
+} // namespace
+
+// Shared with ServoBindings.cpp (HapticBindings.h).
 py::dict eventDict(const haptic::Event& e, const std::vector<haptic::Layer>& layers)
 {
     py::dict d;
@@ -159,6 +149,8 @@ py::dict outputDict(const haptic::NeedleOutput& o, const std::vector<haptic::Lay
     d["events"] = events;
     return d;
 }
+
+namespace {
 
 haptic::Scene sceneOf(const std::string& nameOrPath) { return haptic::loadScene(nameOrPath); }
 

@@ -4,10 +4,14 @@
 /// voxhap's exceptions to Python's, and the parts (docs/reference.md "Python").
 
 #include "python/Bindings.h"
+#include "python/HapticBindings.h"
 
 #include "core/Errors.h"
 #include "core/Version.h"
 #include "volume/Grids.h"
+#ifdef VOXHAP_PYTHON_WITH_IGTL
+#include "haptic/igtl/IgtlDevice.h"
+#endif
 
 #include <nlohmann/json.hpp>
 
@@ -46,5 +50,13 @@ PYBIND11_MODULE(_voxhap, m)
 
     python::bindVolume(m);
     python::bindHaptic(m);
+    python::bindServo(m);
     python::bindPlanning(m);
+#ifdef VOXHAP_PYTHON_WITH_FUSION
+    python::bindFusion(m);
+#endif
+#ifdef VOXHAP_PYTHON_WITH_IGTL
+    // Device kinds of the libraries this module links, by their explicit call (DeviceSpec.h says why).
+    haptic::registerIgtlDevice();
+#endif
 }

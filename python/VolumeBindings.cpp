@@ -132,7 +132,11 @@ py::dict metadataOf(const Volume& v)
     d["modality"] = m.modality;
     d["source"] = m.source;
     d["description"] = m.description;
-    d["mr_weighting"] = m.mrWeighting;
+    d["mr_weighting"] = ""; // CT and phantoms
+    // The typed facts under their names (docs/reference.md "Volume metadata"), as text.
+    for (const auto& [name, text] : volume::metadataFacts(m)) d[py::str(name)] = text;
+    // A fused volume's record as the dict json.loads gives, not as its text.
+    if (m.fusion) d["fusion"] = toPython(volume::toJson(*m.fusion));
     py::dict extra;
     for (const auto& [k, value] : m.extra) extra[py::str(k)] = value;
     d["extra"] = extra;

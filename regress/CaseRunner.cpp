@@ -12,6 +12,7 @@
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/shaft/LabelTrace.h"
+#include "registration/Resample.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
@@ -148,6 +149,12 @@ void recordVolume(const VolumeSpec& v, Inputs& in)
         std::string layers;
         for (const auto& [t, mm] : v.layers) layers += (layers.empty() ? "" : ", ") + t + " " + numberText(mm) + " mm";
         putText(in, "phantom.layers", layers.empty() ? "default" : layers);
+        if (v.fusedMr) {
+            putNumber(in, "phantom.fused_mr.turn_deg", v.fusedMr->turnDeg, "deg");
+            putText(in, "phantom.fused_mr.shift_mm", vecText(v.fusedMr->shiftMm));
+            if (v.fusedMr->mapErrorMm != Vec3d::Zero())
+                putText(in, "phantom.fused_mr.map_error_mm", vecText(v.fusedMr->mapErrorMm));
+        }
     } else if (v.kind == "sphere") {
         putText(in, "phantom.slab_tissue", v.slabTissue);
         putText(in, "phantom.sphere_tissue", v.sphereTissue);
@@ -224,6 +231,52 @@ std::unique_ptr<haptic::NeedleForceModel> makeModel(const haptic::SceneInstance&
         .field = inst.field(),
         // A bending needle's tissue (physics.md §9.2), as the scene builds it.
         .foundation = s.terms.bending.on ? haptic::makeLabelFoundation(*inst.field()) : nullptr});
+}
+
+/// A palpation sweep (Suite.h) through @p model at @p rateHz: down onto the skin,
+/// across it pressed in, and up, the needle held along @p direction. Each row's
+/// depth is the distance travelled so far, its axial force the model's push out
+/// of the skin (along −direction), so that the profile reads against travel.
+haptic::InsertionResult runSweep(
+    haptic::NeedleForceModel& model, const PalpationSweep& s, const Vec3d& direction, double rateHz)
+{
+    const Vec3d corners[4] = {s.from - s.aboveMm * direction, s.from + s.pressMm * direction,
+        s.to + s.pressMm * direction, s.to - s.aboveMm * direction};
+    double length[3], total = 0;
+    for (int i = 0; i < 3; ++i) total += length[i] = (corners[i + 1] - corners[i]).norm();
+    const double dt = 1.0 / rateHz, stepMm = s.speedMmPerS * dt;
+    const long ticks = long(std::ceil(total / stepMm - 1e-9)) + 1;
+    haptic::InsertionResult r;
+    r.rows.reserve(std::size_t(ticks));
+    haptic::NeedleOutput out;
+    for (long n = 0; n < ticks; ++n) {
+        const double travelled = std::min(double(n) * stepMm, total);
+        int seg = 0;
+        double along = travelled;
+        while (seg < 2 && along > length[seg]) along -= length[seg++];
+        const Vec3d unit = (corners[seg + 1] - corners[seg]) / length[seg];
+        haptic::NeedleInput in;
+        in.timeS = double(n) * dt;
+        in.dtS = dt;
+        in.tip = corners[seg] + std::min(along, length[seg]) * unit;
+        in.direction = direction;
+        in.velocity = travelled < total ? Vec3d(s.speedMmPerS * unit) : Vec3d::Zero();
+        model.step(in, out);
+        haptic::InsertionRow row;
+        row.timeS = in.timeS;
+        row.depthMm = travelled;
+        row.force = out.force;
+        row.axialN = -out.modelForce.dot(direction);
+        row.firstEvent = int(r.events.size());
+        row.eventCount = out.events.size();
+        for (const haptic::Event& e : out.events) r.events.push_back(e);
+        r.summary.peakModelN = std::max(r.summary.peakModelN, out.modelForce.norm());
+        r.summary.peakRenderedN = std::max(r.summary.peakRenderedN, out.force.norm());
+        r.rows.push_back(row);
+    }
+    r.summary.finalDepthMm = total;
+    r.summary.durationS = double(ticks - 1) * dt;
+    return r;
 }
 
 /// The stored profile: a sample every @p stepMm of travel, and the last tick; the
@@ -369,7 +422,24 @@ void buildVolume(
         model.bounds.min = model.bounds.min.cwiseMax(crop->min);
         model.bounds.max = model.bounds.max.cwiseMin(crop->max);
     }
-    b.volume = std::make_shared<const volume::Volume>(volume::makePhantom(model, grid, table));
+    volume::Volume ct = volume::makePhantom(model, grid, table);
+    if (v.fusedMr) {
+        // The MR: the same phantom on a grid turned about the layers' normal,
+        // its frame then moved by the shift, so that the CT point x is the MR
+        // point x + shift; fused through that map as `voxhap fuse` resamples.
+        volume::GridSpec mrGrid = grid;
+        mrGrid.direction =
+            Eigen::AngleAxisd(v.fusedMr->turnDeg * 3.14159265358979323846 / 180.0, Vec3d::UnitY()).toRotationMatrix();
+        const volume::Volume scanned = volume::makePhantom(model, mrGrid, table);
+        volume::Geometry g = scanned.geometry();
+        g.origin += v.fusedMr->shiftMm;
+        volume::Volume mr(g, scanned.indexBox());
+        mr.setGrid(volume::Channel::T1,
+            std::const_pointer_cast<openvdb::GridBase>(scanned.grid(volume::Channel::T1))->deepCopyGrid());
+        const registration::AffineMap map{Mat3d::Identity(), v.fusedMr->shiftMm + v.fusedMr->mapErrorMm};
+        ct.setGrid(volume::Channel::T1, registration::resampleOnto(ct, mr, volume::Channel::T1, map));
+    }
+    b.volume = std::make_shared<const volume::Volume>(std::move(ct));
 }
 
 /// The path of a case: its points, else landmarks (the case's, else the
@@ -469,6 +539,8 @@ Runner::Runner(const Suite& suite, std::vector<std::size_t> selected, const RunO
             if (!p.table->find(p.volume.sphereTissue))
                 caseFail(suite, c, "volume.sphere_tissue", "unknown tissue '" + p.volume.sphereTissue + "'");
         }
+        if (c.sweep && !p.scene.terms.palpation.on)
+            caseFail(suite, c, "palpation_sweep", "scene '" + p.scene.name + "' does not turn palpation on");
         if (!c.script.empty()) {
             try {
                 (void)haptic::InsertionScript::load(c.script);
@@ -508,7 +580,7 @@ std::vector<CaseRun> Runner::run()
             }
             const Built& model = mImpl->models[p.volumeKey];
             std::optional<volume::WorldBox> crop;
-            if (model.model && c.script.empty()) { // a scripted case may go anywhere: the whole phantom
+            if (model.model && c.script.empty() && !c.sweep) { // a script or a sweep may go anywhere: the whole phantom
                 const auto [entry, target] = casePath(mSuite, c, p.scene, model);
                 if (entry && target && (*target - *entry).norm() > 1e-6)
                     crop = pathBox(*entry, *target, p.scene, c, p.volume);
@@ -561,7 +633,9 @@ CaseRun Runner::runOne(std::size_t k) const
         ? haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed)
         : haptic::InsertionScript::load(c.script);
     auto model = makeModel(inst, c.strategy);
-    const haptic::InsertionResult r = haptic::runInsertion(*model, script, scene.rateHz);
+    const haptic::InsertionResult r = c.sweep
+        ? runSweep(*model, *c.sweep, (inst.target() - inst.entry()).normalized(), scene.rateHz)
+        : haptic::runInsertion(*model, script, scene.rateHz);
 
     CaseRun out;
     out.profile = profileOf(r, c.sampleMm);
@@ -577,7 +651,13 @@ CaseRun Runner::runOne(std::size_t k) const
     putText(in, "case.strategy", c.strategy);
     putText(in, "case.entry", vecText(inst.entry()));
     putText(in, "case.target", vecText(inst.target()));
-    if (c.script.empty()) {
+    if (c.sweep) {
+        putText(in, "case.sweep.from", vecText(c.sweep->from));
+        putText(in, "case.sweep.to", vecText(c.sweep->to));
+        putNumber(in, "case.sweep.press_mm", c.sweep->pressMm, "mm");
+        putNumber(in, "case.sweep.speed_mm_per_s", c.sweep->speedMmPerS, "mm/s");
+        putNumber(in, "case.sweep.above_mm", c.sweep->aboveMm, "mm");
+    } else if (c.script.empty()) {
         putNumber(in, "case.speed_mm_per_s", speed, "mm/s");
         putNumber(in, "case.depth_mm", depth, "mm");
     } else {

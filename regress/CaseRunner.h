@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace voxhap::regress {
@@ -74,6 +75,7 @@ struct ExpectedEvent {
 
 /// @brief The closed form of physics.md §7 a case is checked against, per sample.
 struct ClosedForm {
+    std::string id;                 ///< "R1" … "R5"
     std::string rule;               ///< e.g. "physics.md §7 R1 (layered damping slab)"
     std::vector<double> modelN;     ///< the closed form at each sample's depth [N]
     std::vector<double> toleranceN; ///< allowed |ΔF| at each sample [N], from the rule's bound
@@ -127,14 +129,39 @@ private:
     double mVolumeSeconds = 0;
 };
 
+/// @brief A case's closed form, or why physics.md §7 has none for it.
+struct ClosedFormCheck {
+    ClosedFormCheck(ClosedForm f) : form(std::move(f)) { } // NOLINT: a rule that applies converts
+    static ClosedFormCheck none(std::string why)
+    {
+        ClosedFormCheck c;
+        c.why = std::move(why);
+        return c;
+    }
+    std::optional<ClosedForm> form;
+    std::string why; ///< without a form: the first precondition that fails ("term karnopp")
+    explicit operator bool() const { return form.has_value(); }
+    const ClosedForm* operator->() const { return &*form; }
+    const ClosedForm& operator*() const { return *form; }
+    /// @brief What `voxhap regress` prints: "closed form: R1" or "no closed form: <why>".
+    std::string line() const;
+
+private:
+    ClosedFormCheck() = default;
+};
+
 /// @brief The closed form for a case, if physics.md §7 has one for it (the
 /// damping slab R1, tilted or not, and the sphere in a slab R5, under a model
 /// whose only axial term is voxel damping; the [LP] stack R2 and the Conci
 /// profile R3 for their scenes' fixed tables; the Sénac nested boxes R4 on the
 /// lumbar phantom's midline), evaluated at @p samples with the
 /// tissue and scene values in @p recorded (the baseline's record, so that an
-/// edited value fails here too) — missing keys fall back to @p current.
-std::optional<ClosedForm> closedForm(
+/// edited value fails here too) — missing keys fall back to @p current. Each
+/// rule is computed from physics.md in regress's own code (R1 and R5 take β
+/// from the recorded tissue rows through §5.4's law and split it as §6.2
+/// writes), never through the haptic functions under test. Without a rule, the
+/// reason says which precondition failed.
+ClosedFormCheck closedForm(
     const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples);
 
 /// @brief FNV-1a over the bytes of @p values, continuing from @p hash.

@@ -8,7 +8,6 @@
 
 #include "regress/CaseRunner.h"
 
-#include "haptic/force/NeedleForceModel.h"
 #include "volume/phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
@@ -19,10 +18,23 @@
 #include <functional>
 #include <iterator>
 #include <limits>
+#include <map>
+#include <set>
 
 namespace voxhap::regress {
 
 namespace {
+
+// Why a case has no closed form, where several rules share the reason.
+const char* const kScripted = "a scripted insertion (the closed forms are at constant speed)";
+const char* const kNoSpeed = "no constant-speed straight insertion";
+const char* const kGauge = "a needle gauge other than the reference gauge (§3.3's d/d_ref scaling)";
+
+/// The material field stores β as float (a FloatGrid, MaterialField.h): each β
+/// the run integrates is the double of §5.4 rounded to the nearest float, half
+/// an ulp, 2⁻²⁴ relative. ∫β is a sum of non-negative terms, so its relative
+/// error, and the force's, stays within the same bound.
+constexpr double kFloatBeta = 0x1p-24;
 
 /// A value of the record, else of the current inputs.
 struct Lookup {
@@ -56,23 +68,6 @@ std::optional<Vec3d> vecOf(const std::string& text)
 /// Length of [a, b] inside [lo, hi].
 double overlap(double a, double b, double lo, double hi) { return std::max(0.0, std::min(b, hi) - std::max(a, lo)); }
 
-/// The model has voxel damping as its only axial term: Kyung's scene without
-/// bone on the path (§1.2, §1.3).
-bool dampingOnly(const Lookup& in)
-{
-    bool damping = false;
-    for (const auto& [key, v] : in.current) {
-        if (key.rfind("scene.terms.", 0) != 0) continue;
-        const std::string term = key.substr(12, key.find('.', 12) - 12);
-        if (term == "damping") damping = damping || v.text != "false";
-        if ((term == "tip" || term == "cutting" || term == "viscous" || term == "karnopp" || term == "lor" ||
-                term == "lock") &&
-            v.text != "false")
-            return false;
-    }
-    return damping;
-}
-
 /// The recorded BMI of a lumbar phantom: a run records it as text ("none" without one).
 std::optional<double> recordedBmi(const Lookup& in)
 {
@@ -87,9 +82,8 @@ std::optional<double> recordedBmi(const Lookup& in)
 /// A scene term is on in the record (else in the current inputs): recorded as its
 /// value ("true", "false", "{}" for an object without parameters) or by its
 /// parameters ("scene.terms.lor.time_constant_ms").
-bool termOn(const Lookup& in, const std::string& name)
+bool termOnIn(const Inputs& from, const std::string& name)
 {
-    const Inputs& from = in.recorded.empty() ? in.current : in.recorded;
     const std::string key = "scene.terms." + name;
     for (auto it = from.lower_bound(key); it != from.end() && it->first.rfind(key, 0) == 0; ++it) {
         if (it->first == key) return it->second.text != "false";
@@ -97,11 +91,75 @@ bool termOn(const Lookup& in, const std::string& name)
     }
     return false;
 }
+bool termOn(const Lookup& in, const std::string& name)
+{
+    return termOnIn(in.recorded.empty() ? in.current : in.recorded, name);
+}
+
+/// Why the model is not voxel damping alone (§1.2), or empty when it is. An
+/// allow-list: Eq. 5 damping, bone contact (R1 refuses rigid tissue on the path
+/// itself), the pivot correction (lateral, §1.4) and the critical-structure rule
+/// (R1 refuses critical tissue on the path). Any other term that is on, known
+/// today or added later, takes the closed form away and is named. Judged on
+/// the current scene: the terms the run had.
+std::string notDampingOnly(const Inputs& current)
+{
+    static const std::set<std::string> kAllowed{"damping", "bone", "pivot", "critical"};
+    bool damping = false;
+    for (const auto& [key, v] : current) {
+        if (key.rfind("scene.terms.", 0) != 0) continue;
+        const std::string term = key.substr(12, key.find('.', 12) - 12);
+        if (!termOnIn(current, term)) continue;
+        if (!kAllowed.count(term)) return "term " + term;
+        damping = damping || term == "damping";
+    }
+    return damping ? std::string() : "no damping term (R1 and R5 are Eq. 5 damping)";
+}
+
+/// physics.md §5.4: β of a tissue [N·s/mm²] from the values the run recorded,
+/// computed here from the document, not by the material field under test. Fat
+/// and muscle take Eq. 4, b = C1·exp(C2·T1), with the 1.5 T fit (C1 = 2464
+/// N·s/m², C2 = 1.398e-3 /ms, T1 clamped to 290..856 ms): the regression
+/// phantoms fill their t1 grid at 1.5 T (§7), which the material field reads;
+/// every other tissue its table β. Empty when the record lacks the value.
+std::optional<double> recordedBeta(const Lookup& in, const std::string& tissue)
+{
+    if (tissue == "fat" || tissue == "muscle") {
+        const std::optional<double> t1 = in.number(tissue + ".t1_1.5T");
+        if (!t1) return std::nullopt;
+        return 2464.0 * std::exp(1.398e-3 * std::clamp(*t1, 290.0, 856.0)) * 1e-6; // N·s/m² → N·s/mm²
+    }
+    return in.number(tissue + ".damping");
+}
+
+/// physics.md §6.2, written here from the document (not haptic::splitDamping,
+/// which is under test): with b = ∫β ds and the device's maximum damping b_dev,
+/// the device renders min(b, b_dev)·v as viscosity, capped, and the rest of b at
+/// the reference speed as friction, within what the cap leaves. Returns the sum.
+double dampingForceN(double b, double v, double bDevice, double capN, double referenceSpeed)
+{
+    if (!(v > 0.0)) return 0.0;
+    b = std::max(0.0, b);
+    const double rendered = std::min(b, bDevice);
+    const double viscous = std::min(rendered * v, capN);
+    const double friction = std::clamp((b - rendered) * referenceSpeed, 0.0, capN - viscous);
+    return viscous + friction;
+}
+
+/// Why a tissue of R1's slab or R5's sphere is not damping alone, or empty.
+std::string notDampingTissue(const Lookup& in, const std::string& tissue)
+{
+    if (in.text(tissue + ".rigid") == "true") // bone: contact, not damping (§1.3)
+        return "rigid tissue " + tissue + " on the path (contact, not damping)";
+    if (in.text(tissue + ".critical") == "true" && termOnIn(in.current, "critical"))
+        return "critical tissue " + tissue + " on the path (its force is zeroed)";
+    return {};
+}
 
 /// physics.md §7 R2: the [LP] stack of §4, Table I reproduced from the document
 /// (not from the code's table), at constant speed v > Δv:
 /// f = k·x (x into the tip's layer) + C (the tip's layer) + Σ b_i·l_i·v.
-std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+ClosedFormCheck lumbarPunctureStack(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
 {
     struct Row {
         double endMm, kNPerM, bNsPerM2, cN;
@@ -109,17 +167,19 @@ std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, c
     static const Row kTable[] = {{5, 0, 0, 0}, {7, 330, 2.1, 0.3}, {14, 0, 1.0, 0.3}, {30, 550, 3.0, 0.5},
         {35, 980, 3.3, 0.6}, {48, 0, 1.6, 0.2}, {55, 2370, 0, 0}};
     const auto speed = in.current.find("case.speed_mm_per_s");
-    if (!c.script.empty() || speed == in.current.end() || !speed->second.number) return std::nullopt;
+    if (!c.script.empty()) return ClosedFormCheck::none(kScripted);
+    if (speed == in.current.end() || !speed->second.number) return ClosedFormCheck::none(kNoSpeed);
     const double v = *speed->second.number;
     const double deltaV = in.number("scene.terms.karnopp.delta_v_mm_per_s").value_or(1.0);
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
-    if (!(v > deltaV)) return std::nullopt;
+    if (!(v > deltaV)) return ClosedFormCheck::none("speed at or below Karnopp's Δv (R2 holds above it)");
     if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
-        return std::nullopt; // §3.3's d/d_ref scaling of k and C: not part of R2
+        return ClosedFormCheck::none(kGauge); // §3.3's d/d_ref scaling of k and C: not part of R2
     // §4's bone texture −c·sgn(v) while the tip is in the bone row, when the scene has it
     // (c 0.3 N [chosen] unless the scene gives c_N).
     const double texture = termOn(in, "bone_texture") ? in.number("scene.terms.bone_texture.c_N").value_or(0.3) : 0.0;
     ClosedForm cf;
+    cf.id = "R2";
     cf.rule = "physics.md §7 R2 ([LP] stack, §4 Table I" + std::string(texture > 0.0 ? ", bone texture" : "") + ")";
     for (const Sample& smp : samples) {
         const double depth = smp.depthMm + 5.0; // Table I starts 5 mm out of the skin
@@ -147,7 +207,7 @@ std::optional<ClosedForm> lumbarPunctureStack(const Case& c, const Lookup& in, c
 /// dura not) and the elastic slopes multiplied by the tip's factor (§3.3).
 /// Within each layer (u from its start): Ce0 + Ce1·u + Ce2·u² up to the puncture
 /// at u_p, then the plateau Cp0, a drop of exactly T_f.
-std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+ClosedFormCheck conciProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
 {
     struct Seed {
         double punctureN, thicknessMm;
@@ -157,12 +217,13 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
         {7.467, 18.0, false, true}, {12.133, 7.4, true, true}, {2.437, 8.6, true, false}};
     constexpr double kBonePunctureN = 8.0265; // §3.2, the bone row: P_{i+1} of the last plateau
     const auto speed = in.current.find("case.speed_mm_per_s");
-    if (!c.script.empty() || speed == in.current.end() || !speed->second.number || !(*speed->second.number > 0))
-        return std::nullopt;
+    if (!c.script.empty()) return ClosedFormCheck::none(kScripted);
+    if (speed == in.current.end() || !speed->second.number || !(*speed->second.number > 0))
+        return ClosedFormCheck::none(kNoSpeed);
     const double v = *speed->second.number;
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
     if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
-        return std::nullopt; // §3.3's d/d_ref scaling of every force: not part of R3
+        return ClosedFormCheck::none(kGauge); // §3.3's d/d_ref scaling of every force: not part of R3
     const std::optional<double> bmi = recordedBmi(in);
     const double scale = bmi ? 10.0 * (2.52 + 0.11 * *bmi) / 40.9 : 1.0; // §3.3: s = SED/40.9 mm
     const std::string tip = in.text("scene.needle.tip");
@@ -196,6 +257,7 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
     // travel either side of a drop is not compared (as for R2).
     const double tick = 1.5 * v / rate;
     ClosedForm cf;
+    cf.id = "R3";
     cf.rule = "physics.md §7 R3 (Conci profile, §3.2 fitted table" + std::string(bmi ? ", BMI-scaled" : "") + ")";
     for (const Sample& smp : samples) {
         const double d = smp.depthMm;
@@ -235,7 +297,7 @@ std::optional<ClosedForm> conciProfile(const Case& c, const Lookup& in, const st
 ///   pop P of [T(s) + k_c·(d − s)], with T(P) the preloaded sum;
 /// - friction (Eq. 1's third term, §2.1): v·Σ b·l over the shaft in the layers
 ///   entered, and a tenting layer's pushed span (the tip is inside its dimple).
-std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
+ClosedFormCheck senacProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
 {
     // Where the rule applies: a constant-speed insertion down the midline of an
     // unturned lumbar phantom, a Sénac scene without other axial terms (Kyung's
@@ -248,24 +310,29 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
     const auto rotation = vecOf(in.text("phantom.rotation_deg"));
     const auto spacing = vecOf(in.text("phantom.spacing_mm"));
     const std::optional<double> speed = in.number("case.speed_mm_per_s");
-    if (!c.script.empty() || in.text("scene.model") != "senac" || in.text("scene.layers") != "labels" ||
-        in.text("phantom.kind") != "lumbar" || termOn(in, "damping") || termOn(in, "karnopp") || !entry || !target ||
-        !rotation || !spacing || !speed)
-        return std::nullopt;
-    if (entry->norm() != 0.0 || target->x() != 0.0 || target->z() != 0.0 || !(target->y() < 0.0) ||
-        rotation->norm() != 0.0)
-        return std::nullopt;
+    if (!c.script.empty()) return ClosedFormCheck::none(kScripted);
+    if (in.text("scene.layers") != "labels") return ClosedFormCheck::none("the senac model on a fixed table");
+    if (in.text("phantom.kind") != "lumbar")
+        return ClosedFormCheck::none("the senac model on the " + in.text("phantom.kind") + " phantom (R4: lumbar)");
+    for (const char* term : {"damping", "karnopp"}) {
+        if (termOn(in, term)) return ClosedFormCheck::none("term " + std::string(term) + " beside the senac model");
+    }
+    if (!entry || !target || !rotation || !spacing || !speed) return ClosedFormCheck::none(kNoSpeed);
+    if (entry->norm() != 0.0 || target->x() != 0.0 || target->z() != 0.0 || !(target->y() < 0.0))
+        return ClosedFormCheck::none("a path off the lumbar phantom's midline");
+    if (rotation->norm() != 0.0) return ClosedFormCheck::none("a rotated grid (R4: the phantom's own axes)");
     const double v = *speed;
-    constexpr double kEpsilonMmPerS = 0.2;          // §2.2 ε
-    if (!(v > kEpsilonMmPerS)) return std::nullopt; // below ε Eq. 3 is 0, the proxy holds: no closed form
+    constexpr double kEpsilonMmPerS = 0.2; // §2.2 ε
+    if (!(v > kEpsilonMmPerS))             // below ε Eq. 3 is 0, the proxy holds: no closed form
+        return ClosedFormCheck::none("speed at or below the senac model's ε (R4 holds above it)");
     if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
-        return std::nullopt; // §3.3's d/d_ref scaling of every force: not part of R4
+        return ClosedFormCheck::none(kGauge); // §3.3's d/d_ref scaling of every force: not part of R4
     const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
     const double needle = in.number("scene.needle.length_mm").value_or(90.0); // §3.3: the default needle, 90 mm
     const double kc = in.number("scene.terms.coupling_N_per_mm").value_or(0.0) > 0.0
         ? *in.number("scene.terms.coupling_N_per_mm")
         : in.number("device.max_stiffness_N_per_mm").value_or(0.0); // §6.2: k_c, else the device's maximum
-    if (!(kc > 0.0) || !(rate > 0.0)) return std::nullopt;
+    if (!(kc > 0.0) || !(rate > 0.0)) return ClosedFormCheck::none("no coupling stiffness or servo rate");
     const double tick = v / rate; // travel per servo tick [mm]
     const bool tipOn = termOn(in, "tip"), cuttingOn = termOn(in, "cutting"), frictionOn = termOn(in, "viscous");
 
@@ -280,18 +347,18 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
     for (const TableI& r : kTableI) {
         if (preset == r.preset) row = &r;
     }
-    if (!row) return std::nullopt;
+    if (!row) return ClosedFormCheck::none("lumbar preset '" + preset + "' has no [S19] Table I row");
     const char* const kNames[] = {"skin", "fat", "supraspinous_ligament", "interspinous_ligament", "ligamentum_flavum",
         "epidural_space", "dura", "csf"};
     double thickness[8];
     for (const int i : {0, 2, 3, 4, 6, 7}) {
         const auto t = in.number(std::string(kNames[i]) + ".thickness");
-        if (!t || !(*t > 0.0)) return std::nullopt;
+        if (!t || !(*t > 0.0)) return ClosedFormCheck::none(std::string(kNames[i]) + " has no thickness in the record");
         thickness[i] = *t;
     }
     thickness[1] = row->dermaMm - thickness[0];
     thickness[5] = row->epiduralMm;
-    if (!(thickness[1] > 0.0)) return std::nullopt;
+    if (!(thickness[1] > 0.0)) return ClosedFormCheck::none("no fat under the skin (derma thinner than the skin)");
     if (const auto bmi = recordedBmi(in)) {
         const double above = thickness[0] + thickness[1] + thickness[2] + thickness[3] + thickness[4];
         const double scale = 10.0 * (2.52 + 0.11 * *bmi) / above;
@@ -318,7 +385,7 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
     std::vector<std::string> tenting{"skin", "dura"}; // without a list: [S19] tents the derma and the dura (§2.1)
     if (const std::string t = in.text("scene.tenting"); !t.empty()) {
         const nlohmann::json j = nlohmann::json::parse(t, nullptr, false);
-        if (!j.is_array()) return std::nullopt;
+        if (!j.is_array()) return ClosedFormCheck::none("scene.tenting is not a list");
         tenting.clear();
         for (const auto& n : j) {
             if (n.is_string()) tenting.push_back(n.get<std::string>());
@@ -339,7 +406,7 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
         const double k = in.number(o + "elasticity_N_per_mm").value_or(in.number(t + "elasticity").value_or(0.0));
         if (std::find(tenting.begin(), tenting.end(), l.name) != tenting.end() && fp > 0.0) {
             const auto zp = in.number(o + "tent_depth_mm");
-            if (!zp && !(k > 0.0)) return std::nullopt;
+            if (!zp && !(k > 0.0)) return ClosedFormCheck::none(l.name + " tents without a tent depth or elasticity");
             l.tents = true;
             l.zp = zp ? *zp : fp / (2.0 * k);
             l.a1 = fp / (2.0 * l.zp);
@@ -347,7 +414,7 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
         }
         layers.push_back(l);
     }
-    if (layers.empty()) return std::nullopt;
+    if (layers.empty()) return ClosedFormCheck::none("no layer thicker than a voxel");
     const double compareEnd = layers.back().bottom; // §7 gives the phantom no further along the midline
 
     // Where the tip meets and enters each layer; the pops.
@@ -477,6 +544,7 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
     };
 
     ClosedForm cf;
+    cf.id = "R4";
     cf.rule = "physics.md §7 R4 (Sénac nested boxes, §6.2 proxy)";
     cf.modelN.assign(samples.size(), 0.0);
     cf.toleranceN.assign(samples.size(), 0.0);
@@ -545,35 +613,51 @@ std::optional<ClosedForm> senacProfile(const Case& c, const Lookup& in, const st
 
 } // namespace
 
-std::optional<ClosedForm> closedForm(
+std::string ClosedFormCheck::line() const { return form ? "closed form: " + form->id : "no closed form: " + why; }
+
+ClosedFormCheck closedForm(
     const Case& c, const Inputs& recorded, const Inputs& current, const std::vector<Sample>& samples)
 {
     const Lookup in{recorded, current};
+    if (c.sweep) return ClosedFormCheck::none("a palpation sweep (§7 has no profile across the back)");
     // The closed forms are those of a straight needle; a bending one's tip lags them by
     // what its deflection takes from the depth (physics.md §9.1).
-    if (termOn(in, "bending")) return std::nullopt;
-    if (in.text("scene.model") == "lumbar-puncture" && in.text("scene.layers") == "table")
-        return lumbarPunctureStack(c, in, samples);
-    if (in.text("scene.model") == "conci" && in.text("scene.layers") == "table") return conciProfile(c, in, samples);
-    if (in.text("scene.model") == "senac") return senacProfile(c, in, samples);
-    const std::string kind = c.volume.kind;
-    if ((kind != "slab" && kind != "sphere") || !c.script.empty() || !dampingOnly(in)) return std::nullopt;
+    if (termOn(in, "bending")) return ClosedFormCheck::none("a bending needle (§7's forms are a straight needle's)");
+    const std::string model = in.text("scene.model"), layersFrom = in.text("scene.layers");
+    if (model == "lumbar-puncture" && layersFrom == "table") return lumbarPunctureStack(c, in, samples);
+    if (model == "conci" && layersFrom == "table") return conciProfile(c, in, samples);
+    if (model == "senac") return senacProfile(c, in, samples);
+    if (model == "lumbar-puncture" || model == "conci")
+        return ClosedFormCheck::none("the " + model + " model on labels (R2 and R3 hold for its fixed table)");
+    const std::string kind = c.volume.kind.empty() ? in.text("phantom.kind") : c.volume.kind;
+    if (kind != "slab" && kind != "sphere")
+        return ClosedFormCheck::none("the " + kind + " phantom (R1 and R5 hold on the slab and the sphere)");
+    if (!c.script.empty()) return ClosedFormCheck::none(kScripted);
+    if (const std::string why = notDampingOnly(in.current); !why.empty()) return ClosedFormCheck::none(why);
     const auto entry = vecOf(in.current.at("case.entry").text), target = vecOf(in.current.at("case.target").text);
     const auto speed = in.current.find("case.speed_mm_per_s");
-    if (!entry || !target || speed == in.current.end() || !speed->second.number) return std::nullopt;
+    if (!entry || !target || speed == in.current.end() || !speed->second.number) return ClosedFormCheck::none(kNoSpeed);
     const Vec3d u = (*target - *entry).normalized();
     const double v0 = *speed->second.number;
-    const double needle = in.number("scene.needle.length_mm").value_or(haptic::Needle{}.lengthMm);
-    const auto beta = [&](const std::string& tissue) { return in.number(tissue + ".beta_used").value_or(0.0); };
-
-    haptic::ForceTerms::Damping damping;
-    damping.on = true;
-    damping.capN = in.number("damping.cap_N").value_or(damping.capN);
-    damping.referenceSpeedMmPerS = in.number("damping.reference_speed_mm_per_s").value_or(damping.referenceSpeedMmPerS);
-    haptic::DeviceLimits device;
-    device.maxDampingNsPerMm = in.number("device.max_damping_Ns_per_mm").value_or(device.maxDampingNsPerMm);
-    // splitDamping is Lipschitz in ∫β with constant max(v, v_ref) (§6.2): the bound on ∫β times it bounds F.
-    const double lipschitz = std::max(v0, damping.referenceSpeedMmPerS);
+    const double needle = in.number("scene.needle.length_mm").value_or(90.0); // §3.3: the default needle, 90 mm
+    // β of each tissue on the path, from the record (regress's own law: recordedBeta).
+    std::map<std::string, double> betas;
+    std::string missing;
+    const auto beta = [&](const std::string& tissue) {
+        auto it = betas.find(tissue);
+        if (it != betas.end()) return it->second;
+        const std::optional<double> b = recordedBeta(in, tissue);
+        if (!b && missing.empty()) missing = tissue;
+        return betas[tissue] = b.value_or(0.0);
+    };
+    // §6.2's split, with the scene's cap and reference speed and the device's
+    // maximum damping as the run recorded them (else §1.1's 6 N, [K01]'s 10 mm/s
+    // and the touch preset's 0.002 N·s/mm of §6.3).
+    const double capN = in.number("damping.cap_N").value_or(6.0);
+    const double referenceSpeed = in.number("damping.reference_speed_mm_per_s").value_or(10.0);
+    const double bDevice = in.number("device.max_damping_Ns_per_mm").value_or(0.002);
+    // The split is Lipschitz in ∫β with constant max(v, v_ref) (§6.2): the bound on ∫β times it bounds F.
+    const double lipschitz = std::max(v0, referenceSpeed);
 
     const double h = c.volume.spacingMm.maxCoeff();
     const double step = 0.25 * c.volume.spacingMm.minCoeff(); // the march step (CaseRunner.cpp)
@@ -589,12 +673,12 @@ std::optional<ClosedForm> closedForm(
             for (const auto& l : volume::SlabParams{}.layers) layers.emplace_back(l.tissue, l.thicknessMm);
         }
         for (const auto& [t, mm] : layers) {
-            if (in.text(t + ".rigid") == "true") return std::nullopt; // bone: contact, not damping (§1.3)
+            if (const std::string why = notDampingTissue(in, t); !why.empty()) return ClosedFormCheck::none(why);
         }
         const double tilt = c.volume.tiltDeg * kPi / 180.0;
         const Vec3d normal(0.0, std::cos(tilt), std::sin(tilt)); // SlabPhantoms.cpp: outward normal
         const double cosT = -u.dot(normal);
-        if (!(cosT > 0.2)) return std::nullopt;
+        if (!(cosT > 0.2)) return ClosedFormCheck::none("a path within 11.5° of the layers' plane");
         const double d0 = -normal.dot(*entry); // the entry's depth below the surface
         std::vector<double> z{0.0}, b;
         for (const auto& [t, mm] : layers) z.push_back(z.back() + mm), b.push_back(beta(t));
@@ -626,18 +710,23 @@ std::optional<ClosedForm> closedForm(
             boundTerm += maxJump * h / (8 * cosT); // R1's smearing term
         else if (strategy == "march-nearest")
             boundTerm += sumJump * step; // the trapezoid rule across each jump
+        cf.id = "R1";
         cf.rule = "physics.md §7 R1 (layered damping slab" + std::string(c.volume.tiltDeg != 0 ? ", tilted" : "") + ")";
     } else {
         const double T = c.volume.slabThicknessMm, R = c.volume.radiusMm;
         const Vec3d centre(0.0, -0.5 * T, 0.0); // SlabPhantoms.cpp: sphereModel
+        for (const std::string& t : {c.volume.slabTissue, c.volume.sphereTissue}) {
+            if (const std::string why = notDampingTissue(in, t); !why.empty()) return ClosedFormCheck::none(why);
+        }
         const double b0 = beta(c.volume.slabTissue), bs = beta(c.volume.sphereTissue);
-        if (!(std::abs(u.y()) > 0.2)) return std::nullopt;
+        if (!(std::abs(u.y()) > 0.2)) return ClosedFormCheck::none("a path within 11.5° of the slab's plane");
         // The slab's planes y = 0 and y = -T along the path, and the sphere's chord.
         const double y0 = entry->y();
         const double sIn = (y0 - 0.0) / -u.y(), sOut = (y0 + T) / -u.y();
         const double m = (centre - *entry).dot(u);
         const double rho2 = (centre - *entry).squaredNorm() - m * m;
-        if (rho2 > 0.64 * R * R) return std::nullopt; // R5's voxel bound holds for ρ ≤ 0.8R
+        if (rho2 > 0.64 * R * R) // R5's voxel bound holds for ρ ≤ 0.8R
+            return ClosedFormCheck::none("a path more than 0.8 R from the sphere's centre (R5's voxel bound)");
         const double half = std::sqrt(R * R - rho2);
         integral = [=](double a, double s) {
             return b0 * overlap(a, s, std::min(sIn, sOut), std::max(sIn, sOut)) +
@@ -653,8 +742,10 @@ std::optional<ClosedForm> closedForm(
             boundTerm += std::max(jump, b0) * h / 8;
         else if (strategy == "march-nearest")
             boundTerm += (2 * jump + 2 * b0) * step;
+        cf.id = "R5";
         cf.rule = "physics.md §7 R5 (sphere in a slab)";
     }
+    if (!missing.empty()) return ClosedFormCheck::none(missing + " has no damping or T1 in the record");
     // R1 and R5 take the layers as unbounded; the phantoms are blocks ±w wide in
     // x and z (§7), cut on the voxels within a voxel diagonal of that. A tilted
     // or oblique path may leave the block sideways: from there the tip (the
@@ -663,17 +754,16 @@ std::optional<ClosedForm> closedForm(
     const double inside = halfWidth - std::sqrt(3.0) * h;
     for (const Sample& smp : samples) {
         const double s = smp.depthMm;
-        const double b = integral(s - needle, s);
-        const haptic::DampingSplit split = haptic::splitDamping(damping, device, b, v0);
-        const double f = split.viscousN + split.frictionN;
+        const double f = dampingForceN(integral(s - needle, s), v0, bDevice, capN, referenceSpeed);
         cf.modelN.push_back(f);
         const Vec3d tip = *entry + s * u;
         if (std::abs(tip.x()) > inside || std::abs(tip.z()) > inside) {
             cf.toleranceN.push_back(std::numeric_limits<double>::infinity());
             continue;
         }
-        // R1: exact traversal to 1e-9 relative; the rest as bounded above.
-        cf.toleranceN.push_back(lipschitz * boundTerm + 1e-9 * std::abs(f) + 1e-9);
+        // R1: exact traversal to 1e-9 relative, and the material field's float β
+        // (kFloatBeta); the rest as bounded above.
+        cf.toleranceN.push_back(lipschitz * boundTerm + (1e-9 + kFloatBeta) * std::abs(f) + 1e-9);
     }
     return cf;
 }

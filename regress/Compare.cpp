@@ -308,7 +308,9 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
     // The closed form, with the values the baseline recorded (clarifications: an
     // edited tissue value fails here too, not only against the stored profile).
     static const Inputs kNone;
-    if (auto cf = closedForm(c, baseline ? baseline->inputs : kNone, run.inputs, now)) {
+    const ClosedFormCheck cf = closedForm(c, baseline ? baseline->inputs : kNone, run.inputs, now);
+    r.closedForm = cf.line();
+    if (cf) {
         r.reference = std::string(baseline ? "baseline + " : "") + cf->rule;
         double worst = 0;
         for (std::size_t i = 0; i < now.size(); ++i) {

@@ -63,6 +63,7 @@ struct CaseReport {
     /// 6.10 mm, +22 %, tolerance 1.50 mm"; empty without one.
     std::string measured;
     bool measuredPass = true;
+    std::string closedForm;  ///< "closed form: R1", or "no closed form: <why>" (ClosedFormCheck::line)
     std::string digest;      ///< of this run's profile (CaseRunner.h)
     std::string png;         ///< the failing case's plot, when drawn
     std::string plotProblem; ///< why it was not drawn (gnuplot missing or failing)

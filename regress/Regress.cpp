@@ -211,19 +211,26 @@ RegressResult runRegression(const Suite& suite, const RegressOptions& o)
 void printReport(std::ostream& os, const RegressResult& r)
 {
     os << "voxhap regress: " << r.suite << "\n\n";
-    std::size_t w = 4;
-    for (const auto& c : r.cases) w = std::max(w, c.name.size());
-    os << std::left << std::setw(int(w)) << "case"
-       << "  result  largest |ΔF| [N]  at [mm]  first past tol [mm]  events\n";
-    for (const auto& c : r.cases) {
+    // The last column says which closed form of physics.md §7 each case was held
+    // to, or why it has none: coverage that cannot vanish unseen.
+    const auto eventsOf = [](const CaseReport& c) {
         std::string events = c.eventDiffs.empty() ? "same" : c.eventDiffs.front();
         if (c.eventDiffs.size() > 1) events += " (+" + std::to_string(c.eventDiffs.size() - 1) + ")";
+        return events;
+    };
+    std::size_t w = 4, we = 6;
+    for (const auto& c : r.cases) w = std::max(w, c.name.size()), we = std::max(we, eventsOf(c).size());
+    os << std::left << std::setw(int(w)) << "case"
+       << "  result  largest |ΔF| [N]  at [mm]  first past tol [mm]  " << std::setw(int(we)) << "events"
+       << "  closed form\n";
+    for (const auto& c : r.cases) {
         os << std::left << std::setw(int(w)) << c.name << "  " << std::setw(6)
            << (c.pass                 ? "pass"
                       : c.hasBaseline ? "FAIL"
                                       : "NEW")
            << "  " << std::setw(16) << sci(c.maxDeltaN) << "  " << std::setw(7) << fixed(c.maxDeltaDepthMm, 2) << "  "
-           << std::setw(19) << (c.first ? fixed(c.first->depthMm, 2) : std::string("-")) << "  " << events << '\n';
+           << std::setw(19) << (c.first ? fixed(c.first->depthMm, 2) : std::string("-")) << "  " << std::setw(int(we))
+           << eventsOf(c) << "  " << c.closedForm << '\n';
     }
     // The literature's deflections, stated pass or fail (physics.md §9.2).
     for (const auto& c : r.cases) {
@@ -260,6 +267,7 @@ nlohmann::json reportJson(const RegressResult& r)
             {"max_delta_depth_mm", c.maxDeltaDepthMm}, {"event_differences", c.eventDiffs},
             {"peak_differences", c.peakDiffs}, {"input_differences", c.inputDiffs}, {"seconds", c.seconds}};
         j["closed_form_max_delta_N"] = c.closedFormMaxDeltaN ? Json(*c.closedFormMaxDeltaN) : Json(nullptr);
+        j["closed_form"] = c.closedForm; // "closed form: R1" or "no closed form: <why>"
         if (c.tipDeviationMm) j["tip_deviation_mm"] = *c.tipDeviationMm;
         if (!c.measured.empty()) j["measured"] = {{"pass", c.measuredPass}, {"text", c.measured}};
         j["first_past_tolerance"] = c.first

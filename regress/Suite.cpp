@@ -67,6 +67,27 @@ VolumeSpec parseVolume(Fields& c)
                 s.layers.emplace_back(l[0].get<std::string>(), l[1].get<double>());
             }
         }
+        if (v.has("fused_mr")) {
+            Fields f = v.sub("fused_mr");
+            VolumeSpec::FusedMr m;
+            if (f.has("turn_deg")) { // may be negative
+                const Json& t = f.raw("turn_deg");
+                if (!t.is_number() || !(std::abs(t.get<double>()) <= 180.0))
+                    f.fail("turn_deg", "must be a number of degrees within ±180");
+                m.turnDeg = t.get<double>();
+            }
+            if (f.has("shift_mm")) m.shiftMm = f.vec3("shift_mm");
+            if (f.has("map_error_mm")) m.mapErrorMm = f.vec3("map_error_mm");
+            // Layer-aligned grids: the MR's voxel centres across the layers fall
+            // on the CT's, so its t1 is the layers' own everywhere but at the
+            // block's sides, and R1 holds as on the slab itself.
+            if (s.tiltDeg != 0.0 || s.rotationDeg.norm() != 0.0)
+                f.fail("", "needs the layers along the grid: tilt_deg and rotation_deg 0");
+            const double across = m.shiftMm.y() / s.spacingMm.y();
+            if (std::abs(across - std::round(across)) > 1e-9)
+                f.fail("shift_mm", "its y (across the layers) must be a whole number of voxels (layer-aligned grids)");
+            s.fusedMr = m;
+        }
     } else if (phantom == "sphere") {
         s.slabTissue = v.string("slab_tissue", s.slabTissue);
         s.sphereTissue = v.string("sphere_tissue", s.sphereTissue);
@@ -135,6 +156,20 @@ Case parseCase(
         k.script = resolve(dir, i.string("script", ""));
         if (!k.script.empty() && (k.speedMmPerS || k.depthMm))
             i.fail("script", "a script gives the motion: speed_mm_per_s and depth_mm do not apply");
+    }
+    if (c.has("palpation_sweep")) {
+        if (c.has("insertion")) c.fail("palpation_sweep", "a sweep is its own motion: give no insertion");
+        Fields w = c.sub("palpation_sweep");
+        PalpationSweep s;
+        s.from = w.vec3("from");
+        s.to = w.vec3("to");
+        s.pressMm = w.number("press_mm", s.pressMm, true);
+        s.speedMmPerS = w.number("speed_mm_per_s", s.speedMmPerS, true);
+        s.aboveMm = w.number("above_mm", s.aboveMm, true);
+        if ((s.to - s.from).norm() < 1e-6) w.fail("to", "must differ from from: a sweep moves across the skin");
+        k.sweep = s;
+        // The skin map is the servo model's (SceneInstance): a sweep runs what the servo loop runs.
+        if (c.string("strategy", "servo") != "servo") c.fail("strategy", "a palpation sweep runs the servo's model");
     }
     k.strategy = c.string("strategy", k.strategy);
     if (std::find(kStrategies.begin(), kStrategies.end(), k.strategy) == kStrategies.end()) {

@@ -42,6 +42,18 @@ struct VolumeSpec {
     std::string slabTissue = "fat", sphereTissue = "muscle"; ///< sphere phantom
     double radiusMm = 10, slabThicknessMm = 40;              ///< sphere phantom [mm]
     double lesionRadiusMm = 8;                               ///< torso [mm]
+    /// slab: fuse a second scan of the phantom as the MR (docs/physics.md §7
+    /// R1, "Fused"): the phantom rasterised again on a grid turned by turnDeg
+    /// about the layers' normal (y), its frame moved by shiftMm, and its t1
+    /// resampled onto the CT's grid through that exact map (no registration),
+    /// or through it with mapErrorMm added: a registration error whose effect
+    /// on the force a case can show.
+    struct FusedMr {
+        double turnDeg = 0;
+        Vec3d shiftMm = Vec3d::Zero();
+        Vec3d mapErrorMm = Vec3d::Zero();
+    };
+    std::optional<FusedMr> fusedMr;
 };
 
 /// @brief The shaft-integration strategies a case may name ("sampler strategies").
@@ -59,6 +71,18 @@ struct Measured {
     std::string source;        ///< who measured it, with what, in what
 };
 
+/// @brief A palpation sweep across the back (a case kind of its own): the
+/// fingertip comes down onto the skin at @ref from, presses @ref pressMm in along
+/// the scene's path direction, slides to @ref to at that depth and lifts, at a
+/// constant speed. The profile is the push out of the skin against the distance
+/// travelled; the scene must turn palpation on.
+struct PalpationSweep {
+    Vec3d from{0, 0, 0}, to{0, 0, 0}; ///< points on the skin [mm, LPS]
+    double pressMm = 2.0;             ///< indentation below them, along the path direction [mm]
+    double speedMmPerS = 10.0;        ///< along the whole motion [mm/s]
+    double aboveMm = 5.0;             ///< the motion starts and ends this far outside the skin [mm]
+};
+
 /// @brief One regression case.
 struct Case {
     std::string name;                          ///< unique; [a-z0-9._-]; also the baseline's file name
@@ -69,6 +93,7 @@ struct Case {
     std::string entryLandmark, targetLandmark; ///< override the scene's landmarks
     std::optional<double> speedMmPerS, depthMm; ///< else the scene's
     std::string script;                         ///< motion script CSV (relative to the suite); empty: constant speed
+    std::optional<PalpationSweep> sweep;        ///< a palpation sweep instead of an insertion
     std::string strategy = "servo";
     double sampleMm = 0.2; ///< spacing of the stored profile samples along the depth [mm]
     Tolerance tolerance;

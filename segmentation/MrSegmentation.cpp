@@ -87,8 +87,9 @@ AutomaticLabels segmentMr(const volume::Volume& v, const Lattice& lat, const std
         detail::forEachVoxel(lat.size(), [&](std::size_t i) {
             if (body[i]) labels[i] = soft;
         });
-        const std::string& w = v.metadata().mrWeighting;
-        out.notes.push_back("MR intensity grid, not T1 (weighting: " + (w.empty() ? std::string("unknown") : w) +
+        const auto& w = v.metadata().mrWeighting;
+        out.notes.push_back("MR intensity grid, not T1 (weighting: " +
+            std::string(volume::mrWeightingName(w.value_or(volume::MrWeightingKind::Unknown))) +
             "): its contrast does not tell fat from muscle, so the body is labelled soft_tissue only; "
             "import a label map for more classes");
         return out;

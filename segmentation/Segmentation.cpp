@@ -153,7 +153,8 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
         report.method = "mr";
         // A T1-weighted series that could not be normalised still has bright fat;
         // any other weighting says nothing about fat against muscle.
-        const MrContrast c = v.metadata().mrWeighting == "T1-weighted" ? MrContrast::T1Weighted : MrContrast::Unknown;
+        const MrContrast c = v.metadata().mrWeighting == volume::MrWeightingKind::T1Weighted ? MrContrast::T1Weighted
+                                                                                             : MrContrast::Unknown;
         automatic(segmentMr(v, lat, toDense(lat, *volume::intensityGrid(v)), c, table));
     } else if (v.has(volume::Channel::Label)) {
         report.method = "existing";

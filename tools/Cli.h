@@ -105,6 +105,7 @@ Action registerPlan(CLI::App& app);
 Action registerRegress(CLI::App& app);
 Action registerBatch(CLI::App& app);
 Action registerAssess(CLI::App& app);
+Action registerFuse(CLI::App& app);
 
 /// @brief What `voxhap plan` and `voxhap demo` leave behind (CmdPlan.cpp).
 struct PlanFiles {

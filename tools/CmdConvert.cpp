@@ -68,9 +68,9 @@ int run(const ConvertOptions& o)
             j["skipped_files"] = dicom.skipped.size();
             j["skipped_bad_files"] = dicom.skippedBad.size();
         }
-        if (!v.metadata().mrWeighting.empty()) j["mr_weighting"] = v.metadata().mrWeighting;
-        if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end())
-            j["modality_source"] = it->second;
+        if (v.metadata().mrWeighting) j["mr_weighting"] = volume::mrWeightingName(*v.metadata().mrWeighting);
+        j["modality_source"] = volume::factSourceName(v.metadata().modalitySource);
+        if (!v.metadata().modalityReason.empty()) j["modality_reason"] = v.metadata().modalityReason;
         std::cout << j.dump(2) << '\n';
         return 0;
     }
@@ -88,12 +88,12 @@ int run(const ConvertOptions& o)
         }
         for (const auto& s : dicom.skippedBad) std::cout << "left out (--skip-bad): " << s.reason << "\n";
     }
-    if (!v.metadata().mrWeighting.empty()) {
-        std::cout << "MR     " << v.metadata().mrWeighting << " -> "
+    if (v.metadata().mrWeighting) {
+        std::cout << "MR     " << volume::mrWeightingName(*v.metadata().mrWeighting) << " -> "
                   << (v.has(volume::Channel::T1) ? "t1 [ms]" : "intensity (not T1)") << "\n";
     }
-    if (auto it = v.metadata().extra.find("modality_source"); it != v.metadata().extra.end()) {
-        std::cout << "modality " << v.metadata().modality << ": " << it->second << "\n";
+    if (!v.metadata().modalityReason.empty()) {
+        std::cout << "modality " << v.metadata().modality << ": " << v.metadata().modalityReason << "\n";
     }
     std::cout << "grid   " << d.x() << " x " << d.y() << " x " << d.z() << " voxels, spacing "
               << info.geometry.spacing.x() << " x " << info.geometry.spacing.y() << " x " << info.geometry.spacing.z()

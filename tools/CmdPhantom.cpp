@@ -6,7 +6,15 @@
 #include "tools/InfoReport.h"
 
 #include "volume/phantoms/Phantoms.h"
+#include "core/AtomicFile.h"
+#include "volume/io/NrrdFile.h"
+#include "volume/mr/MrWeighting.h"
 #include "volume/io/VdbFile.h"
+#include "volume/phantoms/PhantomScans.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
 
 #include <iostream>
 #include <memory>
@@ -34,7 +42,63 @@ struct PhantomOptions {
     double radius = 10, thickness = 40;
     // torso
     double lesionRadius = 8;
+    // a CT and MR scan pair instead of one volume
+    std::string scanPair;
+    std::string mrTurn = "0,0,0", mrShift = "0,0,0", mrSpacing = "1,1,4";
+    double mrNoise = 0.05;
+    std::uint64_t seed = 1;
 };
+
+/// `--scan-pair DIR`: the phantom as a CT and an MR of it, each as a scanner
+/// would export it (volume/phantoms/PhantomScans.h), for trying `voxhap fuse`
+/// against a known answer: DIR/ct.nrrd (hu), DIR/mr.nrrd with its BIDS sidecar
+/// (a T1 map at --field), and DIR/truth.txt, the true MR-from-CT map as a 4×4
+/// LPS matrix.
+int writeScanPair(const PhantomOptions& o, const volume::PhantomModel& model, const volume::GridSpec& grid,
+    const volume::TissueTable& table)
+{
+    namespace fs = std::filesystem;
+    volume::PhantomMrScan scan;
+    scan.rotation = rotationFromDegrees(parseVec3(o.mrTurn, "--mr-turn"));
+    scan.translationMm = parseVec3(o.mrShift, "--mr-shift");
+    scan.spacing = parseSpacing(o.mrSpacing, "--mr-spacing");
+    scan.noiseOfMuscleT1 = o.mrNoise;
+    scan.seed = o.seed;
+    scan.field = grid.field;
+    volume::PhantomScanTruth truth;
+    const fs::path dir = o.scanPair;
+    fs::create_directories(dir);
+    const volume::Volume ct = volume::phantomCtScan(model, grid, table);
+    const volume::Volume mr = volume::phantomMrScan(model, table, scan, &truth);
+    OutputSet outputs;
+    outputs.add(dir / "ct.nrrd",
+        [&](const fs::path& tmp) { volume::saveNrrd(ct, volume::Channel::Hu, tmp, volume::NrrdEncoding::Gzip); });
+    outputs.add(dir / "mr.nrrd", [&](const fs::path& tmp) {
+        volume::saveNrrd(mr, volume::Channel::T1, tmp, volume::NrrdEncoding::Gzip, volume::NrrdKeys::Plain);
+    });
+    outputs.addStream(volume::bidsSidecarPath(dir / "mr.nrrd"),
+        [&](std::ostream& os) { os << volume::phantomMrSidecar(scan.field); });
+    outputs.addStream(dir / "truth.txt", [&](std::ostream& os) {
+        os.precision(17);
+        for (int r = 0; r < 3; ++r)
+            os << truth.linear(r, 0) << ' ' << truth.linear(r, 1) << ' ' << truth.linear(r, 2) << ' ' << truth.offset[r]
+               << '\n';
+        os << "0 0 0 1\n";
+    });
+    outputs.commit();
+    if (o.common.json) {
+        nlohmann::json j;
+        j["ct"] = (dir / "ct.nrrd").string();
+        j["mr"] = (dir / "mr.nrrd").string();
+        j["truth"] = (dir / "truth.txt").string();
+        std::cout << j.dump(2) << '\n';
+    } else {
+        std::cout << "wrote " << (dir / "ct.nrrd").string() << " (CT, hu), " << (dir / "mr.nrrd").string()
+                  << " (MR T1 map with its BIDS sidecar) and " << (dir / "truth.txt").string()
+                  << " (the true MR-from-CT map)\n";
+    }
+    return 0;
+}
 
 std::vector<volume::SlabLayer> parseLayers(const std::string& text)
 {
@@ -99,6 +163,7 @@ int run(const PhantomOptions& o, const CLI::App& cmd)
     if (cmd.count("--bmi") > 0) spec.lumbar.bmi = o.bmi;
     spec.torso.lesionRadiusMm = o.lesionRadius;
     const volume::PhantomModel model = volume::phantomModel(spec, table);
+    if (!o.scanPair.empty()) return writeScanPair(o, model, grid, table);
 
     const std::string out = o.out.empty() ? o.kind + ".vdb" : o.out;
     if (stderrIsTerminal() && !o.common.json)
@@ -150,6 +215,17 @@ Action registerPhantom(CLI::App& app)
     cmd->add_option("--slab-tissue", o->slabTissue, "sphere: tissue of the slab (default fat)");
     cmd->add_option("--sphere-tissue", o->sphereTissue, "sphere: tissue of the sphere (default muscle)");
     cmd->add_option("--lesion-radius", o->lesionRadius, "torso: lesion radius in mm (default 8)");
+    cmd->add_option("--scan-pair", o->scanPair,
+        "Instead of one volume, write a CT and a moved MR of the phantom into this folder, as scanners export "
+        "them: ct.nrrd (hu at --spacing), mr.nrrd with a BIDS sidecar (a T1 map with Rician noise), and "
+        "truth.txt (the true MR-from-CT map, 4x4 LPS): a pair for `voxhap fuse` with a known answer");
+    cmd->add_option("--mr-turn", o->mrTurn,
+        "--scan-pair: the body's rotation in the MR about x,y,z in degrees, about its centre (default 0,0,0)");
+    cmd->add_option("--mr-shift", o->mrShift, "--scan-pair: the body's shift in the MR, x,y,z in mm (default 0,0,0)");
+    cmd->add_option("--mr-spacing", o->mrSpacing, "--scan-pair: the MR's voxel size in mm (default 1,1,4)");
+    cmd->add_option("--mr-noise", o->mrNoise, "--scan-pair: Rician noise as a fraction of muscle's T1 (default 0.05)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--seed", o->seed, "--scan-pair: the noise's seed (default 1)");
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };
 }

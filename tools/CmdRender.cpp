@@ -8,7 +8,9 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
+#include "registration/Resample.h"
 #include "render/Display.h"
+#include "render/FusionViews.h"
 #include "render/ImageFile.h"
 #include "render/Plan.h"
 #include "render/RenderVolume.h"
@@ -39,6 +41,8 @@ struct RenderOptions {
     double pixelMm = 0.0;
     int size = 768;
     bool noLabels = false, noSurfaces = false;
+    bool fusion = false;
+    std::string fusionMr;
 };
 
 render::RenderRequest request(const RenderOptions& o)
@@ -70,8 +74,49 @@ double secondsSince(std::chrono::steady_clock::time_point t)
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+/// `--fusion`: the registration checked by eye, in the three planes, against the
+/// MR at its header geometry (the MR file the fused volume recorded, or --fusion-mr).
+int runFusion(const RenderOptions& o)
+{
+    const volume::Volume fused = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
+    const auto& record = fused.metadata().fusion;
+    if (!record) throw IoError(o.input + ": not a fused volume (no registration record): make one with voxhap fuse");
+    ReaderOptions mrReader;
+    mrReader.series = record->mrSeries;
+    mrReader.volume = std::size_t(record->mrVolume);
+    const std::string mrPath = o.fusionMr.empty() ? record->mrPath : o.fusionMr;
+    const volume::Volume mr = loadVolumeWithProgress(mrPath, mrReader, stderrIsTerminal() && !o.common.json);
+    const volume::Channel c = fused.has(volume::Channel::T1) ? volume::Channel::T1 : volume::Channel::Intensity;
+    const volume::Channel mc = mr.has(volume::Channel::T1) ? volume::Channel::T1 : volume::Channel::Intensity;
+    volume::Volume before(fused.transformPtr()->copy(), fused.indexBox());
+    before.setGrid(c, registration::resampleOnto(fused, mr, mc, registration::AffineMap{}));
+    const auto b = fused.worldBounds();
+    const Vec3d point = o.point.empty() ? Vec3d(0.5 * (b[0] + b[1])) : parseVec3(o.point, "--point");
+    render::FusionViewStyle style;
+    style.pixelMm = o.pixelMm;
+    style.maxPixels = std::min(o.size, 512);
+    fs::create_directories(o.out);
+    nlohmann::json files = nlohmann::json::array();
+    for (render::ViewKind k : {render::ViewKind::Axial, render::ViewKind::Sagittal, render::ViewKind::Coronal}) {
+        const std::string name = std::string(render::viewName(k));
+        const fs::path file = fs::path(o.out) / ("fusion-" + name + ".png");
+        render::writePng(render::fusionSheet(render::renderFusionPanels(fused, before, k, point, style),
+                             render::renderFusionPanels(fused, fused, k, point, style), render::sliceTitle(k, point)),
+            file);
+        files.push_back(file.string());
+    }
+    if (o.common.json) {
+        std::cout << nlohmann::json{{"input", o.input}, {"mr", mrPath}, {"views", files}}.dump(2) << '\n';
+    } else {
+        for (const auto& f : files)
+            std::cout << "wrote  " << f.get<std::string>() << "  (header geometry above, registered below)\n";
+    }
+    return 0;
+}
+
 int run(const RenderOptions& o)
 {
+    if (o.fusion) return runFusion(o);
     render::RenderRequest req = request(o);
     // Cheap inputs first: a bad plan fails before the volume loads.
     if (!o.path.empty()) req.plan = render::loadPlan(o.path);
@@ -176,6 +221,11 @@ Action registerRender(CLI::App& app)
     cmd->add_option("--size", o->size, "Largest side of a view [px] (default 768)")->check(CLI::Range(32, 4096));
     cmd->add_flag("--no-labels", o->noLabels, "Slices without the tissue colours");
     cmd->add_flag("--no-surfaces", o->noSurfaces, "3D view without the critical-structure surfaces");
+    cmd->add_flag("--fusion", o->fusion,
+        "A fused volume (voxhap fuse): checkerboard, CT bone edges over the MR, and the MR in colour over the CT, in "
+        "the three planes, registered and at the header geometry (fusion-axial.png, ...)");
+    cmd->add_option(
+        "--fusion-mr", o->fusionMr, "With --fusion: the MR file (default: the one the fused volume recorded)");
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-render)");
     addReaderOptions(*cmd, o->reader);
     addCommonOptions(*cmd, o->common);

@@ -8,12 +8,12 @@
 
 #include "assessment/Metrics.h"
 
+#include "haptic/devices/DeviceSpec.h"
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/igtl/PoseStream.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/Session.h"
-#include "haptic/servo/SimulatedDevices.h"
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 
@@ -43,73 +43,15 @@ struct ServeOptions {
     GuideOptions guide;
 };
 
-/// What --device names, checked before anything is loaded: a typo in it is
-/// reported at once, not after the scene's volume was built.
-struct DeviceSpec {
-    enum class Kind {
-        Hand,
-        Sim,
-        Igtl,
-        Replay
-    } kind = Kind::Hand;
-    int port = 0; ///< igtl: 0 for the default
-    std::vector<haptic::ServoRecord> replay;
-};
-
-DeviceSpec parseDeviceSpec(const std::string& text)
+/// What --device names, checked (and a replay's file read) before anything is
+/// loaded: a typo in it is reported at once, not after the scene's volume was built.
+haptic::DeviceSpec deviceSpec(const std::string& text)
 {
-    DeviceSpec d;
-    if (text == "hand") return d;
-    if (text == "sim") return d.kind = DeviceSpec::Kind::Sim, d;
-    if (text == "igtl") return d.kind = DeviceSpec::Kind::Igtl, d;
-    if (text.rfind("igtl:", 0) == 0) {
-        d.kind = DeviceSpec::Kind::Igtl;
-        const std::string port = text.substr(5);
-        // Digits only: "28945junk" or "+80" is a typo, not a port (std::stoi took its prefix).
-        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos)
-            throw UsageError("--device: '" + text + "': the port must be a number in 1..65535");
-        d.port = std::stoi(port);
-        if (d.port < 1 || d.port > 65535) throw UsageError("--device: port " + port + " outside 1..65535");
-        return d;
+    try {
+        return haptic::parseDeviceSpec(text);
+    } catch (const ValueError& e) {
+        throw UsageError("--" + std::string(e.what())); // "--device 'x' is not hand, sim, ..."
     }
-    if (text.rfind("replay:", 0) == 0) {
-        d.kind = DeviceSpec::Kind::Replay;
-        d.replay = haptic::readSessionPoses(text.substr(7));
-        return d;
-    }
-    throw UsageError("--device: '" + text + "' is not hand, sim, igtl[:PORT] or replay:FILE");
-}
-
-std::unique_ptr<haptic::Device> makeDevice(const ServeOptions& o, DeviceSpec spec, const CLI::App& cmd,
-    const haptic::NeedleForceModel& m, const haptic::Scene& scene, double& duration)
-{
-    const double speed = cmd.count("--speed") ? o.speed : scene.speedMmPerS;
-    switch (spec.kind) {
-    case DeviceSpec::Kind::Hand: {
-        haptic::HandParams p;
-        p.speedMmPerS = speed;
-        p.startMm = -scene.approachMm;
-        p.stopOnLor = !o.reckless;
-        if (duration <= 0.0) duration = 60.0;
-        return std::make_unique<haptic::HandDevice>(m.path(), p, m.device());
-    }
-    case DeviceSpec::Kind::Sim: {
-        const double depth = scene.depthMm.value_or(60.0);
-        return std::make_unique<haptic::ScriptedDevice>(
-            m.path(), haptic::InsertionScript::constantSpeed(-scene.approachMm, depth, speed), m.device());
-    }
-    case DeviceSpec::Kind::Igtl: {
-        haptic::IgtlOptions io;
-        if (spec.port > 0) io.port = spec.port;
-        auto dev = std::make_unique<haptic::IgtlDevice>(io, m.device());
-        std::cerr << "voxhap serve: OpenIGTLink server on 127.0.0.1:" << dev->port()
-                  << " (TRANSFORM in: tip = translation, needle = z axis; SENSOR force out, in N)\n";
-        return dev;
-    }
-    case DeviceSpec::Kind::Replay:
-        return std::make_unique<haptic::ReplayDevice>(std::move(spec.replay), m.device());
-    }
-    throw UsageError("--device: unknown kind");
 }
 
 std::string layerName(const haptic::NeedleForceModel& m, int i)
@@ -122,15 +64,20 @@ int run(const ServeOptions& o, const CLI::App& cmd)
     // Ctrl-C from the start, set-up included: an interrupt while the scene
     // loads still ends in a clean stop with the (empty) session written.
     const InterruptGuard guard;
-    DeviceSpec spec = parseDeviceSpec(o.device); // before any loading: a typo is said at once
+    const haptic::DeviceSpec spec = deviceSpec(o.device); // before any loading: a typo is said at once
     const volume::TissueTable& table = tissueTable(o.common);
     const std::optional<haptic::GuideLine> guide = guideLine(o.guide, cmd); // a bad plan file fails first
     haptic::Scene scene = loadSceneSayingDefaults(o.scene);
     if (cmd.count("--rate")) scene.rateHz = o.rate;
     const haptic::SceneInstance inst(scene, nullptr, table);
     auto model = inst.makeModel(guide);
-    double duration = o.duration;
-    auto device = makeDevice(o, std::move(spec), cmd, *model, scene, duration);
+    // The simulated hand has no end of its own: a minute unless --duration says.
+    const double duration = o.duration > 0.0 ? o.duration : spec.kind == "hand" ? 60.0 : 0.0;
+    haptic::DeviceContext context = haptic::deviceContext(
+        *model, cmd.count("--speed") ? o.speed : scene.speedMmPerS, scene.approachMm, scene.depthMm);
+    context.careful = !o.reckless;
+    context.announce = [](const std::string& line) { std::cerr << "voxhap serve: " << line << '\n'; };
+    auto device = haptic::makeDevice(spec, context);
     haptic::ServoOptions so;
     so.rateHz = scene.rateHz;
     so.realtime = true; // SCHED_FIFO and locked memory when allowed; one line below when not
@@ -246,11 +193,15 @@ int run(const ServeOptions& o, const CLI::App& cmd)
 
 Action registerServe(CLI::App& app)
 {
+    // The devices of libraries that add kinds, by their explicit call (DeviceSpec.h says why).
+    haptic::registerIgtlDevice();
     auto o = std::make_shared<ServeOptions>();
+    std::string names; // the palpation scenes among them: the back felt before the needle
+    for (const auto& n : haptic::builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
     CLI::App* cmd = app.add_subcommand("serve",
         "Run the haptic servo loop in real time against a device; Ctrl-C stops "
         "and writes the session and trainee metrics");
-    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name")->required();
+    cmd->add_option("--scene", o->scene, "Scene: a JSON file or a built-in name (" + names + ")")->required();
     cmd->add_option("--device", o->device,
         "hand (a simulated trainee's hand, default), sim (a scripted constant-speed insertion), "
         "igtl[:PORT] (an OpenIGTLink server on loopback, default port 18944) or replay:FILE (a recorded "

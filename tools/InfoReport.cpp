@@ -5,6 +5,8 @@
 #include "core/Format.h"
 #include "tools/InfoReport.h"
 
+#include "tools/FusionReport.h"
+
 #include "volume/phantoms/Phantoms.h"
 
 #include <cstdio>
@@ -38,6 +40,21 @@ std::uint64_t denseBytes(const volume::VolumeInfo& info)
     return std::uint64_t(info.denseVoxels) * 4u * info.channels.size();
 }
 
+/// "3T (header: 2.89 T)", "1.5T (assumed)", "7 T (header): neither 1.5 T nor 3 T, no T1 law".
+std::string fieldStrengthText(const volume::VolumeMetadata& md)
+{
+    std::ostringstream s;
+    const std::string from(volume::factSourceName(md.fieldStrengthSource));
+    if (!md.fieldStrength) {
+        s << md.fieldStrengthTesla.value_or(0.0) << " T (" << from << "): neither 1.5 T nor 3 T, no T1 law";
+        return s.str();
+    }
+    s << volume::fieldStrengthName(*md.fieldStrength) << " (" << from;
+    if (md.fieldStrengthTesla) s << ": " << *md.fieldStrengthTesla << " T";
+    s << ")";
+    return s.str();
+}
+
 } // namespace
 
 Json infoJson(const volume::VolumeInfo& info, const std::string& file)
@@ -49,7 +66,7 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
     j["description"] = info.metadata.description;
     j["units"] = {
         {"hu", info.metadata.huUnits}, {"t1", info.metadata.t1Units}, {"intensity", info.metadata.intensityUnits}};
-    if (!info.metadata.mrWeighting.empty()) j["mr_weighting"] = info.metadata.mrWeighting;
+    if (info.metadata.mrWeighting) j["mr_weighting"] = volume::mrWeightingName(*info.metadata.mrWeighting);
     j["dimensions"] = vec(info.box.dims());
     j["index_min"] = vec(info.box.min);
     j["index_max"] = vec(info.box.max);
@@ -84,11 +101,14 @@ Json infoJson(const volume::VolumeInfo& info, const std::string& file)
         }
         j["layers"] = layers;
     }
-    Json extra = Json::object();
-    for (const auto& [k, v] : info.metadata.extra) {
-        if (k != volume::kLayersKey) extra[k] = v;
+    // The typed facts by their names (the layers are above), then the notes.
+    Json facts = Json::object();
+    for (const auto& [k, v] : volume::metadataFacts(info.metadata)) {
+        if (k != "modality" && k != "mr_weighting" && k != "layers" && k != "fusion") facts[k] = v;
     }
-    j["metadata"] = extra;
+    if (info.metadata.fusion) j["fusion"] = volume::toJson(*info.metadata.fusion);
+    for (const auto& [k, v] : info.metadata.extra) facts[k] = v;
+    j["metadata"] = facts;
     return j;
 }
 
@@ -104,20 +124,21 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
         const auto it = info.metadata.extra.find(key);
         return it == info.metadata.extra.end() ? std::string() : it->second;
     };
-    if (const std::string why = extra("modality_source"); !why.empty()) row("") << why << '\n';
-    if (!info.metadata.mrWeighting.empty()) {
-        row("weighting") << info.metadata.mrWeighting << '\n';
+    const volume::VolumeMetadata& md = info.metadata;
+    if (!md.modalityReason.empty()) row("") << md.modalityReason << '\n';
+    if (md.mrWeighting) {
+        row("weighting") << volume::mrWeightingName(*md.mrWeighting) << '\n';
         if (const std::string why = extra("mr_weighting_reason"); !why.empty()) row("") << why << '\n';
         if (const std::string refused = extra("t1_norm_refused"); !refused.empty()) {
             row("") << "not normalised to T1: " << refused << '\n';
-        } else if (const std::string field = extra("t1_norm_field"); !field.empty()) {
-            row("") << "normalised per scan to T1 [ms] at " << field << " (fat " << extra("t1_norm_fat") << ", muscle "
-                    << extra("t1_norm_muscle") << ")\n";
+        } else if (md.t1Kind == volume::T1Kind::NormalisedWeighted && md.fieldStrength) {
+            row("") << "normalised per scan to T1 [ms] at " << volume::fieldStrengthName(*md.fieldStrength) << " (fat "
+                    << extra("t1_norm_fat") << ", muscle " << extra("t1_norm_muscle") << ")\n";
         }
         if (const std::string bg = extra("mr_background"); !bg.empty()) row("background") << bg << '\n';
-        if (const std::string fs = extra("field_strength_source"); !fs.empty()) row("field") << fs << '\n';
     }
-    if (const std::string vol = extra("volume"); !vol.empty()) row("volume") << vol << '\n';
+    if (md.fieldStrength || md.fieldStrengthTesla) row("field") << fieldStrengthText(md) << '\n';
+    if (md.volumeChoice) row("volume") << volume::volumeChoiceText(*md.volumeChoice) << '\n';
     if (const std::string r = extra("resampled"); !r.empty()) {
         row("resampled") << r << '\n';
         row("") << "interpolation: " << extra("interpolation")
@@ -159,6 +180,10 @@ void printInfo(std::ostream& os, const volume::VolumeInfo& info, const std::stri
                << std::right << std::setw(12) << l.voxels << " voxels " << std::setw(10) << fixed(l.volumeMl, 2)
                << " ml\n";
         }
+    }
+    if (info.metadata.fusion) {
+        os << "registration (MR onto CT, voxhap fuse)\n";
+        printFusionRecord(os, *info.metadata.fusion, "  ");
     }
     if (info.layers) {
         os << "layers along the reference path (depth from its entry):\n";

@@ -8,6 +8,9 @@
 #                                       number of inputs from seed 1 and an
 #                                       empty corpus, so that every run of the
 #                                       suite tries the same inputs
+#   --min-runs N                        fail when a target tried fewer than N
+#                                       inputs (the time cap stopped it first:
+#                                       a slow runner must not test less)
 #
 # Each target starts from fuzz/seeds/<target> and fuzz/regressions/<target>
 # (inputs that once broke it) and keeps what it learns in
@@ -22,6 +25,7 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build_dir=${VOXHAP_BUILD_DIR:-$here/build}
 seconds=600
 runs=-1
+min_runs=0
 fresh=0
 targets=()
 while (($#)); do
@@ -29,9 +33,10 @@ while (($#)); do
     --minutes) seconds=$(($2 * 60)); shift 2 ;;
     --seconds) seconds=$2; shift 2 ;;
     --runs) runs=$2; shift 2 ;;
+    --min-runs) min_runs=$2; shift 2 ;;
     --fresh) fresh=1; shift ;;
     --build-dir) build_dir=$2; shift 2 ;;
-    -h|--help) sed -n '3,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,21p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     -*) echo "voxhap fuzz: unknown option $1 (see --help)" >&2; exit 2 ;;
     *) targets+=("$1"); shift ;;
   esac
@@ -68,14 +73,22 @@ for t in "${targets[@]}"; do
   if ((runs >= 0)); then echo "voxhap fuzz: $t, $runs inputs"; else echo "voxhap fuzz: $t for ${seconds} s"; fi
   # 4 KiB inputs reach every header field; rss 2 GiB: a parser asking for more is a finding.
   # grep hides libFuzzer's progress lines; the fuzzer's exit status is what counts.
+  log=$(mktemp)
   set +e
   "$bin/fuzz_$t" -max_total_time="$seconds" -runs="$runs" "${extra[@]}" -max_len=4096 -rss_limit_mb=2048 -timeout=10 \
-    -print_final_stats=1 -artifact_prefix="$artifacts/" "${inputs[@]}" 2>&1 |
+    -print_final_stats=1 -artifact_prefix="$artifacts/" "${inputs[@]}" 2>&1 | tee "$log" |
     grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|==[0-9]+==|SUMMARY|INFO: seed corpus)|ERROR|refusal|content check|^ +#[0-9]+ .* in [a-zA-Z_:]+voxhap'
   status=${PIPESTATUS[0]}
   set -e
+  executed=$(sed -n 's/^stat::number_of_executed_units: *\([0-9]*\).*/\1/p' "$log" | tail -n 1)
+  rm -f "$log"
   if ((status != 0)); then
     echo "voxhap fuzz: $t failed (exit $status); inputs in $artifacts" >&2
+    exit 1
+  fi
+  if ((min_runs > 0)) && ((${executed:-0} < min_runs)); then
+    echo "voxhap fuzz: $t tried ${executed:-no} inputs, fewer than the floor of $min_runs:" \
+      "the ${seconds} s cap stopped it (a slower machine must not test less)" >&2
     exit 1
   fi
 done

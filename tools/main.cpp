@@ -24,6 +24,7 @@ int main(int argc, char** argv)
         {"phantom", registerPhantom(app)},
         {"info", registerInfo(app)},
         {"convert", registerConvert(app)},
+        {"fuse", registerFuse(app)},
         {"segment", registerSegment(app)},
         {"plan", registerPlan(app)},
         {"simulate", registerSimulate(app)},

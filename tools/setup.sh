@@ -26,6 +26,8 @@ packages=(
   libopenimageio-dev openimageio-tools
   # DICOM
   libgdcm-dev
+  # CT-MR registration (ITK 5.2's v4 framework); elastix, the independent reference of its tests and bench
+  libinsighttoolkit5-dev elastix
   # gzip-encoded .nrrd; NIfTI headers (qform/sform)
   zlib1g-dev libnifti2-dev
   # device link
@@ -42,6 +44,9 @@ packages=(
   gnuplot-nox
   # real DICOM test files of other encodings and object classes (pydicom's test data)
   python3-pydicom
+  # DICOM series re-encoded in every transfer syntax for the held-out classes test (DCMTK; GDCM's
+  # gdcmconv for JPEG 2000, which DCMTK lacks)
+  dcmtk libgdcm-tools
   # the Python module (python/): pybind11 and numpy for /usr/bin/python3; its tests and example
   python3-dev python3-pybind11 pybind11-dev python3-numpy python3-pytest python3-matplotlib
   # a one-node SLURM for the test that runs the cohort example as an array job

@@ -313,8 +313,6 @@ std::string describeOverflow(std::string_view text, const std::string& what, con
 
 } // namespace
 
-std::string_view fieldStrengthName(FieldStrength f) { return f == FieldStrength::T3 ? "3T" : "1.5T"; }
-
 TissueTable TissueTable::parse(std::string_view text, const std::string& origin)
 {
     Json root;

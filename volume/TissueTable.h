@@ -8,6 +8,8 @@
 /// density N·s/mm² (so that force = β·v[mm/s]·ℓ[mm]), T1 in ms, CT in HU.
 #pragma once
 
+#include "volume/VolumeMetadata.h"
+
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -17,15 +19,6 @@
 #include <vector>
 
 namespace voxhap::volume {
-
-/// @brief MR field strength: T1 depends on it (physics.md §5.1).
-enum class FieldStrength {
-    T1_5,
-    T3
-};
-
-/// @brief "1.5T" or "3T".
-std::string_view fieldStrengthName(FieldStrength f);
 
 /// @brief A sourced number, already converted to its field's canonical unit.
 struct Quantity {

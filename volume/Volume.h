@@ -10,6 +10,7 @@
 #pragma once
 
 #include "core/Math.h"
+#include "volume/VolumeMetadata.h"
 
 #include <openvdb/math/Transform.h>
 
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -35,7 +37,7 @@ namespace voxhap::volume {
 /// scan normalised per scan (T1Normalisation.h). Every other MR image (PD, T2,
 /// FLAIR, diffusion, field maps, phase, T1-weighted scans that could not be
 /// normalised, MR of unknown weighting) is an `intensity` grid, which no force
-/// law reads as T1; metadata().mrWeighting says what it is.
+/// law reads as T1; metadata().mrWeighting says what it is (VolumeMetadata.h).
 enum class Channel {
     Hu,        ///< float, CT Hounsfield units
     T1,        ///< float, MR T1 [ms]
@@ -86,25 +88,6 @@ openvdb::math::Transform::Ptr makeTransform(const Geometry& g);
 /// @brief Recover spacing, origin and direction from a linear transform.
 /// @throw ValueError if the transform is not linear (e.g. a frustum).
 Geometry geometryOf(const openvdb::math::Transform& xform);
-
-/// @brief Descriptive metadata saved with the volume. No patient identity.
-struct VolumeMetadata {
-    std::string modality;    ///< "CT", "MR" or "phantom"
-    std::string source;      ///< file or generator that made the volume
-    std::string description; ///< free text, patient-free
-    std::string huUnits = "HU";
-    std::string t1Units = "ms";                     ///< always "ms": the t1 grid holds T1 only
-    std::string intensityUnits = "arbitrary units"; ///< of the intensity grid
-    /// MR only: what the series is, as decided from its headers (MrWeighting.h):
-    /// "T1 map", "T1-weighted", "PD-weighted", "T2-weighted", "diffusion", ...;
-    /// "unknown" when nothing says; empty for CT and phantoms.
-    std::string mrWeighting;
-    /// Further keys (saved as "voxhap.<key>"), e.g. "layers": a phantom's layer
-    /// table along its reference path, as JSON.
-    std::map<std::string, std::string> extra;
-
-    bool operator==(const VolumeMetadata&) const = default;
-};
 
 /// @brief Named sparse grids sharing one transform, with metadata.
 ///

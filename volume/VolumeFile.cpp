@@ -117,28 +117,32 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
     Volume raw = format == VolumeFormat::Nrrd ? loadNrrd(path, all)
         : format == VolumeFormat::Nifti       ? loadNifti(path, all)
                                               : loadMetaImage(path, all);
-    VolumeMetadata& rawMd = raw.metadata();
-    // A voxhap NRRD names its channel: t1, label and intensity are read as they are.
-    const bool declared = rawMd.extra.erase("declared_channel") > 0;
+    const VolumeMetadata& rawMd = raw.metadata();
+    // A voxhap NRRD names its channel: t1, label and intensity are read as they
+    // are, and hu is CT by the file's own word (NrrdFile.h).
     if (!raw.has(Channel::Hu)) return raw;
+    const bool declared = rawMd.modalitySource == FactSource::Header;
     const std::string name = path.string();
 
     std::optional<BidsSidecar> sidecar = readBidsSidecarBeside(path);
     ModalityGuess::Kind kind = ModalityGuess::Kind::Unknown;
-    std::string why;
+    std::string why = rawMd.modalityReason;
+    FactSource from = FactSource::Header;
     if (declared) {
         kind = ModalityGuess::Kind::Ct;
-        why = "declared by the file's voxhap_channel:=hu";
     } else if (options.modality != DeclaredModality::Infer) {
         kind = options.modality == DeclaredModality::Ct ? ModalityGuess::Kind::Ct : ModalityGuess::Kind::Mr;
         why = std::string("declared by the user (--channel ") + (kind == ModalityGuess::Kind::Ct ? "hu)" : "mr)");
+        from = FactSource::User;
     } else if (sidecar && (sidecar->modality == "MR" || sidecar->modality == "CT")) {
         kind = sidecar->modality == "CT" ? ModalityGuess::Kind::Ct : ModalityGuess::Kind::Mr;
         why = "Modality " + sidecar->modality + " in the BIDS sidecar " + sidecar->file.filename().string();
+        from = FactSource::Sidecar;
     } else {
         const ModalityGuess guess = inferModality(*raw.grid(Channel::Hu));
         kind = guess.kind;
         why = "inferred from the data: " + guess.reason;
+        from = FactSource::Data;
         if (kind == ModalityGuess::Kind::Unknown) {
             throw IoError(
                 name + ": modality: " + guess.reason + "; declare it with --channel hu (CT) or --channel mr (MR)");
@@ -148,7 +152,8 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
     Volume v(raw.transformPtr()->copy(), raw.indexBox());
     VolumeMetadata& md = v.metadata();
     md = rawMd;
-    md.extra["modality_source"] = why;
+    md.modalitySource = from;
+    md.modalityReason = why;
     if (kind == ModalityGuess::Kind::Ct) {
         v.setGrid(Channel::Hu, withAir(raw, kAirHu, options.dicom.airHu, false));
         md.modality = "CT";
@@ -170,13 +175,9 @@ Volume loadRasterVolume(const std::filesystem::path& path, VolumeFormat format, 
     mo.t1Weighted = options.dicom.t1Weighted;
     mo.normaliseT1Weighted = options.dicom.normaliseT1Weighted;
     mo.removeBackground = options.dicom.removeMrBackground;
-    mo.assumedField = options.dicom.assumedField;
-    const std::optional<double> field = sidecar ? sidecar->fieldStrengthT : std::nullopt;
-    assignMrMaterial(v, weighting, field, mo, name);
-    if (!field) {
-        md.extra["field_strength_source"] =
-            "assumed " + std::string(fieldStrengthName(mo.assumedField)) + ": no MagneticFieldStrength in a sidecar";
-    }
+    recordFieldStrength(
+        md, sidecar ? sidecar->fieldStrengthT : std::nullopt, FactSource::Sidecar, options.dicom.assumedField);
+    assignMrMaterial(v, weighting, mo, name);
     return v;
 }
 

@@ -52,7 +52,7 @@ RasterOptions rasterOptions(const LoadOptions& o);
 /// NIfTI, NRRD and MetaImage carry no modality: it comes from the user
 /// (options.modality), else a BIDS sidecar beside the file (x.json, as
 /// dcm2niix writes it), else the values (ModalityInference.h); the metadata
-/// say which and why ("modality_source"). MR then goes through
+/// say which and why (modalitySource, modalityReason). MR then goes through
 /// assignMrMaterial (MrMaterial.h) with the sidecar's weighting, or the
 /// user's declaration, or none: an intensity grid of unknown weighting.
 /// @throw IoError naming the file and the field; for an unknown format, and

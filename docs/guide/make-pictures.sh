@@ -6,11 +6,12 @@
 #   docs/guide/make-pictures.sh                 write docs/guide/img/*.png
 #   docs/guide/make-pictures.sh --out DIR       write them to DIR instead
 #   docs/guide/make-pictures.sh --ct DIR        the patient CT (default ../shared/data/ct-abdomen-tcia/dicom)
+#   docs/guide/make-pictures.sh --pair DIR      a CT and MR pair with ct/ and mr-t2/ (default ../shared/data/ct-mr-porcine)
 #   docs/guide/make-pictures.sh --list          print the pictures' names and exit
 #
 # Environment: VOXHAP_BUILD_DIR (default ./build), with the voxhap program and
-# the Python module. Needs the CT of the planning chapter; every other picture comes from built-in phantoms and
-# scenes. About a minute on 2 cores. Pictures are written only when every
+# the Python module. Needs the CT of the planning chapter and the CT and MR pair of the fusion chapter; every other picture comes from built-in phantoms and
+# scenes. About two minutes on 2 cores. Pictures are written only when every
 # step succeeded: a failed step leaves the old pictures in place.
 set -euo pipefail
 
@@ -18,6 +19,7 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 build_dir=${VOXHAP_BUILD_DIR:-$here/build}
 out=$here/docs/guide/img
 ct=$here/../shared/data/ct-abdomen-tcia/dicom
+pair=$here/../shared/data/ct-mr-porcine
 
 # The pictures, in the order the guide shows them. tests/docs checks that this
 # list and the guide's image links are the same set.
@@ -30,6 +32,8 @@ pictures=(
   regress-failure.png     # voxhap regress: a tissue edit caught, where and by how much
   bench-sampler.png       # voxhap bench sampler: runtime against error, Pareto front
   python-plan-force.png   # examples/python/plan_and_plot.py: predicted and rendered force, phantom and CT
+  fusion-axial.png        # voxhap render --fusion: the porcine CT and MR, before and after registration
+  fusion-plan-force.png   # voxhap plan on a fused torso phantom: damping from the MR's T1
   plan-bending-views.png  # voxhap plan with a bending needle: the predicted bent needles on the CT
 )
 
@@ -37,8 +41,9 @@ while (($#)); do
   case $1 in
     --out) out=$2; shift 2 ;;
     --ct) ct=$2; shift 2 ;;
+    --pair) pair=$2; shift 2 ;;
     --list) printf '%s\n' "${pictures[@]}"; exit 0 ;;
-    -h|--help) sed -n '3,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,15p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "make-pictures: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -46,6 +51,7 @@ done
 voxhap=$build_dir/bin/voxhap
 [ -x "$voxhap" ] || { echo "make-pictures: no $voxhap; run tools/setup.sh first" >&2; exit 2; }
 [ -d "$ct" ] || { echo "make-pictures: no CT folder '$ct' (--ct DIR)" >&2; exit 2; }
+[ -d "$pair/ct" ] && [ -d "$pair/mr-t2" ] || { echo "make-pictures: no CT and MR pair in '$pair' (--pair DIR)" >&2; exit 2; }
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -94,6 +100,17 @@ step "the Python example: plan on the phantom and the CT, insert, plot force aga
   { echo "make-pictures: no Python module in $build_dir/python (VOXHAP_WITH_PYTHON=ON builds it)" >&2; exit 2; }
 PYTHONPATH="$build_dir/python" MPLBACKEND=Agg /usr/bin/python3 "$here/examples/python/plan_and_plot.py" \
   --ct "$ct" --target 4,128,296 --allow-bone --out python-plan-force.png >/dev/null
+
+step "fuse the porcine CT and MR, and draw the check"
+"$voxhap" fuse "$pair/ct" "$pair/mr-t2" --out pig.vdb >/dev/null
+"$voxhap" render pig.vdb --fusion --out pig-views >/dev/null
+cp pig-views/fusion-axial.png fusion-axial.png
+
+step "a phantom scan pair, fused, and a plan on it"
+"$voxhap" phantom torso --spacing 1 --scan-pair pair --mr-turn 0,0,180 --mr-shift 10,-5,20 >/dev/null
+"$voxhap" fuse pair/ct.nrrd pair/mr.nrrd --out torso-fused.vdb >/dev/null
+"$voxhap" plan torso-fused.vdb --target 5,-78,0 --allow-bone --out fused-plan >/dev/null
+cp fused-plan/force-depth.png fusion-plan-force.png
 
 step "plan on the CT with a needle that bends"
 "$voxhap" plan "$ct" --target 4,128,296 --allow-bone --scene kyung-bending --top 3 --out plan-bend >plan-bend.txt

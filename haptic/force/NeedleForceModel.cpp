@@ -113,7 +113,14 @@ DampingSplit splitDamping(const ForceTerms::Damping& damping, const DeviceLimits
     b = std::max(0.0, b);
     const double rendered = std::min(b, device.maxDampingNsPerMm);
     DampingSplit s;
+#ifdef VOXHAP_MUTANT_SPLIT_DAMPING
+    // A deliberately wrong split, compiled only into tests/regress's mutant test: the
+    // viscous part ignores the device's limit, so the excess counts twice. §7 R1 and R5
+    // must catch it.
+    s.viscousN = std::min(b * v, damping.capN);
+#else
     s.viscousN = std::min(rendered * v, damping.capN);
+#endif
     s.frictionN = std::clamp((b - rendered) * damping.referenceSpeedMmPerS, 0.0, damping.capN - s.viscousN);
     return s;
 }

@@ -7,6 +7,7 @@
 #include "haptic/igtl/detail/IgtlWire.h"
 
 #include "core/Errors.h"
+#include "haptic/devices/DeviceSpec.h"
 
 #include <igtlSensorMessage.h>
 #include <igtlStringMessage.h>
@@ -208,6 +209,33 @@ void IgtlDevice::serve() noexcept
         }
     }
     if (client >= 0) ::close(client);
+}
+
+void registerIgtlDevice()
+{
+    DeviceKind kind;
+    kind.name = "igtl";
+    kind.usage = "igtl[:PORT]";
+    kind.check = [](DeviceSpec& s) {
+        if (s.text.find(':') == std::string::npos) return;
+        const std::string& port = s.argument;
+        // Digits only: "28945junk" or "+80" is a typo, not a port (std::stoi took its prefix).
+        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos)
+            throw ValueError("device '" + s.text + "': the port must be a number in 1..65535");
+        const int n = std::stoi(port);
+        if (n < 1 || n > 65535) throw ValueError("device '" + s.text + "': port " + port + " outside 1..65535");
+    };
+    kind.make = [](const DeviceSpec& s, const DeviceContext& c) {
+        IgtlOptions o;
+        if (!s.argument.empty()) o.port = std::stoi(s.argument);
+        auto device = std::make_unique<IgtlDevice>(o, c.limits);
+        if (c.announce) {
+            c.announce("OpenIGTLink server on " + o.bindAddress + ":" + std::to_string(device->port()) +
+                " (TRANSFORM in: tip = translation, needle = z axis; SENSOR force out, in N)");
+        }
+        return std::unique_ptr<Device>(std::move(device));
+    };
+    registerDeviceKind(std::move(kind));
 }
 
 } // namespace voxhap::haptic

@@ -94,4 +94,10 @@ private:
     IgtlCounters mCounters;
 };
 
+/// @brief Make "igtl[:PORT]" known to parseDeviceSpec() and makeDevice()
+/// (haptic/devices/DeviceSpec.h): the server on 127.0.0.1, on PORT (1..65535)
+/// or the default 18944. Programs built with voxhap::igtl call it once at
+/// start-up (DeviceSpec.h says why it is not a static initialiser).
+void registerIgtlDevice();
+
 } // namespace voxhap::haptic

@@ -13,6 +13,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cmath>
+#include <sstream>
 
 namespace voxhap::haptic {
 
@@ -23,11 +24,25 @@ using namespace voxhap::volume;
 /// The bone threshold without labels: about 150 HU (physics.md §5.2 [chosen]).
 constexpr double kBoneHuThreshold = 150.0;
 
-FieldStrength fieldOf(const Volume& v, const MaterialOptions& o)
+/// The field strength of the T1 law (MaterialOptions::field), or nothing when
+/// the metadata record a field that has no law.
+std::optional<FieldStrength> fieldOf(const Volume& v, const MaterialOptions& o)
 {
     if (o.field) return *o.field;
-    const auto it = v.metadata().extra.find("field_strength");
-    return (it != v.metadata().extra.end() && it->second == "3T") ? FieldStrength::T3 : FieldStrength::T1_5;
+    const VolumeMetadata& md = v.metadata();
+    if (md.fieldStrength) return *md.fieldStrength;
+    if (md.fieldStrengthTesla) return std::nullopt;
+    return FieldStrength::T1_5;
+}
+
+/// Why T1 cannot be read for a field without a law, for messages.
+std::string noLawReason(const VolumeMetadata& md)
+{
+    std::ostringstream s;
+    s << "the MR's field strength (" << md.fieldStrengthTesla.value_or(0.0) << " T, from the "
+      << factSourceName(md.fieldStrengthSource)
+      << ") is neither 1.5 T nor 3 T, the fields the T1 damping law is fitted at (physics.md §5.4)";
+    return s.str();
 }
 
 void checkLabelRange(const LabelGrid& labels)
@@ -48,9 +63,12 @@ struct BetaRule {
     bool haveLabels = false, haveT1 = false;
 
     bool usesT1(int label) const { return haveT1 && (!haveLabels || fromT1[std::size_t(label)]); }
-    float operator()(int label, float t1) const
+    /// @param t1 the voxel's T1, or nothing where the t1 grid is inactive: outside
+    ///        the MR's field of view or body in a fused volume (§5.5), where the
+    ///        table's value by label stands in
+    float operator()(int label, std::optional<float> t1) const
     {
-        if (usesT1(label)) return float(law.dampingNsPerMm2(t1));
+        if (t1 && usesT1(label)) return float(law.dampingNsPerMm2(*t1));
         const double b = (*perLabel)[std::size_t(label)].dampingNsPerMm2;
         return std::isfinite(b) ? float(b) : 0.0f;
     }
@@ -64,7 +82,13 @@ struct SourceReader {
     {
     }
     int label(const openvdb::Coord& c) { return labelAcc ? labelAcc->getValue(c) : 1; }
-    float t1(const openvdb::Coord& c) { return t1Acc ? t1Acc->getValue(c) : 0.0f; }
+    /// T1 where the t1 grid is active; nothing elsewhere (and without a t1 grid).
+    std::optional<float> t1(const openvdb::Coord& c)
+    {
+        float v = 0.0f;
+        if (t1Acc && t1Acc->probeValue(c, v)) return v;
+        return std::nullopt;
+    }
 
     std::optional<LabelGrid::ConstAccessor> labelAcc;
     std::optional<FloatGrid::ConstAccessor> t1Acc;
@@ -86,7 +110,40 @@ void fillLeaves(FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid
     });
 }
 
-FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
+/// How many of the β grid's voxels took T1 and how many the table (after the
+/// fill: every tile left is uniform in label and in T1's presence).
+DampingSources countSources(
+    const FloatGrid::TreeType& tree, const BetaRule& rule, const LabelGrid* labels, const FloatGrid* t1)
+{
+    DampingSources out;
+    auto fromT1 = [&](SourceReader& r, const openvdb::Coord& c) { return rule.usesT1(r.label(c)) && r.t1(c); };
+    {
+        SourceReader r(labels, t1);
+        auto it = tree.cbeginValueOn();
+        it.setMaxDepth(FloatGrid::TreeType::ValueOnCIter::LEAF_DEPTH - 1);
+        for (; it; ++it) {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            (fromT1(r, it.getCoord()) ? out.fromT1Voxels : out.fromTableVoxels) += std::int64_t(box.volume());
+        }
+    }
+    tbb::enumerable_thread_specific<SourceReader> readers([&] { return SourceReader(labels, t1); });
+    tbb::enumerable_thread_specific<DampingSources> counts;
+    openvdb::tree::LeafManager<const FloatGrid::TreeType> leaves(tree);
+    leaves.foreach ([&](const FloatGrid::TreeType::LeafNodeType& leaf, std::size_t) {
+        SourceReader& r = readers.local();
+        DampingSources& c = counts.local();
+        for (auto it = leaf.cbeginValueOn(); it; ++it)
+            ++(fromT1(r, it.getCoord()) ? c.fromT1Voxels : c.fromTableVoxels);
+    });
+    for (const DampingSources& c : counts) {
+        out.fromT1Voxels += c.fromT1Voxels;
+        out.fromTableVoxels += c.fromTableVoxels;
+    }
+    return out;
+}
+
+FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule, DampingSources& sources)
 {
     const auto labels = labelGrid(v);
     const auto t1 = t1Grid(v);
@@ -112,6 +169,7 @@ FloatGrid::Ptr buildDamping(const Volume& v, const BetaRule& rule)
     }
     if (nonUniform) tree->voxelizeActiveTiles(); // rare; tiles already filled become equal voxels
     fillLeaves(*tree, rule, labels.get(), t1.get());
+    sources = countSources(*tree, rule, labels.get(), t1.get());
     tree->prune(); // exact: tolerance 0
     auto grid = FloatGrid::create(tree);
     grid->setTransform(v.transform().copy());
@@ -124,7 +182,8 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
 {
     initializeOpenVdb();
     fillPerLabel(table);
-    mLaw = t1DampingLaw(fieldOf(v, options));
+    const std::optional<FieldStrength> field = fieldOf(v, options);
+    mLaw = t1DampingLaw(field.value_or(FieldStrength::T1_5));
     const auto labels = labelGrid(v);
     if (labels) {
         checkLabelRange(*labels);
@@ -135,22 +194,27 @@ MaterialField::MaterialField(const Volume& v, const TissueTable& table, const Ma
         if (!labels && !v.has(Channel::T1)) {
             if (v.has(Channel::Intensity)) {
                 // MR that is not T1 (MrMaterial.h): never read as T1 silently.
-                const std::string w = v.metadata().mrWeighting.empty() ? "unknown" : v.metadata().mrWeighting;
+                const std::string w(mrWeightingName(v.metadata().mrWeighting.value_or(MrWeightingKind::Unknown)));
                 throw ValueError("material field: tissue damping needs T1 or tissue labels, and this MR (" + w +
                     ") is an intensity grid, not T1: segment it (voxhap segment), or load a T1-weighted "
                     "image with --t1-weighted or a T1 map with --t1-map");
             }
             throw ValueError("material field: tissue damping needs a label or t1 grid (segment the volume first)");
         }
+        const bool t1 = v.has(Channel::T1) && v.metadata().t1Units == "ms";
+        if (t1 && !field && !labels) {
+            throw ValueError("material field: tissue damping needs T1 with a law or tissue labels, and " +
+                noLawReason(v.metadata()) + ": segment it (labels carry the tissue's damping)");
+        }
         BetaRule rule;
         rule.perLabel = &mPerLabel;
         rule.law = mLaw;
         rule.haveLabels = labels != nullptr;
-        rule.haveT1 = v.has(Channel::T1) && v.metadata().t1Units == "ms";
+        rule.haveT1 = t1 && field; // without a law, fat and muscle take the table's β as every other label
         for (const char* name : {"fat", "muscle"}) {
             if (const Tissue* t = table.find(name); t && t->id < kMaxLabels) rule.fromT1[std::size_t(t->id)] = true;
         }
-        auto beta = buildDamping(v, rule);
+        auto beta = buildDamping(v, rule, mSources);
         mMaxBeta = beta->activeVoxelCount() ? double(openvdb::tools::minMax(beta->tree()).max()) : 0.0;
         mBeta = beta;
     }

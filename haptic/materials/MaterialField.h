@@ -32,8 +32,10 @@ struct MaterialNeeds {
 /// @brief How image values map to mechanics.
 struct MaterialOptions {
     MaterialNeeds needs;
-    /// T1 law of this field strength (physics.md §5.4); by default the one the
-    /// volume's metadata names ("field_strength"), else 1.5 T.
+    /// T1 law of this field strength (physics.md §5.4); by default the volume's
+    /// VolumeMetadata::fieldStrength, else 1.5 T when the metadata record none.
+    /// A field they record as neither 1.5 T nor 3 T has no law: T1 is not read,
+    /// and damping comes from the labels alone (refused without labels).
     std::optional<volume::FieldStrength> field;
     ModulusLaw modulusLaw = ModulusLaw::Kopperdahl2002; ///< QCT density, as HU gives (§5.3)
     double tipAreaMm2 = 1.27;                           ///< needle tip area [mm²]: 18 G (physics.md §1.3)
@@ -63,6 +65,19 @@ struct StiffnessReport {
     double deviceLimitNPerMm = 0;
 };
 
+/// @brief Where the damping of the body came from (physics.md §5.5): T1 through
+/// Eq. 4 (fat and muscle where the t1 grid is active), or the table by label.
+struct DampingSources {
+    std::int64_t fromT1Voxels = 0;
+    std::int64_t fromTableVoxels = 0;
+    /// The fraction of the body's voxels whose β came from T1 (0 for an empty body).
+    double t1Fraction() const
+    {
+        const std::int64_t n = fromT1Voxels + fromTableVoxels;
+        return n ? double(fromT1Voxels) / double(n) : 0.0;
+    }
+};
+
 /// @brief Mechanical property grids and per-label parameters of one volume.
 /// @note Immutable after construction; share it between threads freely.
 class MaterialField {
@@ -87,6 +102,8 @@ public:
     const T1DampingLaw& t1Law() const { return mLaw; }
     /// @brief Largest β anywhere in the field [N·s/mm²] (for error bounds).
     double maxDamping() const { return mMaxBeta; }
+    /// @brief Where β came from, voxel by voxel (zero when no damping grid was built).
+    const DampingSources& dampingSources() const { return mSources; }
 
 private:
     void fillPerLabel(const volume::TissueTable& table);
@@ -96,6 +113,7 @@ private:
     StiffnessReport mStiffnessReport;
     T1DampingLaw mLaw;
     double mMaxBeta = 0;
+    DampingSources mSources;
 };
 
 } // namespace voxhap::haptic

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "haptic/DeviceLimits.h"
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/materials/MaterialField.h"
 #include "haptic/Needle.h"
 #include "haptic/force/NeedleForceModel.h"

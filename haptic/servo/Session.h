@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Session.h
-/// @brief A recorded servo session (pose, force, plunger, events), its file, its
-/// replay device, and the trainee metrics of [S19] (physics.md §2.3).
+/// @brief A recorded servo session (pose, force, plunger, events), its file, and
+/// the trainee metrics of [S19] (physics.md §2.3); haptic/devices/ReplayDevice.h
+/// plays one back.
 #pragma once
 
 #include "haptic/Procedure.h"
@@ -39,23 +40,6 @@ void addSessionOutputs(
 ///        line whose first seven fields are not finite numbers, a t_s that does
 ///        not increase, and a file of fewer than two records
 std::vector<ServoRecord> readSessionPoses(const std::filesystem::path& file);
-
-/// @brief Plays a recorded session's poses in time (linear between records).
-class ReplayDevice final : public Device {
-public:
-    ReplayDevice(std::vector<ServoRecord> poses, const DeviceLimits& limits);
-    DeviceReading read(double timeS) noexcept override;
-    void write(const Vec3d&, double, double) noexcept override { }
-    const DeviceLimits& limits() const noexcept override { return mLimits; }
-    std::string name() const override { return "replay"; }
-    bool finished() const noexcept override { return mFinished; }
-
-private:
-    std::vector<ServoRecord> mPoses;
-    DeviceLimits mLimits;
-    std::size_t mIndex = 0;
-    bool mFinished = false;
-};
 
 /// @brief Trainee metrics after [S19] (physics.md §2.3).
 struct TraineeMetrics {

@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 #include <string>
 
 namespace voxhap::assessment {
@@ -152,6 +154,73 @@ TEST(CrossValidation, SeparatedGroupsAreAllRight)
     EXPECT_NEAR(cv.ci95.low, wilsonInterval(20, 20).low, 1e-15);
     EXPECT_THROW(crossValidate(set(x, y), 1), ValueError);
     EXPECT_THROW(crossValidate(set(x, y), 21), ValueError);
+}
+
+/// @p n samples of two overlapping classes, equal priors: feature 0 is N(−μ, 1) for
+/// class 0 and N(+μ, 1) for class 1; @p noise further features are N(0, 1) for
+/// both. Normal deviates by Box–Muller from mt19937_64 (std::normal_distribution is
+/// not the same on every standard library).
+LabelledSet gaussianClasses(int n, double mu, int noise, std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    const auto uniform = [&rng] { return (double(rng() >> 11) + 0.5) * 0x1p-53; }; // (0, 1)
+    const auto normal = [&] { return std::sqrt(-2.0 * std::log(uniform())) * std::cos(2.0 * M_PI * uniform()); };
+    std::vector<std::vector<double>> x;
+    std::vector<int> y;
+    for (int i = 0; i < n; ++i) {
+        const int label = i % 2;
+        std::vector<double> row{(label ? mu : -mu) + normal()};
+        for (int k = 0; k < noise; ++k) row.push_back(normal());
+        x.push_back(row);
+        y.push_back(label);
+    }
+    return set(x, y);
+}
+
+/// Held-out predictions right, counted here from CrossValidation::predicted.
+int heldOutCorrect(const LabelledSet& d, const CrossValidation& cv)
+{
+    int correct = 0;
+    for (std::size_t i = 0; i < d.y.size(); ++i) correct += cv.predicted.at(i) == d.y[i];
+    return correct;
+}
+
+// Overlapping classes with a known Bayes error. For x ~ N(±μ, 1) with equal priors
+// the best any classifier can do is the rule x > 0, right with probability Φ(μ)
+// (Bayes accuracy 0.8413 at μ = 1); the log-odds 2μx are linear in x, so logistic
+// regression can reach it. 5-fold held-out accuracy over n samples must lie within
+// the binomial spread of Φ(μ): 4·sqrt(Φ(1−Φ)/n), 0.033 at n = 2000 (a fixed seed:
+// the tolerance says how far a correct implementation may be, not a flaky margin).
+// The control: classes that do not differ at all (μ = 0, Bayes accuracy 0.5) over 40
+// noise features and 60 samples. Held out, the accuracy stays within the spread of
+// 0.5; on its own training set the model does far better than any rule can, so
+// predicting the training set (what the cohort test once did) fails the same bound.
+TEST(CrossValidation, OverlappingClassesReachTheBayesAccuracyOnHeldOutFolds)
+{
+    const double mu = 1.0;
+    const double bayes = 0.5 * std::erfc(-mu / std::sqrt(2.0)); // Φ(μ)
+    EXPECT_NEAR(bayes, 0.8413, kFourDecimals);
+    const auto spread = [](double p, int n) { return 4.0 * std::sqrt(p * (1.0 - p) / n); };
+
+    const LabelledSet big = gaussianClasses(2000, mu, 0, 11);
+    const CrossValidation cv = crossValidate(big, 5);
+    ASSERT_EQ(cv.predicted.size(), big.y.size());
+    const int correct = heldOutCorrect(big, cv);
+    EXPECT_EQ(cv.correct, correct);
+    EXPECT_NEAR(double(correct) / 2000.0, bayes, spread(bayes, 2000));
+    EXPECT_NEAR(cv.accuracy, double(correct) / 2000.0, 1e-15);
+    const Interval w = wilsonInterval(correct, 2000);
+    EXPECT_EQ(cv.ci95.low, w.low);
+    EXPECT_EQ(cv.ci95.high, w.high);
+
+    // Nothing to learn: held out, chance; on its own training set, far better than chance.
+    const LabelledSet noise = gaussianClasses(60, 0.0, 40, 12);
+    const CrossValidation ncv = crossValidate(noise, 5);
+    EXPECT_NEAR(double(heldOutCorrect(noise, ncv)) / 60.0, 0.5, spread(0.5, 60));
+    const LogisticModel fitted = trainLogistic(noise);
+    int seen = 0;
+    for (std::size_t i = 0; i < noise.y.size(); ++i) seen += fitted.predict(noise.x[i]) == noise.y[i];
+    EXPECT_GT(double(seen) / 60.0, 0.5 + spread(0.5, 60)) << "the control: resubstitution must beat the bound";
 }
 
 TEST(LabelledCsv, ReadsAndRefusesNamingLineAndColumn)

@@ -75,7 +75,10 @@ TEST(SimulatedCohort, MeasuredSpeedFollowsTheSimulatedHand)
 
 // Trained on the simulated sessions' metrics (label 1 = reckless), 3-fold
 // cross-validated accuracy is above chance: the Wilson 95 % interval's lower bound
-// exceeds 0.5.
+// exceeds 0.5. The simulated hands differ by construction (disjoint speed ranges),
+// so this shows that the metrics carry the difference through simulate, the
+// session files and the assessment, not how good the classifier is: that is
+// CrossValidation.OverlappingClassesReachTheBayesAccuracyOnHeldOutFolds.
 TEST(SimulatedCohort, ClassifierSeparatesSimulatedHandsUnderCrossValidation)
 {
     const auto& run = simulated();
@@ -93,8 +96,6 @@ TEST(SimulatedCohort, ClassifierSeparatesSimulatedHandsUnderCrossValidation)
     }
     const CrossValidation cv = crossValidate(d, 3);
     EXPECT_GT(cv.ci95.low, 0.5) << cv.correct << "/" << cv.n;
-    const LogisticModel m = trainLogistic(d);
-    for (std::size_t i = 0; i < d.x.size(); ++i) EXPECT_EQ(m.predict(d.x[i]), d.y[i]) << run.trainees[i].id;
 }
 
 } // namespace

@@ -39,10 +39,12 @@ struct SyntheticSlice {
     /// MR sequence fields (written when not empty / > 0): what the weighting rule reads.
     std::string scanningSequence, sequenceVariant, sequenceName, imageType;
     double repetitionTimeMs = 0, echoTimeMs = 0, flipAngleDeg = 0;
-    int echoNumber = 0;               ///< (0018,0086) if > 0
-    int acquisitionNumber = 0;        ///< (0020,0012) if > 0
-    int instanceNumber = 0;           ///< (0020,0013) if > 0
-    std::string seriesNumber;         ///< (0020,0011) if not empty
+    int echoNumber = 0;        ///< (0018,0086) if > 0
+    int acquisitionNumber = 0; ///< (0020,0012) if > 0
+    int instanceNumber = 0;    ///< (0020,0013) if > 0
+    std::string seriesNumber;  ///< (0020,0011) if not empty
+    /// The patient and frame of reference (written when not empty): what fusion checks.
+    std::string patientId, patientName, frameOfReferenceUid;
     std::vector<std::int16_t> pixels; ///< rows × columns stored values, column fastest
 };
 
@@ -138,6 +140,9 @@ inline void writeSyntheticSlice(const SyntheticSlice& s, const std::filesystem::
     text(0x0018, 0x0024, gdcm::VR::SH, s.sequenceName);
     text(0x0008, 0x0008, gdcm::VR::CS, s.imageType);
     text(0x0020, 0x0011, gdcm::VR::IS, s.seriesNumber);
+    text(0x0010, 0x0020, gdcm::VR::LO, s.patientId);
+    text(0x0010, 0x0010, gdcm::VR::PN, s.patientName);
+    text(0x0020, 0x0052, gdcm::VR::UI, s.frameOfReferenceUid);
     number(0x0018, 0x0080, gdcm::VR::DS, s.repetitionTimeMs);
     number(0x0018, 0x0081, gdcm::VR::DS, s.echoTimeMs);
     number(0x0018, 0x1314, gdcm::VR::DS, s.flipAngleDeg);

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file SharedData.h
 /// @brief The real data beside the project (../shared/data). Locally a missing
-/// folder skips its tests with a message; CI sets VOXHAP_REQUIRE_SHARED_DATA
-/// (.ci/run) so that a missing folder fails them instead of passing silently.
+/// folder skips its tests with a message; VOXHAP_REQUIRE_SHARED_DATA, or
+/// VOXHAP_REQUIRE_ALL which CI sets (.ci/run), makes a missing folder fail them
+/// instead of passing silently.
 #pragma once
+
+#include "common/Prerequisites.h"
 
 #include <gtest/gtest.h>
 
@@ -39,11 +42,13 @@ inline std::filesystem::path flash2dDir() { return sharedDataDir() / "mr-dwi-pri
 /// The reference converter's (dcm2niix) sidecars for the two Prisma series.
 inline std::filesystem::path prismaReferenceDir() { return sharedDataDir() / "mr-dwi-prisma" / "reference"; }
 
-inline bool sharedDataRequired() { return std::getenv("VOXHAP_REQUIRE_SHARED_DATA") != nullptr; }
+/// The shared data must be present: VOXHAP_REQUIRE_SHARED_DATA (the data alone) or
+/// VOXHAP_REQUIRE_ALL (every prerequisite) is set.
+inline bool sharedDataRequired() { return std::getenv("VOXHAP_REQUIRE_SHARED_DATA") != nullptr || allRequired(); }
 
 } // namespace voxhap::test
 
-/// In a test body: skip (locally) or fail (in CI) when @p dir is absent.
+/// In a test body: skip (locally) or fail (in CI) when the shared data folder @p dir is absent.
 #define VOXHAP_REQUIRE_DIR(dir)                                                                                        \
     do {                                                                                                               \
         if (!std::filesystem::is_directory(dir)) {                                                                     \

@@ -9,7 +9,8 @@
 #       --help lists
 #   CheckGuide.sh SOURCE_DIR VOXHAP regenerate  make-pictures.sh runs to the
 #       end into a scratch folder and makes every picture (needs the shared CT;
-#       exit 77, skipped, without it unless VOXHAP_REQUIRE_SHARED_DATA is set)
+#       exit 77, skipped, without it unless VOXHAP_REQUIRE_SHARED_DATA or
+#       VOXHAP_REQUIRE_ALL is set)
 set -euo pipefail
 src=$1 voxhap=$2 what=$3
 guide=$src/docs/guide.md
@@ -73,7 +74,7 @@ commands)
 regenerate)
   ct=$src/../shared/data/ct-abdomen-tcia/dicom
   if [ ! -d "$ct" ]; then
-    [ -z "${VOXHAP_REQUIRE_SHARED_DATA:-}" ] || fail "no shared CT at $ct"
+    [ -z "${VOXHAP_REQUIRE_SHARED_DATA:-}${VOXHAP_REQUIRE_ALL:-}" ] || fail "no shared CT at $ct"
     echo "CheckGuide: no shared CT; skipped"
     exit 77
   fi

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # Every #include between the project's libraries must point down the documented
 # order (README "Layout"; issue 24 item 5):
-#   core <- volume <- segmentation <- haptic <- assessment <- planning <- render <- regress <- bench <- tools <- python
+#   core <- volume <- registration <- segmentation <- fusion <- haptic <- assessment <- planning <- render <- regress <- bench <- tools <- python
 # (python/, the Python module, binds the physics core and planning; nothing includes it;
 # regress/ plots its failing cases with render/; nothing below tools includes it)
 # and inside volume/ and haptic/ down their own orders (below). A source of
@@ -25,7 +25,7 @@ function(line_number text line out)
 endfunction()
 
 # Rank of a path among the libraries.
-set(order core volume segmentation haptic assessment planning render regress bench tools python)
+set(order core volume registration segmentation fusion haptic assessment planning render regress bench tools python)
 function(library_rank path out)
   string(REGEX MATCH "^([a-z_]+)/" m "${path}")
   list(FIND order "${CMAKE_MATCH_1}" r)
@@ -51,11 +51,13 @@ function(volume_rank path out)
 endfunction()
 
 # haptic/: the root's shared types (device limits, events, layers, the needle)
-# <- materials <- shaft <- beam <- models <- force <- scene <- servo <- igtl.
+# <- materials <- shaft <- beam <- papers <- force <- scene <- servo <- devices <- igtl
+# (devices/ holds the drivers and the device factory the servo loop runs;
+# igtl/ registers its kind there).
 function(haptic_rank path out)
   set(r 0)
   set(i 1)
-  foreach(sub materials shaft beam models force scene servo igtl)
+  foreach(sub materials shaft beam papers force scene servo devices igtl)
     if(path MATCHES "^haptic/${sub}/")
       set(r ${i})
     endif()

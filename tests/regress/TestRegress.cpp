@@ -208,21 +208,75 @@ TEST(RegressClosedForm, TiltedSlabIsComparedOnlyWhileTheTipIsInsideTheBlock)
     EXPECT_GT(beyond, 10);
 }
 
-TEST(RegressClosedForm, EditedBetaInTheRecordMovesTheClosedForm)
+/// R1 takes β from the recorded tissue rows (§5.4), not from the β the field
+/// reported using: an edited table value moves the closed form by what the law
+/// says, and the β the run recorded as used moves nothing.
+TEST(RegressClosedForm, EditedTissueValuesInTheRecordMoveTheClosedForm)
 {
     const Suite s = builtinSuite();
     const auto sel = indicesOf(s, {"slab-servo"});
     Runner runner(s, sel, {});
     const CaseRun run = runner.run().at(0);
-    Inputs recorded = run.inputs;
-    recorded["fat.beta_used"].number = *recorded["fat.beta_used"].number * 1.03;
     const auto fresh = closedForm(s.cases[sel[0]], {}, run.inputs, run.profile.samples);
-    const auto edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
-    ASSERT_TRUE(fresh && edited);
-    // Deep in the muscle the fat's 8 mm chord carries the 3 %.
-    const std::size_t last = run.profile.samples.size() - 1;
-    EXPECT_NEAR(
-        edited->modelN[last] - fresh->modelN[last], 10.0 * 0.03 * *run.inputs.at("fat.beta_used").number * 8.0, 1e-9);
+    ASSERT_TRUE(fresh);
+    const std::size_t last = run.profile.samples.size() - 1; // deep in the muscle: every chord whole
+    // At 10 mm/s, the reference speed, viscous and friction parts add up to v·∫β (§6.2).
+    const double v = 10.0;
+
+    Inputs recorded = run.inputs; // the skin's table β (8152 N·s/m²), 3 % more over its 2 mm
+    recorded["skin.damping"].number = 8152e-6 * 1.03;
+    auto edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
+    ASSERT_TRUE(edited);
+    EXPECT_NEAR(edited->modelN[last] - fresh->modelN[last], v * 0.03 * 8152e-6 * 2.0, 1e-12);
+
+    recorded = run.inputs; // the fat's T1, 290 → 300 ms through Eq. 4 over its 8 mm
+    recorded["fat.t1_1.5T"].number = 300.0;
+    edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
+    ASSERT_TRUE(edited);
+    const double fatShift = 2464e-6 * (std::exp(1.398e-3 * 300.0) - std::exp(1.398e-3 * 290.0)) * 8.0;
+    EXPECT_NEAR(edited->modelN[last] - fresh->modelN[last], v * fatShift, 1e-12);
+
+    recorded = run.inputs; // what the run says it used is not the reference
+    recorded["fat.beta_used"].number = *recorded["fat.beta_used"].number * 1.03;
+    edited = closedForm(s.cases[sel[0]], recorded, run.inputs, run.profile.samples);
+    ASSERT_TRUE(edited);
+    EXPECT_EQ(edited->modelN[last], fresh->modelN[last]);
+}
+
+/// Every case says which closed form it was held to, or why none: a term the
+/// allow-list does not know, a script, the wrong phantom, an edge-on path.
+TEST(RegressClosedForm, ACaseWithoutAClosedFormSaysWhy)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"slab-servo", "kyung", "conci-labels"});
+    Runner runner(s, sel, {});
+    const auto runs = runner.run();
+    const Case& slab = s.cases[sel[0]];
+    EXPECT_EQ(closedForm(slab, {}, runs[0].inputs, runs[0].profile.samples).line(), "closed form: R1");
+    EXPECT_EQ(closedForm(s.cases[sel[1]], {}, runs[1].inputs, runs[1].profile.samples).line(),
+        "no closed form: the torso phantom (R1 and R5 hold on the slab and the sphere)");
+    EXPECT_EQ(closedForm(s.cases[sel[2]], {}, runs[2].inputs, runs[2].profile.samples).line(),
+        "no closed form: the conci model on labels (R2 and R3 hold for its fixed table)");
+
+    // One more term in the scene, known or not, takes R1 away and is named.
+    for (const std::string term : {"viscous", "palpation", "some_future_term"}) {
+        Inputs current = runs[0].inputs;
+        current["scene.terms." + term] = InputValue{"true", {}, ""};
+        EXPECT_EQ(closedForm(slab, {}, current, runs[0].profile.samples).line(), "no closed form: term " + term);
+        current["scene.terms." + term] = InputValue{"false", {}, ""};
+        EXPECT_EQ(closedForm(slab, {}, current, runs[0].profile.samples).line(), "closed form: R1") << "off: " << term;
+    }
+    Case scripted = slab;
+    scripted.script = "motion.csv";
+    EXPECT_EQ(closedForm(scripted, {}, runs[0].inputs, runs[0].profile.samples).line(),
+        "no closed form: a scripted insertion (the closed forms are at constant speed)");
+    Inputs current = runs[0].inputs;
+    const nlohmann::json entry = nlohmann::json::parse(current.at("case.entry").text);
+    current["case.target"].text =
+        nlohmann::json::array({entry[0].get<double>(), entry[1].get<double>() - 1.0, entry[2].get<double>() + 10.0})
+            .dump(); // 5.7° below the skin's plane
+    EXPECT_EQ(closedForm(slab, {}, current, runs[0].profile.samples).line(),
+        "no closed form: a path within 11.5° of the layers' plane");
 }
 
 /// physics.md §7 R2 against the reference values §4 lists (computed at 20 mm/s,
@@ -686,6 +740,50 @@ TEST_F(RegressBaselines, TruncatedBaselineIsRefusedNamingTheFile)
     }
     o.update = true; // --update replaces it
     EXPECT_EQ(runRegression(s, o).updated.size(), 1u);
+}
+
+} // namespace
+
+namespace {
+
+/// A fused slab (docs/physics.md §7 R1, "Fused"): its t1 comes from a second
+/// scan of the phantom, turned and moved, resampled through the exact map. It
+/// is held to R1 like the slab itself; the same fusion through a map 1.5 mm off
+/// across the layers moves every fat–muscle boundary of the t1 grid, and R1
+/// catches it (the control: R1 sees the fused t1, not the table's).
+TEST(RegressClosedForm, AFusedSlabHoldsToR1AndAMisregisteredOneDoesNot)
+{
+    const auto suite = [](const std::string& error) {
+        return parseSuite(std::string(kHeader) +
+                R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+            "fused_mr": {"turn_deg": 20, "shift_mm": [3.3, 2.0, -4.7], "map_error_mm": )" +
+                error + R"(}}}]})",
+            "my-suite.json", ".");
+    };
+    const auto worstExcess = [](const Suite& s) {
+        Runner runner(s, {0}, {});
+        const CaseRun run = runner.run().at(0);
+        const auto cf = closedForm(s.cases[0], {}, run.inputs, run.profile.samples);
+        EXPECT_TRUE(cf) << cf.line();
+        double worst = -1e300;
+        for (std::size_t i = 0; cf && i < run.profile.samples.size(); ++i) {
+            if (!std::isfinite(cf->toleranceN[i])) continue;
+            worst = std::max(worst, std::abs(run.profile.samples[i].modelN - cf->modelN[i]) - cf->toleranceN[i]);
+        }
+        return worst;
+    };
+    EXPECT_LE(worstExcess(suite("[0, 0, 0]")), 0.0) << "the exact map: within R1's tolerance everywhere";
+    EXPECT_GT(worstExcess(suite("[0, 1.5, 0]")), 0.0) << "1.5 mm off across the layers: past it somewhere";
+}
+
+TEST(RegressSuite, AFusedSlabNeedsLayerAlignedGrids)
+{
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+        "fused_mr": {"shift_mm": [0, 0.3, 0]}}}]})",
+        "whole number of voxels");
+    expectSuiteRefused(std::string(kHeader) + R"({"name": "f", "scene": "kyung-damping", "volume": {"phantom": "slab",
+        "tilt_deg": 10, "fused_mr": {"shift_mm": [0, 1, 0]}}}]})",
+        "tilt_deg and rotation_deg 0");
 }
 
 } // namespace

@@ -6,16 +6,20 @@
 
 #include "RenderFixtures.h"
 
+#include "common/Prerequisites.h"
+
 #include "render/Display.h"
 #include "render/RenderVolume.h"
 #include "render/VolumeView3d.h"
 #include "core/Errors.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <unistd.h>
 
 namespace voxhap::render {
@@ -35,8 +39,7 @@ class View3d : public testing::Test {
 protected:
     static void SetUpTestSuite()
     {
-        sDisplay = new DisplayGuard();
-        if (!sDisplay->available()) GTEST_FAIL() << "no display for the 3D view: " << sDisplay->why();
+        sDisplay = new DisplayGuard(); // SetUp skips or fails each test without one
     }
     static void TearDownTestSuite()
     {
@@ -45,7 +48,7 @@ protected:
     }
     void SetUp() override
     {
-        if (!sDisplay->available()) GTEST_SKIP() << sDisplay->why();
+        VOXHAP_REQUIRE(sDisplay->available(), "a display for the 3D view (xvfb): " << sDisplay->why());
         mPhantom.graded = true;
         mPhantom.radius = 6.0;
         mPhantom.box = {Vec3d(-12, -30, -14), Vec3d(22, 0, 18)};
@@ -240,6 +243,12 @@ TEST(Display, AStartBegunWithoutWaitingIsFinishedByWaitOrStoppedUnwaited)
     const int before = xvfbChildren();
     {
         DisplayGuard guard(10.0, false);
+        // Forked at once; its name reads Xvfb once the child has exec'd, which a
+        // loaded machine may delay: poll for it (a guard that never started one
+        // fails after the deadline).
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+        while (xvfbChildren() != before + 1 && std::chrono::steady_clock::now() < deadline)
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
         EXPECT_EQ(xvfbChildren(), before + 1) << "the server is started at once";
     }
     EXPECT_EQ(xvfbChildren(), before) << "stopped and reaped (a zombie still counts)";

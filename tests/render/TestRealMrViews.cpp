@@ -82,7 +82,7 @@ MprageViews& mprageAsIntensity()
         }
         out->setGrid(volume::Channel::Intensity, r1);
         out->metadata().modality = "MR";
-        out->metadata().mrWeighting = "T1-weighted";
+        out->metadata().mrWeighting = voxhap::volume::MrWeightingKind::T1Weighted;
         return out;
     }());
     return m;

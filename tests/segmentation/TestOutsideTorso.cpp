@@ -305,7 +305,7 @@ TEST(OutsideTorso, MrT1HeadHasScalpFatAndNoMuscle)
     // no signal in the skull (the normalisation's ceiling, 5000 ms), white matter at fat's 382.
     volume::Volume v = mrHead(volume::Channel::T1, {900.0f, 382.0f, 5000.0f, 4000.0f, 1400.0f, 382.0f});
     v.metadata().modality = "MR";
-    v.metadata().mrWeighting = "T1-weighted";
+    v.metadata().mrWeighting = voxhap::volume::MrWeightingKind::T1Weighted;
     const SegmentReport r = segment(v, table());
     expectScalpFatOnly(v, r);
 }
@@ -316,7 +316,7 @@ TEST(OutsideTorso, MrT1WeightedIntensityHeadHasScalpFatAndNoMuscle)
     // white matter as bright, CSF and bone dark (arbitrary units 0–800).
     volume::Volume v = mrHead(volume::Channel::Intensity, {300.0f, 700.0f, 20.0f, 60.0f, 350.0f, 700.0f});
     v.metadata().modality = "MR";
-    v.metadata().mrWeighting = "T1-weighted";
+    v.metadata().mrWeighting = voxhap::volume::MrWeightingKind::T1Weighted;
     const SegmentReport r = segment(v, table());
     expectScalpFatOnly(v, r);
 }
@@ -326,7 +326,7 @@ TEST(OutsideTorso, MrOfUnknownWeightingIsABodyOfSoftTissueWithANote)
     // A T2-like contrast (fluid bright, fat middling) that segmentation must not read.
     volume::Volume v = mrHead(volume::Channel::Intensity, {300.0f, 450.0f, 20.0f, 800.0f, 500.0f, 400.0f});
     v.metadata().modality = "MR";
-    v.metadata().mrWeighting = "unknown";
+    v.metadata().mrWeighting = voxhap::volume::MrWeightingKind::Unknown;
     const SegmentReport r = segment(v, table());
     EXPECT_EQ(r.method, "mr");
     ASSERT_EQ(r.labels.size(), 1u) << "only soft_tissue";
@@ -342,7 +342,7 @@ TEST(OutsideTorso, MrOfUnknownWeightingIsABodyOfSoftTissueWithANote)
 TEST(OutsideTorso, AVolumeWithOnlyAnIntensityGridCanBeSegmented)
 {
     volume::Volume v = mrHead(volume::Channel::Intensity, {300.0f, 450.0f, 20.0f, 800.0f, 500.0f, 400.0f});
-    v.metadata().mrWeighting = "PD-weighted";
+    v.metadata().mrWeighting = voxhap::volume::MrWeightingKind::PdWeighted;
     ASSERT_FALSE(v.has(volume::Channel::Hu));
     ASSERT_FALSE(v.has(volume::Channel::T1));
     const SegmentReport r = segment(v, table());

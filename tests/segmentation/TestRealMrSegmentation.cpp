@@ -64,7 +64,7 @@ TEST_F(RealMrSegmentation, TheSeriesIsReadAsT1Contrast)
     const volume::Volume& v = *mprage().v;
     ASSERT_TRUE(v.has(volume::Channel::T1) || v.has(volume::Channel::Intensity));
     if (!v.has(volume::Channel::T1)) {
-        EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+        EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     }
     EXPECT_EQ(mprage().report.method, "mr");
 }
@@ -131,7 +131,7 @@ TEST_F(RealMrSegmentation, TheSameValuesOfUnknownWeightingGiveABodyOfSoftTissue)
     const volume::Channel c = src.has(volume::Channel::T1) ? volume::Channel::T1 : volume::Channel::Intensity;
     v.setGrid(volume::Channel::Intensity, std::const_pointer_cast<openvdb::GridBase>(src.grid(c))->deepCopyGrid());
     v.metadata().modality = "MR";
-    v.metadata().mrWeighting = "unknown";
+    v.metadata().mrWeighting = voxhap::volume::MrWeightingKind::Unknown;
     const SegmentReport r = segment(v, table());
     ASSERT_EQ(r.labels.size(), 1u);
     EXPECT_EQ(r.labels[0].name, "soft_tissue");

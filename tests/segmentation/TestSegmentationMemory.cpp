@@ -6,6 +6,7 @@
 /// the child process's peak within the estimate.
 
 #include "common/CliRunner.h"
+#include "common/Prerequisites.h"
 #include "segmentation/Components.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/DistanceTransform.h"
@@ -266,8 +267,8 @@ class SegmentationMemoryCli : public test::CliTest { };
 
 TEST_F(SegmentationMemoryCli, RefusalIsOneLineWithNoOutputAndThePeakStaysWithinTheEstimate)
 {
-    if (!std::filesystem::exists(VOXHAP_BINARY_DIR "/bin/voxhap"))
-        GTEST_SKIP() << "no voxhap program in this build (configured without render)";
+    VOXHAP_REQUIRE(std::filesystem::exists(VOXHAP_BINARY_DIR "/bin/voxhap"),
+        "the voxhap program (a build with VOXHAP_WITH_RENDER and VOXHAP_WITH_IGTL)");
     // A CT phantom as a file, as a user would give it.
     volume::saveVolume(ctPhantom(), mDir / "ct.vdb");
     // The process's own floor (its libraries), measured the same way as the peak below.

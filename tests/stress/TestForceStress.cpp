@@ -10,12 +10,12 @@
 #include "common/Phantom.h"
 #include "stress/AllocationCounter.h"
 
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/ServoStep.h"
-#include "haptic/servo/SimulatedDevices.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>

@@ -274,7 +274,7 @@ TEST_F(Cli, ServeDeviceIsCheckedBeforeTheScene)
     expectUsageError(run("serve --scene senac-average --device igtl:28945junk"), "the port must be a number");
     expectUsageError(run("serve --scene senac-average --device igtl:+80"), "the port must be a number");
     expectUsageError(run("serve --scene senac-average --device igtl:70000"), "outside 1..65535");
-    expectUsageError(run("serve --scene no-such-scene --device igtl:1x"), "--device: 'igtl:1x'");
+    expectUsageError(run("serve --scene no-such-scene --device igtl:1x"), "--device 'igtl:1x'");
 }
 
 // A scene that leaves out device and insertion runs on the documented defaults and

@@ -12,6 +12,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -56,7 +58,14 @@ TEST_F(CliAssess, SimulatedCohortIsAssessedTrainedAndClassified)
     ASSERT_EQ(t.exitCode, 0) << t.err;
     const auto tj = nlohmann::json::parse(t.out)["classifier"]["cross_validation"];
     EXPECT_EQ(tj["n"], 6);
-    EXPECT_LE(tj["ci95"][0].get<double>(), tj["accuracy"].get<double>());
+    // The interval is Wilson's for the printed count, evaluated here from the formula
+    // (z = 1.959964): centre (p + z²/2n)/(1 + z²/n), half-width z/(1 + z²/n)·sqrt(p(1−p)/n + z²/4n²).
+    const double n = 6, k = tj["correct"].get<double>(), z = 1.959963984540054, p = k / n;
+    EXPECT_EQ(tj["accuracy"].get<double>(), p);
+    const double centre = (p + z * z / (2 * n)) / (1 + z * z / n);
+    const double half = z / (1 + z * z / n) * std::sqrt(p * (1 - p) / n + z * z / (4 * n * n));
+    EXPECT_NEAR(tj["ci95"][0].get<double>(), std::max(0.0, centre - half), 1e-12);
+    EXPECT_NEAR(tj["ci95"][1].get<double>(), std::min(1.0, centre + half), 1e-12);
     ASSERT_TRUE(fs::exists(mDir / "model.json"));
     const Result m = run("assess cohort --model model.json --json");
     EXPECT_EQ(m.exitCode, 3);

@@ -863,13 +863,14 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
 
             VolumeMetadata& md = v.metadata();
             md.modality = first.modality.empty() ? "unknown" : first.modality;
+            md.modalitySource = first.modality.empty() ? FactSource::Unknown : FactSource::Header;
             md.source = "DICOM series " + chosen->uid;
             md.description = first.seriesDescription;
-            md.extra["series_uid"] = chosen->uid;
+            md.seriesUid = chosen->uid;
             md.extra["slices"] = std::to_string(plan.slices.size());
             if (plan.volume > 0) {
-                md.extra["volume"] = std::to_string(plan.volume) + " of " + std::to_string(work.volumes->count()) +
-                    " (" + work.volumes->labels[plan.volume - 1] + ")";
+                md.volumeChoice =
+                    VolumeChoice{int(plan.volume), int(work.volumes->count()), work.volumes->labels[plan.volume - 1]};
             }
             std::ostringstream air;
             air << airBelow;
@@ -887,11 +888,9 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
                 mo.t1Weighted = options.t1Weighted;
                 mo.normaliseT1Weighted = options.normaliseT1Weighted;
                 mo.removeBackground = options.removeMrBackground;
-                mo.assumedField = options.assumedField;
+                recordFieldStrength(md, first.fieldStrength, FactSource::Header, options.assumedField);
                 MrWeighting weighting = classifyMrWeighting(sequenceFields(first));
-                mr = assignMrMaterial(v, weighting, first.fieldStrength, mo, first.file.parent_path().string());
-                if (!first.fieldStrength)
-                    md.extra["field_strength_source"] = "assumed: (0018,0087) MagneticFieldStrength absent";
+                mr = assignMrMaterial(v, weighting, mo, first.file.parent_path().string());
             }
 
             if (report) {

@@ -90,7 +90,7 @@ template <typename GridT> void writeVoxels(const GridT& grid, const IndexBox& bo
 
 } // namespace
 
-void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding)
+void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding, NrrdKeys keys)
 {
     if (!v.has(c))
         throw ValueError(file.string() + ": the volume has no '" + std::string(channelName(c)) + "' grid to save");
@@ -114,15 +114,17 @@ void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, Nrr
     h << "\nkinds: domain domain domain\nendian: little\n";
     h << "encoding: " << (encoding == NrrdEncoding::Gzip ? "gzip" : "raw") << "\n";
     h << "space origin: (" << origin.x() << ',' << origin.y() << ',' << origin.z() << ")\n";
-    h << "voxhap_channel:=" << channelName(c) << "\n";
-    h << "voxhap_units:="
-      << (c == Channel::Hu                 ? v.metadata().huUnits
-                 : c == Channel::T1        ? v.metadata().t1Units
-                 : c == Channel::Intensity ? v.metadata().intensityUnits
-                                           : std::string("tissue id"))
-      << "\n";
-    if (!v.metadata().mrWeighting.empty()) h << "voxhap_mr_weighting:=" << v.metadata().mrWeighting << "\n";
-    if (!v.metadata().modality.empty()) h << "voxhap_modality:=" << v.metadata().modality << "\n";
+    if (keys == NrrdKeys::Voxhap) {
+        h << "voxhap_channel:=" << channelName(c) << "\n";
+        h << "voxhap_units:="
+          << (c == Channel::Hu                 ? v.metadata().huUnits
+                     : c == Channel::T1        ? v.metadata().t1Units
+                     : c == Channel::Intensity ? v.metadata().intensityUnits
+                                               : std::string("tissue id"))
+          << "\n";
+        // The typed facts (VolumeMetadata.h), one line each: their texts hold no line break.
+        for (const auto& [name, text] : metadataFacts(v.metadata())) h << "voxhap_" << name << ":=" << text << "\n";
+    }
     h << "\n";
 
     writeStreamAtomically(file, [&](std::ostream& out) {
@@ -195,15 +197,25 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
     src.finish(); // the whole compressed stream must check out, not just the bytes the voxels took
     auto& md = v.metadata();
     md.source = file.filename().string();
-    if (auto it = h.keyValues.find("voxhap_modality"); it != h.keyValues.end()) md.modality = it->second;
     if (auto it = h.keyValues.find("voxhap_units"); it != h.keyValues.end()) {
         (channel == Channel::T1                 ? md.t1Units
                 : channel == Channel::Intensity ? md.intensityUnits
                                                 : md.huUnits) = it->second;
     }
-    if (auto it = h.keyValues.find("voxhap_channel"); it != h.keyValues.end())
-        md.extra["declared_channel"] = it->second;
-    if (auto it = h.keyValues.find("voxhap_mr_weighting"); it != h.keyValues.end()) md.mrWeighting = it->second;
+    for (const auto& [key, text] : h.keyValues) {
+        if (key.rfind("voxhap_", 0) != 0) continue;
+        try {
+            setMetadataFact(md, std::string_view(key).substr(7), text, name);
+        } catch (const ValueError& e) {
+            throw IoError(e.what());
+        }
+    }
+    // A voxhap NRRD that names its channel hu says it holds CT numbers: the
+    // loaders take it as CT without looking at the values.
+    if (channel == Channel::Hu && h.keyValues.count("voxhap_channel")) {
+        md.modalitySource = FactSource::Header;
+        md.modalityReason = "declared by the file's voxhap_channel:=hu";
+    }
     return v;
 }
 

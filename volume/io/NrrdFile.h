@@ -23,11 +23,18 @@ enum class NrrdEncoding {
     Gzip, ///< gzip stream (Slicer's default for .nrrd)
 };
 
+/// @brief Which keys of voxhap's own a written .nrrd carries.
+enum class NrrdKeys {
+    Voxhap, ///< voxhap_channel, voxhap_units, ...: read back as the same channel
+    Plain,  ///< none: the file reads as a scanner's export would, its modality and
+            ///< weighting from a sidecar or the data (the phantom scans use it)
+};
+
 /// @brief Write channel @p c of @p v over its dense extent; inactive voxels
 /// take the grid's background (air). The file appears only when complete.
 /// @throw IoError naming the file; ValueError if the channel is absent
-void saveNrrd(
-    const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding = NrrdEncoding::Gzip);
+void saveNrrd(const Volume& v, Channel c, const std::filesystem::path& file, NrrdEncoding encoding = NrrdEncoding::Gzip,
+    NrrdKeys keys = NrrdKeys::Voxhap);
 
 /// @brief Read a .nrrd volume; the channel comes from the voxhap_channel
 /// key (files voxhap wrote) or else from @p options.

@@ -8,6 +8,7 @@
 #include "core/Errors.h"
 #include "volume/Grids.h"
 
+#include <nlohmann/json.hpp>
 #include <openvdb/io/File.h>
 
 #include <algorithm>
@@ -569,13 +570,12 @@ void saveVdb(const Volume& v, const std::filesystem::path& file)
     openvdb::MetaMap meta;
     meta.insertMeta(kFormatKey, openvdb::Int32Metadata(kFormatVersion));
     const auto& md = v.metadata();
-    putString(meta, "modality", md.modality);
     putString(meta, "source", md.source);
     putString(meta, "description", md.description);
     putString(meta, "hu_units", md.huUnits);
     putString(meta, "t1_units", md.t1Units);
     putString(meta, "intensity_units", md.intensityUnits);
-    putString(meta, "mr_weighting", md.mrWeighting);
+    for (const auto& [name, text] : metadataFacts(md)) putString(meta, name, text);
     for (const auto& [key, value] : md.extra) putString(meta, "extra." + key, value);
     meta.insertMeta("voxhap.index_min", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().min.data())));
     meta.insertMeta("voxhap.index_max", openvdb::Vec3IMetadata(openvdb::Vec3i(v.indexBox().max.data())));
@@ -678,20 +678,29 @@ Volume loadVdb(const std::filesystem::path& file, std::uint64_t memoryCapBytes)
         v.setDerived(g->getName(), g);
     }
     auto& md = v.metadata();
-    md.modality = getString(*meta, "modality");
     md.source = getString(*meta, "source", file.filename().string());
     md.description = getString(*meta, "description");
     md.huUnits = getString(*meta, "hu_units", "HU");
     md.t1Units = getString(*meta, "t1_units", "ms");
     md.intensityUnits = getString(*meta, "intensity_units", "arbitrary units");
-    md.mrWeighting = getString(*meta, "mr_weighting");
+    // The typed facts under their own names ("voxhap.field_strength"), the
+    // display notes under "voxhap.extra.<key>"; a file written before a fact
+    // was typed holds it among the notes, and is read the same.
     const std::string extraPrefix = std::string(kPrefix) + "extra.";
-    for (auto it = meta->beginMeta(); it != meta->endMeta(); ++it) {
-        if (it->first.rfind(extraPrefix, 0) == 0) {
-            if (auto s = meta->getMetadata<openvdb::StringMetadata>(it->first)) {
+    try {
+        for (auto it = meta->beginMeta(); it != meta->endMeta(); ++it) {
+            const auto s = meta->getMetadata<openvdb::StringMetadata>(it->first);
+            if (!s || it->first.rfind(kPrefix, 0) != 0) continue;
+            if (it->first.rfind(extraPrefix, 0) == 0) {
                 md.extra[it->first.substr(extraPrefix.size())] = s->value();
+            } else {
+                setMetadataFact(
+                    md, std::string_view(it->first).substr(std::strlen(kPrefix)), s->value(), file.string());
             }
         }
+        upgradeLegacyExtras(md, file.string());
+    } catch (const ValueError& e) {
+        throw IoError(e.what());
     }
     return v;
 }

@@ -27,6 +27,10 @@ namespace voxhap::volume {
 
 namespace mrbackground_detail {
 
+/// The noise peak is found in the low histogram smoothed over 1/kModeWindow of
+/// its bins (a moving average; MrBackground.h step 2).
+constexpr std::size_t kModeWindow = 64;
+
 using FloatTree = FloatGrid::TreeType;
 using FloatLeaf = FloatTree::LeafNodeType;
 
@@ -337,12 +341,28 @@ NoiseEstimate estimateNoise(
         e.why = "too few histogram bins below tBET";
         return e;
     }
+    // The peak of the histogram smoothed over kModeWindow of its bins: the
+    // Rayleigh's top is flat (within 5 % over ±0.3σ), and the argmax of the
+    // raw bins wanders over it with their counting noise.
+    const std::size_t window = std::max<std::size_t>(1, low.count.size() / kModeWindow);
+    std::vector<double> smooth(low.count.size(), 0.0);
+    {
+        double sum = 0.0;
+        std::size_t n = 0;
+        const std::size_t half = window / 2;
+        std::size_t lo = first, hi = first; // the window [lo, hi) around b
+        for (std::size_t b = first; b < low.count.size(); ++b) {
+            while (hi < low.count.size() && hi <= b + half) sum += double(low.count[hi++]), ++n;
+            while (lo + half < b) sum -= double(low.count[lo++]), --n;
+            smooth[b] = n ? sum / double(n) : 0.0;
+        }
+    }
     std::size_t peak = first;
     for (std::size_t b = first; b < low.count.size(); ++b) {
-        if (low.count[b] > low.count[peak]) peak = b;
+        if (smooth[b] > smooth[peak]) peak = b;
     }
     e.mode = low.lowerEdge(std::int64_t(peak)) + low.width / 2;
-    if (low.count[peak] == 0) {
+    if (low.count[peak] == 0 && smooth[peak] == 0.0) {
         e.why = "no positive value below tBET";
         return e;
     }

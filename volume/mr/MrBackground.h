@@ -17,7 +17,10 @@
 ///    t98, the 2nd and 98th percentiles, and BET's background/object
 ///    threshold tBET = t2 + 0.1·(t98 − t2). The noise peak is sought below it.
 /// 2. **Noise floor σ**: the mode of the histogram of the positive values
-///    below tBET (the peak of the background's Rayleigh distribution: Chang,
+///    below tBET, smoothed by a moving average over 1/64 of its bins (the
+///    Rayleigh's top is flat, and the raw bins' argmax wanders over it with
+///    their counting noise: on a 4096-bin histogram of a noisy T1 map it fell
+///    above tBET/2 in one scan of two) (the peak of the background's Rayleigh distribution: Chang,
 ///    Rohde & Pierpaoli 2005, Proc SPIE 5747), refined by the maximum-likelihood
 ///    fit of a Rayleigh distribution to the partial histogram below
 ///    kFitRangeModes × the mode (Sijbers, Poot, den Dekker & Pintjens 2007, Phys

@@ -13,8 +13,8 @@
 
 namespace voxhap::volume {
 
-MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optional<double> fieldStrengthT,
-    const MrMaterialOptions& options, const std::string& source)
+MrMaterialReport assignMrMaterial(
+    Volume& v, MrWeighting weighting, const MrMaterialOptions& options, const std::string& source)
 {
     Volume::GridPtr raw = std::const_pointer_cast<openvdb::GridBase>(v.grid(Channel::Intensity));
     if (!raw) throw ValueError(source + ": no MR intensities to assign");
@@ -31,7 +31,7 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
         weighting.name = std::string(mrWeightingName(MrWeightingKind::T1Weighted));
     }
     report.weighting = weighting;
-    md.mrWeighting = weighting.name;
+    md.mrWeighting = weighting.kind;
     md.extra["mr_weighting_reason"] = weighting.reason;
     md.intensityUnits = "arbitrary units";
 
@@ -54,7 +54,7 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
     if (weighting.kind == MrWeightingKind::T1Map) {
         toT1();
         md.t1Units = "ms";
-        md.extra["t1_kind"] = "T1 map";
+        md.t1Kind = T1Kind::Map;
         report.channel = Channel::T1;
         report.note = "T1 map: values are T1 [ms]";
         return report;
@@ -74,7 +74,7 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
     // A body the field of view cuts left and right (a sagittal spine slab) may
     // be a trunk: the rule applies, as it always did.
     const BodyWidth width = measureBodyWidth(v, *v.grid(Channel::Intensity));
-    md.extra["body_width_mm"] = std::to_string(int(std::lround(std::max(width.widestMm, width.widestCutMm))));
+    md.bodyWidthMm = std::max(width.widestMm, width.widestCutMm);
     if (width.measured() && !width.trunk()) {
         const std::string why = "the body is at most " + std::to_string(int(std::lround(width.widestMm))) +
             " mm across (a trunk is at least " + std::to_string(int(kMinTorsoWidthMm)) +
@@ -88,13 +88,20 @@ MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optiona
         md.extra["t1_norm_anatomy"] =
             "the field of view cuts the body left and right in every section: taken as a trunk";
     }
-    const FieldStrength field = fieldStrengthT ? nearestFieldStrength(*fieldStrengthT) : options.assumedField;
+    if (!md.fieldStrength) {
+        // The table's fat and muscle T1 are known at 1.5 T and 3 T only (physics.md §5.4).
+        std::ostringstream why;
+        why << "the scan's field strength";
+        if (md.fieldStrengthTesla) why << " (" << *md.fieldStrengthTesla << " T)";
+        why << " is neither 1.5 T nor 3 T, the fields the tissue table gives fat and muscle T1 at";
+        md.extra["t1_norm_refused"] = why.str();
+        report.note = "T1-weighted but not normalised (" + why.str() + "): an intensity grid, not T1";
+        return report;
+    }
+    const FieldStrength field = *md.fieldStrength;
     toT1();
     try {
         applyT1wNormalisation(v, fitT1wNormalisation(v, TissueTable::builtin(), field, source));
-        md.extra["t1_norm_field_source"] = fieldStrengthT
-            ? "MagneticFieldStrength of the headers"
-            : "assumed " + std::string(fieldStrengthName(field)) + ": the headers give no field strength";
         report.channel = Channel::T1;
         report.note = "T1-weighted, normalised per scan to T1 [ms] at " + std::string(fieldStrengthName(field));
     } catch (const ValueError& e) {

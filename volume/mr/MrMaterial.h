@@ -40,8 +40,6 @@ struct MrMaterialOptions {
     bool normaliseT1Weighted = true;
     /// Make the air background inactive (off: every voxel above 0 stays active).
     bool removeBackground = true;
-    /// The field strength when the headers do not give it.
-    FieldStrength assumedField = FieldStrength::T1_5;
 };
 
 /// @brief What assignMrMaterial decided, for reports.
@@ -53,12 +51,13 @@ struct MrMaterialReport {
 };
 
 /// @brief Steps 1–4 above on @p v, whose raw MR intensities are in the
-/// intensity channel.
+/// intensity channel. A T1-weighted image is normalised at the field strength
+/// the metadata hold (recordFieldStrength, VolumeMetadata.h); a scan at a
+/// field that is neither 1.5 T nor 3 T is not, and says why.
 /// @param weighting     the rule's verdict from the headers
-/// @param fieldStrengthT MagneticFieldStrength from the headers [T], if any
 /// @param source        names the input in messages
 /// @throw ValueError if @p v has no intensity channel
-MrMaterialReport assignMrMaterial(Volume& v, MrWeighting weighting, std::optional<double> fieldStrengthT,
-    const MrMaterialOptions& options, const std::string& source);
+MrMaterialReport assignMrMaterial(
+    Volume& v, MrWeighting weighting, const MrMaterialOptions& options, const std::string& source);
 
 } // namespace voxhap::volume

@@ -762,51 +762,6 @@ std::optional<MrWeighting> descriptionVerdict(const Facts& x, const MrSequenceFi
 
 } // namespace mrweighting_detail
 
-std::string_view mrWeightingName(MrWeightingKind k)
-{
-    switch (k) {
-    case MrWeightingKind::T1Map:
-        return "T1 map";
-    case MrWeightingKind::T1Weighted:
-        return "T1-weighted";
-    case MrWeightingKind::PdWeighted:
-        return "PD-weighted";
-    case MrWeightingKind::T2Weighted:
-        return "T2-weighted";
-    case MrWeightingKind::T2StarWeighted:
-        return "T2*-weighted";
-    case MrWeightingKind::Flair:
-        return "FLAIR";
-    case MrWeightingKind::Stir:
-        return "STIR";
-    case MrWeightingKind::SteadyState:
-        return "steady state";
-    case MrWeightingKind::Diffusion:
-        return "diffusion";
-    case MrWeightingKind::FieldMap:
-        return "field map";
-    case MrWeightingKind::Phase:
-        return "phase";
-    case MrWeightingKind::Perfusion:
-        return "perfusion";
-    case MrWeightingKind::Functional:
-        return "functional";
-    case MrWeightingKind::Susceptibility:
-        return "susceptibility";
-    case MrWeightingKind::Angiography:
-        return "angiography";
-    case MrWeightingKind::Localizer:
-        return "localizer";
-    case MrWeightingKind::OtherMap:
-        return "quantitative map";
-    case MrWeightingKind::Derived:
-        return "derived";
-    case MrWeightingKind::Unknown:
-        return "unknown";
-    }
-    return "unknown";
-}
-
 double spoiledGreT1Sensitivity(double trMs, double flipDeg, double t1Ms)
 {
     if (!(trMs > 0) || !(t1Ms > 0) || !std::isfinite(trMs) || !std::isfinite(t1Ms) || !std::isfinite(flipDeg))

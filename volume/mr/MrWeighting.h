@@ -93,6 +93,8 @@
 ///   written in milliseconds and are refused [chosen].
 #pragma once
 
+#include "volume/VolumeMetadata.h"
+
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -196,37 +198,8 @@ struct MrSequenceFields {
     std::string source;
 };
 
-/// @brief What an MR series is. Only T1Map and T1Weighted fill the `t1` grid.
-enum class MrWeightingKind {
-    T1Map,          ///< quantitative T1 [ms]
-    T1Weighted,     ///< T1-weighted signal (normalised per scan, T1Normalisation.h)
-    PdWeighted,     ///< proton-density-weighted
-    T2Weighted,     ///< T2-weighted
-    T2StarWeighted, ///< T2*-weighted (long-TE gradient echo)
-    Flair,          ///< long-TI inversion recovery (fluid suppressed)
-    Stir,           ///< short-TI inversion recovery (fat suppressed)
-    SteadyState,    ///< balanced or coherent steady state (T2/T1 contrast)
-    Diffusion,      ///< diffusion-weighted, or a map derived from it (ADC, FA, trace)
-    FieldMap,       ///< B0 or B1 field map, magnitude or phase difference
-    Phase,          ///< phase image
-    Perfusion,      ///< ASL, DSC or DCE series and their maps
-    Functional,     ///< BOLD fMRI
-    Susceptibility, ///< SWI, SWAN, QSM
-    Angiography,    ///< time of flight or contrast-enhanced MRA
-    Localizer,      ///< localizer, scout or calibration scan
-    OtherMap,       ///< quantitative map other than T1 (T2, T2*, PD, MTR, fat fraction)
-    Derived,        ///< projection (MIP, minIP) or subtraction image
-    Unknown,        ///< nothing decides: an intensity grid, never T1
-};
-
-/// @brief The display name of @p k, as saved in VolumeMetadata::mrWeighting:
-/// "T1 map", "T1-weighted", "PD-weighted", "T2-weighted", "T2*-weighted",
-/// "FLAIR", "STIR", "steady state", "diffusion", "field map", "phase",
-/// "perfusion", "functional", "susceptibility", "angiography", "localizer",
-/// "quantitative map", "derived", "unknown".
-std::string_view mrWeightingName(MrWeightingKind k);
-
-/// @brief The rule's verdict.
+/// @brief The rule's verdict (MrWeightingKind and its names are in
+/// volume/VolumeMetadata.h, where the volume keeps it).
 struct MrWeighting {
     MrWeightingKind kind = MrWeightingKind::Unknown;
     std::string name; ///< mrWeightingName(kind), for metadata and `voxhap info`

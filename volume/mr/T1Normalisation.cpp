@@ -99,8 +99,6 @@ double T1wNormalisation::t1Ms(double s) const
     return std::clamp(1.0 / rate, kMinT1Ms, kMaxT1Ms);
 }
 
-FieldStrength nearestFieldStrength(double tesla) { return tesla >= 2.25 ? FieldStrength::T3 : FieldStrength::T1_5; }
-
 T1wNormalisation fitT1wNormalisation(
     const Volume& v, const TissueTable& table, FieldStrength field, const std::string& source)
 {
@@ -173,10 +171,9 @@ void applyT1wNormalisation(Volume& v, const T1wNormalisation& fit)
 
     VolumeMetadata& md = v.metadata();
     md.t1Units = "ms";
-    md.extra["t1_kind"] = "T1-weighted, normalised per scan";
-    md.extra["t1_norm_rule"] =
-        "physics.md 5.1: fat and muscle of this scan pinned to the tissue table; linear in 1/T1 between them";
-    md.extra["t1_norm_field"] = std::string(fieldStrengthName(fit.field));
+    md.t1Kind = T1Kind::NormalisedWeighted;
+    md.extra["t1_norm_rule"] = "physics.md 5.1: fat and muscle of this scan pinned to the tissue table at " +
+        std::string(fieldStrengthName(fit.field)) + "; linear in 1/T1 between them";
     md.extra["t1_norm_fat"] = number(fit.fatIntensity) + " -> " + number(fit.fatT1Ms) + " ms";
     md.extra["t1_norm_muscle"] = number(fit.muscleIntensity) + " -> " + number(fit.muscleT1Ms) + " ms";
     md.extra["t1_norm_thresholds"] = number(fit.lowerThreshold) + ", " + number(fit.upperThreshold);

@@ -46,10 +46,6 @@ struct T1wNormalisation {
     double t1Ms(double s) const;
 };
 
-/// @brief The field strength a MagneticFieldStrength (0018,0087) value
-/// [tesla] stands for: 3 T from 2.25 T up, else 1.5 T.
-FieldStrength nearestFieldStrength(double tesla);
-
 /// @brief Fit the normalisation to the active voxels of @p v's t1 grid.
 /// @param source names the file in error messages
 /// @throw ValueError naming @p source if the grid has no t1 channel, too few
@@ -58,7 +54,7 @@ T1wNormalisation fitT1wNormalisation(
     const Volume& v, const TissueTable& table, FieldStrength field, const std::string& source);
 
 /// @brief Replace every active t1 value of @p v by its normalised T1 [ms] and
-/// record the fit in the metadata (t1Units "ms", t1_kind, t1_norm_*).
+/// record the fit in the metadata (t1Units "ms", t1Kind, and t1_norm_* for display).
 void applyT1wNormalisation(Volume& v, const T1wNormalisation& fit);
 
 } // namespace voxhap::volume

@@ -116,22 +116,11 @@ PhantomModel phantomModel(const PhantomSpec& spec, const TissueTable& table);
 /// @brief Rasterise a model and record its layers and landmarks in the metadata.
 Volume makePhantom(const PhantomModel& model, const GridSpec& grid, const TissueTable& table);
 
-/// @brief Metadata key of the layer table (JSON) along a phantom's reference path.
-inline constexpr const char* kLayersKey = "layers";
-/// @brief Metadata key of the named points (JSON) of a phantom.
-inline constexpr const char* kLandmarksKey = "landmarks";
-
-/// @brief The layer table stored in a volume's metadata, or empty if none.
-/// @throw ValueError if present but malformed
-struct PhantomLayers {
-    Vec3d entry{0, 0, 0};
-    Vec3d direction{0, -1, 0};
-    std::vector<LayerSpan> layers;
-};
+/// @brief The layer table of a phantom (VolumeMetadata::phantomLayers), or empty if none.
 std::optional<PhantomLayers> phantomLayers(const Volume& v);
 
-/// @brief The named point @p name stored in a volume's metadata (kLandmarksKey), or
-/// nothing if the volume has no such landmark. @throw ValueError if malformed
+/// @brief The named point @p name of a phantom (VolumeMetadata::landmarks), or
+/// nothing if the volume has no such landmark.
 std::optional<Vec3d> phantomLandmark(const Volume& v, const std::string& name);
 
 } // namespace voxhap::volume

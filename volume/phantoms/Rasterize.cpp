@@ -146,9 +146,13 @@ Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridS
     v.setGrid(Channel::Label, labelGridPtr);
     v.setGrid(Channel::Hu, huGridPtr);
     v.setGrid(Channel::T1, t1GridPtr);
-    v.metadata().modality = "phantom";
-    v.metadata().t1Units = "ms";
-    v.metadata().extra["field_strength"] = std::string(fieldStrengthName(spec.field));
+    VolumeMetadata& md = v.metadata();
+    md.modality = "phantom";
+    md.modalitySource = FactSource::Generator;
+    md.t1Units = "ms";
+    md.t1Kind = T1Kind::Map; // the table's T1 at the spec's field, as a T1 map would give it
+    md.fieldStrength = spec.field;
+    md.fieldStrengthSource = FactSource::Generator;
     return v;
 }
 

@@ -43,15 +43,7 @@ struct WorldBox {
 /// @throw ValueError if the classifier returns an id the table does not hold.
 Volume rasterize(const Classifier& classify, const WorldBox& bounds, const GridSpec& spec, const TissueTable& table);
 
-/// @brief One tissue interval along a straight path.
-struct LayerSpan {
-    int tissue = 0;     ///< tissue id
-    std::string name;   ///< tissue name
-    double startMm = 0; ///< distance from the path's start [mm]
-    double endMm = 0;   ///< distance from the path's start [mm]
-};
-
-/// @brief The tissue intervals along entry + s·direction, s in [0, length],
+/// @brief The tissue intervals (LayerSpan, VolumeMetadata.h) along entry + s·direction, s in [0, length],
 /// of the analytic classifier (not the voxels): boundaries located by bisection
 /// to 1e-9 mm after a scan at @p stepMm (features thinner than the step may be missed).
 std::vector<LayerSpan> traceLayers(const Classifier& classify, const Vec3d& entry, const Vec3d& direction,

@@ -11,7 +11,7 @@
 
 #include "haptic/beam/Foundation.h"
 #include "haptic/force/NeedleForceModel.h"
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "core/Errors.h"
 #include "core/Math.h"

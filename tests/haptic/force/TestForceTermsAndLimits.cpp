@@ -9,9 +9,9 @@
 
 #include "core/Format.h"
 #include "haptic/force/NeedleForceModel.h"
-#include "haptic/models/ConciModel.h"
-#include "haptic/models/LayerTables.h"
-#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/papers/ConciModel.h"
+#include "haptic/papers/LayerTables.h"
+#include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/scene/ScriptedInsertion.h"
 
 #include <gtest/gtest.h>

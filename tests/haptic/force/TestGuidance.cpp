@@ -81,34 +81,83 @@ TEST(Guidance, PerpendicularSpringWithSaturationTaperAndFadeOut)
     EXPECT_EQ(fading.update(off, 100.0).norm(), 0.0);
 }
 
+/// The work a force field does on the hand round a closed loop that starts and ends
+/// at one point (zero-order hold: F_n·(x_{n+1} − x_n)), and the sampled field's leak
+/// ½·K·|Δx|² summed over the ticks: a random walk, then circles round the line at
+/// radii 2 and 5 mm, ten turns each (where a field with a curl does work every
+/// turn), then home.
+struct LoopWork {
+    double work = 0, leak = 0;
+};
+template <typename Field> LoopWork closedLoop(Field field, double stiffest)
+{
+    std::mt19937 rng(5);
+    std::normal_distribution<double> n(0.0, 1.0);
+    const Vec3d w = (kLine.target - kLine.entry).normalized();
+    const Vec3d a = w.unitOrthogonal(), b = w.cross(a);
+    const Vec3d centre = kLine.entry + 20.0 * w;
+    const Vec3d home = centre + Vec3d(1.0, 1.0, 1.0);
+    Vec3d x = home;
+    double t = 0.0;
+    LoopWork r;
+    Vec3d f = field(x, t);
+    const auto move = [&](const Vec3d& to) {
+        r.work += f.dot(to - x);
+        r.leak += 0.5 * stiffest * (to - x).squaredNorm();
+        x = to;
+        t += 1e-3;
+        f = field(x, t);
+    };
+    const auto straight = [&](const Vec3d& to, int steps) {
+        const Vec3d from = x;
+        for (int i = 1; i <= steps; ++i) move(from + (double(i) / steps) * (to - from));
+    };
+    for (int i = 0; i < 100000; ++i) move(x + 0.02 * Vec3d(n(rng), n(rng), n(rng)));
+    for (const double radius : {2.0, 5.0}) {
+        straight(centre + radius * a, 5000);
+        for (int turn = 0; turn < 10; ++turn) {
+            for (int i = 1; i <= 2000; ++i) {
+                const double phi = 2.0 * M_PI * i / 2000.0;
+                move(centre + radius * (std::cos(phi) * a + std::sin(phi) * b));
+            }
+        }
+    }
+    straight(home, 5000);
+    return r;
+}
+
 // The field depends on r alone: round a closed loop it returns at most the sampled
-// field's leak, ½·K·Δx² a tick (Guidance.h), also while it fades.
+// field's leak, ½·K·Δx² a tick (Guidance.h), also while it fades. K is the field's
+// steepest slope from the parameters, not from the code: the spring k up to F_max,
+// and with a capture radius R the taper from f(R) = min(k·R, F_max) to 0 over R.
+// The control adds a swirl about the line, 0.05 N/mm × r tangential, a field that
+// is not conservative (its curl is along the line): the same loop gains energy
+// from it, 2π·0.05·r² N·mm a turn, far beyond the leak, and the check fails it.
 TEST(Guidance, ClosedLoopsCreateNoEnergy)
 {
     for (const double fade : {0.0, 20.0}) {
         GuidanceParams p;
-        p.captureRadiusMm = 6.0; // a taper, so K = max(k, F_max/R) is met too
+        p.captureRadiusMm = 6.0; // a taper, so its slope counts toward K too
         p.fadeOutS = fade;
+        const double K = std::max(
+            p.stiffnessNPerMm, std::min(p.stiffnessNPerMm * p.captureRadiusMm, p.maxForceN) / p.captureRadiusMm);
+        EXPECT_DOUBLE_EQ(K, 0.2); // k = 0.2 N/mm; the taper 1 N over 6 mm is gentler
         Guidance g(p, kLine);
-        std::mt19937 rng(5);
-        std::normal_distribution<double> n(0.0, 1.0);
-        const Vec3d home = kLine.entry + Vec3d(1.0, 1.0, 1.0);
-        Vec3d x = home;
-        double work = 0.0, leak = 0.0, t = 0.0;
-        Vec3d f = g.update(x, t);
-        const auto move = [&](const Vec3d& to) {
-            work += f.dot(to - x);
-            leak += 0.5 * g.stiffestNPerMm() * (to - x).squaredNorm();
-            x = to;
-            t += 1e-3;
-            f = g.update(x, t);
-        };
-        for (int i = 0; i < 100000; ++i) move(x + 0.02 * Vec3d(n(rng), n(rng), n(rng)));
-        const Vec3d back = x;
-        for (int i = 1; i <= 5000; ++i) move(back + (i / 5000.0) * (home - back));
+        const LoopWork passive = closedLoop([&](const Vec3d& x, double t) { return g.update(x, t); }, K);
         SCOPED_TRACE(fade);
-        EXPECT_LE(work, leak + kRoundOffNmm);
-        EXPECT_GT(leak, 0.0);
+        EXPECT_LE(passive.work, passive.leak + kRoundOffNmm);
+        EXPECT_GT(passive.leak, 0.0);
+
+        Guidance h(p, kLine);
+        const Vec3d w = h.direction();
+        const double swirl = 0.05; // N/mm
+        const LoopWork active = closedLoop(
+            [&](const Vec3d& x, double t) {
+                const Vec3d r = h.offset(x);
+                return Vec3d(h.update(x, t) + swirl * w.cross(r));
+            },
+            K + swirl);
+        EXPECT_GT(active.work, active.leak + 1.0) << "the control: a field with a curl must fail the check";
     }
 }
 

@@ -8,8 +8,8 @@
 #include "common/Tolerances.h"
 
 #include "haptic/scene/ScriptedInsertion.h"
-#include "haptic/models/LayerTables.h"
-#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/papers/LayerTables.h"
+#include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/force/NeedleForceModel.h"
 
 #include <gtest/gtest.h>

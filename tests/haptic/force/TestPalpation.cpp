@@ -304,6 +304,49 @@ TEST(Palpation, TheScriptedInsertionIsUnchanged)
     EXPECT_GT(rb.summary.pops, 0);
 }
 
+// The built-in palpation scenes (issue 42 item 6) are their base scenes with the
+// palpation block added, nothing else: the same insertion tick for tick. On their
+// own phantom the back is felt before the needle: over the lower spinous process
+// (bone 13 mm under the skin) k = E·A/T (3 N/13 mm), stiffer than over the
+// interspace beside the entry (T from the analytic model), at a 2 mm press.
+TEST(Palpation, BuiltinPalpationScenesFeelTheBackAndInsertAsTheirBaseScenes)
+{
+    for (const auto& [variant, base] : {std::pair<std::string, std::string>{"senac-average-palpation", "senac-average"},
+             {"lumbar-puncture-palpation", "lumbar-puncture"}}) {
+        SCOPED_TRACE(variant);
+        std::ifstream vin(VOXHAP_SOURCE_DIR "/data/scenes/" + variant + ".json"),
+            bin(VOXHAP_SOURCE_DIR "/data/scenes/" + base + ".json");
+        Json v = Json::parse(vin), b = Json::parse(bin);
+        EXPECT_NE(v.at("source").get<std::string>().find("[C-ui]"), std::string::npos);
+        EXPECT_NE(v.at("source").get<std::string>().find("[chosen]"), std::string::npos);
+        ASSERT_TRUE(v.at("terms").contains("palpation"));
+        for (const char* key : {"name", "description", "source"}) v.erase(key), b.erase(key);
+        v["terms"].erase("palpation");
+        EXPECT_EQ(v, b) << "the variant differs from its base in more than the palpation block";
+
+        const SceneInstance with(loadScene(variant), nullptr, table()), without(loadScene(base), nullptr, table());
+        ASSERT_TRUE(with.skinMap());
+        auto a = with.makeModel();
+        auto c = without.makeModel();
+        const InsertionScript script = InsertionScript::constantSpeed(-5.0, 25.0, 5.0);
+        const InsertionResult ra = runInsertion(*a, script, 1000.0), rc = runInsertion(*c, script, 1000.0);
+        ASSERT_EQ(ra.rows.size(), rc.rows.size());
+        for (std::size_t i = 0; i < ra.rows.size(); ++i) ASSERT_EQ(ra.rows[i].force, rc.rows[i].force) << i;
+
+        const double delta = 2.0, kEA = 30e-3 * 100.0; // 30 kPa over 100 mm² [N]
+        Hand process(with, kSpinous + Vec3d(0.0, 5.0, 0.0)), interspace(with, kInterspace + Vec3d(4.0, 5.0, 0.0));
+        process.line(kSpinous + delta * kDown, 0.01);
+        interspace.line(kInterspace + Vec3d(4.0, 0.0, 0.0) + delta * kDown, 0.01);
+        ASSERT_TRUE(process.out().palpating && interspace.out().palpating);
+        const double tProcess = analyticBoneDepth(kSpinous.x(), kSpinous.z());
+        const double tInter = analyticBoneDepth(4.0, kInterspace.z());
+        EXPECT_NEAR(process.out().modelForce.y(), kEA / tProcess * delta, 1e-9);
+        EXPECT_NEAR(
+            interspace.out().modelForce.y(), kEA / tInter * delta, delta * kEA * kHalfVoxelMm / (tInter * tInter));
+        EXPECT_GT(process.out().modelForce.y(), 3.0 * interspace.out().modelForce.y());
+    }
+}
+
 // The hand-over happens only out of contact: sliding in contact onto the entry keeps
 // palpating (the interspace is felt, not cut); lifting and coming down at the entry
 // is the needle, which tents and punctures the skin.

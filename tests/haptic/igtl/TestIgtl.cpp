@@ -5,6 +5,7 @@
 /// garbage, oversized, corrupted and truncated messages leave it alive; a lost
 /// client zeroes the force within one tick.
 
+#include "common/Prerequisites.h"
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
@@ -134,8 +135,9 @@ private:
 TEST(Igtl, DebianTrackerClientDrivesTheServer)
 {
 #ifndef VOXHAP_IGTL_TRACKER_CLIENT
-    GTEST_SKIP()
-        << "Debian's openigtlink-examples is not installed: no TrackerClient to build (tools/setup.sh installs it)";
+    VOXHAP_REQUIRE(false,
+        "Debian's TrackerClient example (openigtlink-examples, which tools/setup.sh installs) when this was "
+        "configured");
 #else
     IgtlDevice dev(anyPort(), DeviceLimits{});
     const pid_t child = ::fork();

@@ -3,14 +3,17 @@
 /// @brief The mapping layer against physics.md §1.3, §5.3 and §5.4.
 
 #include "common/BuiltinTable.h"
+#include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
 #include "haptic/materials/FieldGrids.h"
 #include "haptic/materials/MaterialField.h"
 #include "core/Errors.h"
 #include "volume/phantoms/Phantoms.h"
+#include "volume/VolumeFile.h"
 
 #include <cmath>
+#include <fstream>
 
 namespace voxhap::haptic {
 namespace {
@@ -26,6 +29,8 @@ using voxhap::test::table;
 /// Eq. 4 at 1.5 T with the §5.4 constants, written out here: β = C1·exp(C2·T1),
 /// C1 = 2464 N·s/m² = 2464e-6 N·s/mm², C2 = 1.398e-3 ms⁻¹ (physics.md §5.4 table).
 double beta15T(double t1Ms) { return 2464e-6 * std::exp(1.398e-3 * t1Ms); }
+/// The same at 3 T: C1 = 2058 N·s/m², C2 = 1.533e-3 ms⁻¹ (physics.md §5.4 table).
+double beta3T(double t1Ms) { return 2058e-6 * std::exp(1.533e-3 * t1Ms); }
 
 /// The β grid holds floats: 2⁻²⁴ ≈ 6e-8 relative of values up to 1.7e-2 N·s/mm²
 /// (the interspinous β) is at most 1e-9 N·s/mm².
@@ -136,7 +141,7 @@ TEST_F(LumbarField, MrIntensityIsNeverReadAsT1)
     // that names the weighting and the declarations that would make it T1.
     volume::Volume mr(vol->transformPtr()->copy(), vol->indexBox());
     mr.setGrid(volume::Channel::Intensity, vol->grid(volume::Channel::T1)->deepCopyGrid());
-    mr.metadata().mrWeighting = "PD-weighted";
+    mr.metadata().mrWeighting = voxhap::volume::MrWeightingKind::PdWeighted;
     try {
         const MaterialField f(mr, table(), MaterialOptions{});
         FAIL() << "damping was built from an intensity grid";
@@ -192,6 +197,113 @@ TEST(MaterialField, BoneStiffnessIsComputedThenLimitedToTheDevice)
     const auto k = detail::stiffnessGrid(f);
     EXPECT_EQ(std::int64_t(k->activeVoxelCount()), bone);
     for (auto it = k->cbeginValueOn(); it; ++it) ASSERT_LE(*it, 0.5f);
+}
+
+/// MR files as a scanner's converter leaves them: a raw NRRD without voxhap's
+/// keys and a BIDS sidecar beside it, loaded as a user loads them.
+class MrFieldStrength : public voxhap::test::TempDirTest {
+protected:
+    static constexpr int kN = 32;
+    /// A 32³ ball of 10 mm voxels (a 270 mm trunk, so that a T1-weighted image is
+    /// normalised): @p shell in the outer 2 voxels (subcutaneous fat), @p core
+    /// inside, @p centre within 3 voxels of the centre (fluid), air around it.
+    /// Returns the NRRD's path.
+    std::filesystem::path write(
+        const std::string& name, float shell, float core, float centre, const std::string& sidecar) const
+    {
+        const std::filesystem::path p = mDir / (name + ".nrrd");
+        std::ofstream out(p, std::ios::binary);
+        out << "NRRD0004\ntype: float\ndimension: 3\nspace: left-posterior-superior\nsizes: 32 32 32\n"
+               "space directions: (10,0,0) (0,10,0) (0,0,10)\nkinds: domain domain domain\nendian: little\n"
+               "encoding: raw\nspace origin: (0,0,0)\n\n";
+        for (int k = 0; k < kN; ++k)
+            for (int j = 0; j < kN; ++j)
+                for (int i = 0; i < kN; ++i) {
+                    const double r = std::hypot(i - 16.0, j - 16.0, k - 16.0);
+                    const float v = r > 13 ? 0.0f : r > 11 ? shell : r < 3 ? centre : core;
+                    out.write(reinterpret_cast<const char*>(&v), sizeof v);
+                }
+        std::ofstream(mDir / (name + ".json")) << sidecar;
+        return p;
+    }
+    /// β in the ball's core and in its shell, no labels: every voxel through Eq. 4.
+    static std::pair<double, double> coreAndShellBeta(const volume::Volume& v)
+    {
+        const MaterialField f(v, table(), MaterialOptions{});
+        const auto acc = detail::dampingGrid(f)->getConstAccessor();
+        return {acc.getValue({16, 16, 22}), acc.getValue({16, 16, 28})};
+    }
+    /// A sidecar of an MR at @p tesla: a T1 map, or a T1-weighted spoiled gradient echo.
+    static std::string sidecar(double tesla, bool map)
+    {
+        return R"({"Modality": "MR", "MagneticFieldStrength": )" + std::to_string(tesla) +
+            (map ? R"(, "ImageType": ["DERIVED", "PRIMARY", "T1 MAP"]})"
+                 : R"(, "ScanningSequence": "GR", "SequenceVariant": ["SP", "OSP"], "SequenceName": "*fl2d1",
+                       "RepetitionTime": 0.3, "EchoTime": 0.00246, "FlipAngle": 80, "ImageType": ["ORIGINAL", "PRIMARY", "M"]})");
+    }
+};
+
+TEST_F(MrFieldStrength, TheDampingLawFollowsTheScansFieldStrength)
+{
+    // physics.md §5.4: b = C1·exp(C2·T1) with C1, C2 of the scan's field. The
+    // two laws differ by 10 % at T1 = 600 ms, far beyond the tolerance: a scan
+    // damped with the other field's law fails here (the fault this guards
+    // against: every MR loaded from a file got the 1.5 T law).
+    ASSERT_GT(std::abs(beta3T(600.0) - beta15T(600.0)), 1e5 * kFloatGridNsPerMm2);
+    for (double tesla : {3.0, 1.5, 2.89362}) {
+        const volume::Volume map = volume::loadVolume(write("map", 600.0f, 600.0f, 600.0f, sidecar(tesla, true)));
+        ASSERT_TRUE(map.has(volume::Channel::T1));
+        EXPECT_EQ(map.metadata().t1Kind, volume::T1Kind::Map);
+        const double expected = tesla > 2 ? beta3T(600.0) : beta15T(600.0);
+        EXPECT_NEAR(coreAndShellBeta(map).first, expected, kFloatGridNsPerMm2) << tesla << " T";
+    }
+    // A T1-weighted scan normalised per scan at 3 T (§5.1): its fat becomes the
+    // table's 382 ms and its muscle 898 ms, and both are damped with the 3 T law,
+    // which gives them §5.4's fitted β; the 1.5 T law would give fat 4.21e-3.
+    const volume::Volume t1w = volume::loadVolume(write("t1w", 220.0f, 110.0f, 40.0f, sidecar(3.0, false)));
+    ASSERT_TRUE(t1w.has(volume::Channel::T1));
+    EXPECT_EQ(t1w.metadata().t1Kind, volume::T1Kind::NormalisedWeighted);
+    const auto [muscle, fat] = coreAndShellBeta(t1w);
+    EXPECT_NEAR(fat, beta3T(382.0), kFloatGridNsPerMm2);
+    EXPECT_NEAR(muscle, beta3T(898.0), kFloatGridNsPerMm2);
+    EXPECT_NEAR(fat, 3696e-6, kFitRounding * 3696e-6);
+}
+
+TEST_F(MrFieldStrength, AFieldWithoutALawIsNotReadAsEither)
+{
+    // 7 T: no T1 law (physics.md §5.4). A T1-weighted scan is not normalised;
+    // a T1 map's T1 is not read, and without labels the damping is refused in
+    // one line naming the field and where it came from.
+    const volume::Volume t1w = volume::loadVolume(write("t1w", 220.0f, 110.0f, 40.0f, sidecar(7.0, false)));
+    EXPECT_FALSE(t1w.has(volume::Channel::T1));
+    EXPECT_NE(t1w.metadata().extra.at("t1_norm_refused").find("neither 1.5 T nor 3 T"), std::string::npos);
+    volume::Volume map = volume::loadVolume(write("map", 600.0f, 600.0f, 600.0f, sidecar(7.0, true)));
+    ASSERT_TRUE(map.has(volume::Channel::T1));
+    EXPECT_EQ(map.metadata().fieldStrength, std::nullopt);
+    EXPECT_EQ(map.metadata().fieldStrengthTesla, 7.0);
+    try {
+        const MaterialField f(map, table(), MaterialOptions{});
+        FAIL() << "a 7 T T1 map was damped with a 1.5 T or 3 T law";
+    } catch (const ValueError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("7 T, from the sidecar"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    // With labels, fat takes the table's β like every other tissue, not Eq. 4.
+    const int fat = table().at("fat").id;
+    auto labels = volume::LabelGrid::create(volume::kAirLabel);
+    labels->setTransform(map.transformPtr()->copy());
+    labels->tree().setValueOn(openvdb::Coord(16, 16, 16), fat);
+    map.setGrid(volume::Channel::Label, labels);
+    const MaterialField f(map, table(), MaterialOptions{});
+    EXPECT_NEAR(detail::dampingGrid(f)->getConstAccessor().getValue({16, 16, 16}), 3696e-6, kFloatGridNsPerMm2);
+    // The caller's own field overrides the metadata (MaterialOptions::field).
+    map.removeGrid(volume::Channel::Label);
+    MaterialOptions at3T;
+    at3T.field = volume::FieldStrength::T3;
+    const MaterialField chosen(map, table(), at3T);
+    EXPECT_NEAR(
+        detail::dampingGrid(chosen)->getConstAccessor().getValue({16, 16, 22}), beta3T(600.0), kFloatGridNsPerMm2);
 }
 
 TEST(MaterialField, RejectsLabelsBeyondTheForcePathRange)

@@ -9,14 +9,16 @@
 #include "common/Layers.h"
 #include "common/Tolerances.h"
 
+#include "haptic/devices/ReplayDevice.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/Session.h"
-#include "haptic/servo/SimulatedDevices.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -504,13 +506,30 @@ private:
     long mWaits = 0;
 };
 
+/// How long a wait for the servo thread may last. The loops below run on a
+/// simulated clock and end in milliseconds; the deadline is there only so that a
+/// broken build fails the test instead of hanging the suite, never as a timing check.
+constexpr auto kWaitDeadline = std::chrono::seconds(60);
+
+/// Yield until @p done() or the deadline; false when the deadline came first.
+template <typename Done> bool waitUntil(Done done)
+{
+    const auto end = std::chrono::steady_clock::now() + kWaitDeadline;
+    while (!done()) {
+        if (std::chrono::steady_clock::now() > end) return false;
+        std::this_thread::yield();
+    }
+    return true;
+}
+
 /// Run the real-time loop on its thread until the device finishes; no wall-clock
 /// timing: the loop ends by itself when the scripted device reaches its end.
 void runToEnd(ServoLoop& loop)
 {
     loop.start();
-    while (loop.running()) std::this_thread::yield();
+    const bool ended = waitUntil([&] { return !loop.running(); });
     loop.stop(); // joins
+    EXPECT_TRUE(ended) << "the loop did not end within " << kWaitDeadline.count() << " s";
 }
 
 constexpr std::int64_t kTickNs = 1'000'000;
@@ -656,7 +675,8 @@ TEST(Servo, RealTimeThreadStartsAndStops)
     ScriptedDevice script(model->path(), InsertionScript::constantSpeed(-5.0, 30.0, 0.1), model->device());
     ServoLoop loop(*model, script);
     loop.start();
-    while (loop.ticks() < 10 && loop.running()) std::this_thread::yield();
+    const bool ran = waitUntil([&] { return loop.ticks() >= 10 || !loop.running(); });
+    EXPECT_TRUE(ran) << "ten ticks did not run within " << kWaitDeadline.count() << " s";
     EXPECT_TRUE(loop.running()); // the script lasts 350 s: only stop() ends it
     loop.stop();
     EXPECT_FALSE(loop.running());

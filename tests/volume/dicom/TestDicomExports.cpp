@@ -254,7 +254,7 @@ TEST_F(DicomExports, DefaultSeriesIsTheLargestLoadableCtThenT1WeightedMr)
     DicomLoadReport report;
     const Volume v = loadDicom({mDir}, raw, &report);
     EXPECT_EQ(report.series.uid, "1.2.826.0.1.3680043.2.1125.27.21");
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     // Add a CT: it comes first whatever its size.
     writeCt(mDir / "ct", 2);
     loadDicom({mDir}, raw, &report);
@@ -270,8 +270,11 @@ TEST_F(DicomExports, DefaultSeriesIsTheLargestLoadableCtThenT1WeightedMr)
     const Volume echo2 = loadDicom({mDir}, second, &report);
     EXPECT_EQ(report.volume, 2u);
     EXPECT_EQ(echo2.indexBox().dims().z(), 8);
-    EXPECT_NE(echo2.metadata().extra.at("volume").find("echo 2"), std::string::npos)
-        << echo2.metadata().extra.at("volume");
+    ASSERT_TRUE(echo2.metadata().volumeChoice);
+    EXPECT_EQ(echo2.metadata().volumeChoice->index, 2);
+    EXPECT_EQ(echo2.metadata().volumeChoice->count, 2);
+    EXPECT_NE(echo2.metadata().volumeChoice->label.find("echo 2"), std::string::npos)
+        << echo2.metadata().volumeChoice->label;
 }
 
 TEST_F(DicomExports, DamagedSliceIsNamedWithItsOffsetAndSkipBadLoadsTheRest)
@@ -471,7 +474,8 @@ TEST_F(DicomExports, EnhancedMultiFrameTimeSeriesLoadsOneTimePoint)
         // Slice k of time point t is frame 3·(t − 1) + k, whose stored values are storedAt(·, ·, frame).
         for (int k = 0; k < 3; ++k)
             EXPECT_EQ(acc.getValue({5, 4, k}), float(storedAt(5, 4, int(3 * (t - 1)) + k))) << t << "," << k;
-        EXPECT_NE(v.metadata().extra.at("volume").find("time point " + std::to_string(t)), std::string::npos);
+        ASSERT_TRUE(v.metadata().volumeChoice);
+        EXPECT_NE(v.metadata().volumeChoice->label.find("time point " + std::to_string(t)), std::string::npos);
     }
 }
 

@@ -506,7 +506,7 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     EXPECT_FALSE(unknown.has(Channel::Hu));
     EXPECT_FALSE(unknown.has(Channel::T1));
     ASSERT_TRUE(unknown.has(Channel::Intensity));
-    EXPECT_EQ(unknown.metadata().mrWeighting, "unknown");
+    EXPECT_EQ(unknown.metadata().mrWeighting, voxhap::volume::MrWeightingKind::Unknown);
     EXPECT_EQ(
         intensityGrid(unknown)->getConstAccessor().getValue(openvdb::Coord(3, 2, 1)), float(storedValue(3, 2, 1)));
 
@@ -522,7 +522,7 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     writeShuffled(slices);
     const Volume t2 = loadDicom({mDir});
     EXPECT_FALSE(t2.has(Channel::T1));
-    EXPECT_EQ(t2.metadata().mrWeighting, "T2-weighted");
+    EXPECT_EQ(t2.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T2Weighted);
 
     // A short-TR, short-TE spin echo is T1-weighted: without normalisation it
     // stays intensity (not T1 in ms) and says why.
@@ -533,7 +533,7 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     DicomOptions raw;
     raw.normaliseT1Weighted = false;
     const Volume weighted = loadDicom({mDir}, raw);
-    EXPECT_EQ(weighted.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(weighted.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     EXPECT_FALSE(weighted.has(Channel::T1));
     EXPECT_EQ(weighted.metadata().extra.at("t1_norm_refused"), "switched off");
 
@@ -545,7 +545,7 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     writeShuffled(slices);
     const Volume map = loadDicom({mDir});
     ASSERT_TRUE(map.has(Channel::T1));
-    EXPECT_EQ(map.metadata().extra.at("t1_kind"), "T1 map");
+    EXPECT_EQ(map.metadata().t1Kind, T1Kind::Map);
     EXPECT_EQ(map.metadata().t1Units, "ms");
     EXPECT_EQ(t1Grid(map)->getConstAccessor().getValue(openvdb::Coord(3, 2, 1)), float(storedValue(3, 2, 1)));
 
@@ -558,7 +558,7 @@ TEST_F(DicomSeries, MrFillsT1OnlyWhenItsHeadersSayT1)
     declared.t1Weighted = true;
     declared.normaliseT1Weighted = false;
     const Volume d = loadDicom({mDir}, declared);
-    EXPECT_EQ(d.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(d.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     EXPECT_NE(d.metadata().extra.at("mr_weighting_reason").find("--t1-weighted"), std::string::npos);
 }
 
@@ -599,8 +599,10 @@ TEST_F(DicomSeries, T1WeightedIntensityIsNormalisedPerScanFromFatAndMuscle)
         writeShuffled(fourRegionMr(tesla));
         const Volume v = loadDicom({mDir});
         EXPECT_EQ(v.metadata().t1Units, "ms");
-        EXPECT_EQ(v.metadata().extra.at("t1_kind"), "T1-weighted, normalised per scan");
-        EXPECT_EQ(v.metadata().extra.at("t1_norm_field"), tesla > 2 ? "3T" : "1.5T");
+        EXPECT_EQ(v.metadata().t1Kind, T1Kind::NormalisedWeighted);
+        EXPECT_EQ(v.metadata().fieldStrength, tesla > 2 ? FieldStrength::T3 : FieldStrength::T1_5);
+        EXPECT_EQ(v.metadata().fieldStrengthSource, FactSource::Header);
+        EXPECT_EQ(v.metadata().fieldStrengthTesla, tesla);
         EXPECT_NEAR(t1At(v, 3), fatMs, kFloatMs);
         EXPECT_NEAR(t1At(v, 8), muscleMs, kFloatMs);
         // R1 = R1_fat + (s - 800)·(R1_muscle - R1_fat)/(300 - 800), T1 = 1/R1 up to the clamp.
@@ -625,7 +627,9 @@ TEST_F(DicomSeries, T1WeightedIntensityIsNormalisedPerScanFromFatAndMuscle)
     o.assumedField = FieldStrength::T3;
     const Volume v = loadDicom({mDir}, o);
     EXPECT_NEAR(t1At(v, 3), 382.0, kFloatMs);
-    EXPECT_EQ(v.metadata().extra.at("t1_norm_field_source"), "assumed 3T: the headers give no field strength");
+    EXPECT_EQ(v.metadata().fieldStrength, FieldStrength::T3);
+    EXPECT_EQ(v.metadata().fieldStrengthSource, FactSource::Assumed);
+    EXPECT_EQ(v.metadata().fieldStrengthTesla, std::nullopt);
 }
 
 TEST_F(DicomSeries, T1WeightedScanWithoutFatAndMuscleStaysIntensityAndSaysWhy)
@@ -634,7 +638,7 @@ TEST_F(DicomSeries, T1WeightedScanWithoutFatAndMuscleStaysIntensityAndSaysWhy)
     for (auto& s : slices) std::fill(s.pixels.begin(), s.pixels.end(), std::int16_t(500)); // one grey: no classes
     writeShuffled(slices);
     const Volume v = loadDicom({mDir});
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     EXPECT_FALSE(v.has(Channel::T1)); // so the force models will not read it as T1
     ASSERT_TRUE(v.has(Channel::Intensity));
     EXPECT_NE(v.metadata().extra.at("t1_norm_refused").find(mDir.string()), std::string::npos);

@@ -13,7 +13,10 @@
 #include <gdcmImageReader.h>
 
 #include <fstream>
+#include <optional>
 #include <regex>
+#include <set>
+#include <vector>
 
 namespace {
 
@@ -42,7 +45,7 @@ TEST(RealMr, MprageIsT1WeightedWithItsAirInactiveAndNotPinnedAsATrunk)
     VOXHAP_REQUIRE_DIR(voxhap::test::mprageDir());
     DicomLoadReport report;
     const Volume v = loadDicom({voxhap::test::mprageDir()}, {}, &report);
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     // A head: the per-scan rule would pin white matter as fat (physics.md
     // §5.1 pins a trunk's fat and muscle), so it stays an intensity grid and
     // says why (BodyWidth.h).
@@ -50,7 +53,8 @@ TEST(RealMr, MprageIsT1WeightedWithItsAirInactiveAndNotPinnedAsATrunk)
     ASSERT_TRUE(v.has(Channel::Intensity));
     const std::string why = v.metadata().extra.at("t1_norm_refused");
     EXPECT_NE(why.find("mm across"), std::string::npos) << why;
-    const int width = std::stoi(v.metadata().extra.at("body_width_mm"));
+    ASSERT_TRUE(v.metadata().bodyWidthMm);
+    const int width = int(std::lround(*v.metadata().bodyWidthMm));
     EXPECT_GT(width, 131); // ANSUR II head breadth 131-180 mm; a fiducial and the ears add a little
     EXPECT_LT(width, 240);
     // Issue 27 item 7's targets: at most half the voxels active, sparse at
@@ -98,8 +102,10 @@ TEST(RealMr, FieldMapIsNeverT1AndNeverOneVolumeOfTwoEchoes)
         const Volume v = loadDicom({dir}, o, &report);
         EXPECT_FALSE(v.has(Channel::T1));
         ASSERT_TRUE(v.has(Channel::Intensity));
-        EXPECT_EQ(v.metadata().mrWeighting, "field map");
-        EXPECT_NE(v.metadata().extra.at("volume").find("echo " + std::to_string(echo)), std::string::npos);
+        EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::FieldMap);
+        ASSERT_TRUE(v.metadata().volumeChoice);
+        EXPECT_EQ(v.metadata().volumeChoice->index, int(echo));
+        EXPECT_NE(v.metadata().volumeChoice->label.find("echo " + std::to_string(echo)), std::string::npos);
         slices += std::stoul(v.metadata().extra.at("slices"));
     }
     EXPECT_EQ(slices, 36u); // the two echoes hold every file once
@@ -127,26 +133,39 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     // CSA series header lists each slice's centre (sSliceArray.asSlice[k].sPosition).
     const fs::path first = dicomFiles(dir).front();
     const std::string bytes = readAll(first);
-    const auto coordinate = [&](int k, const char* axis) {
+    // Siemens writes no field whose value is 0: dSag is absent from every slice of
+    // this series (sagittal offset 0), and an absent component means 0. dCor and
+    // dTra must be found for every slice, or the check below compares nothing.
+    const auto coordinate = [&](int k, const char* axis) -> std::optional<double> {
         const std::regex re(
             "sSliceArray\\.asSlice\\[" + std::to_string(k) + "\\]\\.sPosition\\." + axis + "\\s*=\\s*([-0-9.eE]+)");
         std::smatch m;
-        return std::regex_search(bytes, m, re) ? std::stod(m[1]) : 0.0; // an absent coordinate is 0
+        if (!std::regex_search(bytes, m, re)) return std::nullopt;
+        return std::stod(m[1]);
     };
+    std::vector<Vec3d> centres;
+    for (int k = 0; k < 25; ++k) {
+        const auto cor = coordinate(k, "dCor"), tra = coordinate(k, "dTra");
+        ASSERT_TRUE(cor) << "slice " << k << ": no sPosition.dCor in the protocol";
+        ASSERT_TRUE(tra) << "slice " << k << ": no sPosition.dTra in the protocol";
+        centres.emplace_back(coordinate(k, "dSag").value_or(0.0), *cor, *tra);
+    }
     // The protocol's centres are stored to 10 digits; the slice grid's centre
     // lies half a pixel from the geometric centre of an even matrix or not,
     // depending on the convention: within half a pixel (0.86 mm) in plane,
     // and 0.01 mm along the normal.
     const Vec3d normal = b0.geometry().direction.col(2);
+    std::set<long> planes;
     for (int k = 0; k < 25; ++k) {
         // The slice is at index z where its centre projects.
-        const Vec3d centre(coordinate(k, "dSag"), coordinate(k, "dCor"), coordinate(k, "dTra"));
-        const Vec3d ijk = b0.worldToIndex(centre);
+        const Vec3d ijk = b0.worldToIndex(centres[std::size_t(k)]);
+        planes.insert(std::lround(ijk.z()));
         EXPECT_NEAR(ijk.z(), std::round(ijk.z()), 0.01 / 5.2) << "slice " << k;
         EXPECT_NEAR(ijk.x(), 63.5, 0.5 + 1e-6) << "slice " << k;
         EXPECT_NEAR(ijk.y(), 63.5, 0.5 + 1e-6) << "slice " << k;
         (void)normal;
     }
+    EXPECT_EQ(planes.size(), 25u) << "each protocol slice on a plane of its own"; // not all at 0
 
     // Values: tile k of the stored mosaic (read here with GDCM) is slice k in
     // acquisition order, placed along the CSA slice normal.
@@ -159,8 +178,7 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     const auto* mosaic = reinterpret_cast<const std::uint16_t*>(raw.data());
     auto acc = intensityGrid(b0)->getConstAccessor();
     for (int k = 0; k < 25; ++k) {
-        const Vec3d centre(coordinate(k, "dSag"), coordinate(k, "dCor"), coordinate(k, "dTra"));
-        const int z = int(std::lround(b0.worldToIndex(centre).z()));
+        const int z = int(std::lround(b0.worldToIndex(centres[std::size_t(k)]).z()));
         const int tileRow = k / 5, tileCol = k % 5;
         for (int j = 0; j < 128; j += 9) {
             for (int i = 0; i < 128; i += 7) {
@@ -172,15 +190,15 @@ TEST(RealMr, DiffusionMosaicsSplitIntoTheirSlicesWhereTheProtocolPutsThem)
     // Every volume loads, b = 1000 after the b = 0.
     o.volume = 13;
     const Volume last = loadDicom({dir}, o);
-    EXPECT_NE(last.metadata().extra.at("volume").find("13 of 13 (b=1000)"), std::string::npos)
-        << last.metadata().extra.at("volume");
+    ASSERT_TRUE(last.metadata().volumeChoice);
+    EXPECT_EQ(volumeChoiceText(*last.metadata().volumeChoice), "13 of 13 (b=1000)");
 }
 
 TEST(RealMr, Flash2dIsT1WeightedAndAHead)
 {
     VOXHAP_REQUIRE_DIR(voxhap::test::flash2dDir());
     const Volume v = loadDicom({voxhap::test::flash2dDir()});
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     EXPECT_FALSE(v.has(Channel::T1)); // a head, as above
     EXPECT_TRUE(v.has(Channel::Intensity));
     EXPECT_EQ(v.indexBox().dims(), voxhap::Vec3i(256, 256, 35));

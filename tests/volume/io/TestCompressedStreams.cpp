@@ -257,9 +257,12 @@ TEST_P(CompressedStreams, FlipInTheChecksumIsRefusedNamingItAndItsOffset)
     }
 }
 
-TEST_P(CompressedStreams, FlipInTheStoredLengthIsRefusedNamingItAndItsOffset)
+/// The gzip formats alone: a zlib stream stores no length to check.
+class GzipStreams : public CompressedStreams { };
+
+TEST_P(GzipStreams, FlipInTheStoredLengthIsRefusedNamingItAndItsOffset)
 {
-    if (!GetParam().gzip) GTEST_SKIP() << "a zlib stream stores no length";
+    ASSERT_TRUE(GetParam().gzip);
     const std::size_t field = mStream.size() - 4;
     for (std::size_t b = 0; b < 4; ++b) {
         std::string s = mStream;
@@ -349,11 +352,23 @@ TEST_P(CompressedStreams, EveryByteFlippedIsRefusedOrLoadsTheSameVoxels)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Formats, CompressedStreams, testing::ValuesIn(formats()), [](const testing::TestParamInfo<Format>& p) {
-        std::string n = p.param.name.substr(0, p.param.name.find('.'));
-        for (char& c : n) c = c == '-' ? '_' : c;
-        return n;
-    });
+std::string formatName(const testing::TestParamInfo<Format>& p)
+{
+    std::string n = p.param.name.substr(0, p.param.name.find('.'));
+    for (char& c : n) c = c == '-' ? '_' : c;
+    return n;
+}
+
+std::vector<Format> gzipFormats()
+{
+    std::vector<Format> out;
+    for (const Format& f : formats()) {
+        if (f.gzip) out.push_back(f);
+    }
+    return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, CompressedStreams, testing::ValuesIn(formats()), formatName);
+INSTANTIATE_TEST_SUITE_P(Formats, GzipStreams, testing::ValuesIn(gzipFormats()), formatName);
 
 } // namespace

@@ -91,8 +91,9 @@ TEST_F(ModalityInference, CtIsInferredFromAirAndWater)
     const Volume v = loadVolume(p);
     ASSERT_TRUE(v.has(Channel::Hu));
     EXPECT_EQ(v.metadata().modality, "CT");
-    EXPECT_NE(v.metadata().extra.at("modality_source").find("inferred from the data"), std::string::npos);
-    EXPECT_NE(v.metadata().extra.at("modality_source").find("air"), std::string::npos);
+    EXPECT_EQ(v.metadata().modalitySource, FactSource::Data);
+    EXPECT_NE(v.metadata().modalityReason.find("inferred from the data"), std::string::npos);
+    EXPECT_NE(v.metadata().modalityReason.find("air"), std::string::npos);
     // The air below −950 is inactive, the tissue exact.
     auto acc = huGrid(v)->getConstAccessor();
     EXPECT_FALSE(acc.isValueOn({0, 0, 0}));
@@ -108,7 +109,7 @@ TEST_F(ModalityInference, T1WeightedNiftiIsMrOfUnknownWeightingUntilDeclared)
     EXPECT_FALSE(v.has(Channel::Hu));
     EXPECT_FALSE(v.has(Channel::T1)); // no sidecar, no declaration: never T1
     ASSERT_TRUE(v.has(Channel::Intensity));
-    EXPECT_EQ(v.metadata().mrWeighting, "unknown");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::Unknown);
     EXPECT_NE(v.metadata().extra.at("mr_weighting_reason").find("--t1-weighted"), std::string::npos);
     EXPECT_EQ(intensityGrid(v)->getConstAccessor().getValue({16, 16, 20}), 110.0f);
 
@@ -127,7 +128,8 @@ TEST_F(ModalityInference, T1WeightedNiftiIsMrOfUnknownWeightingUntilDeclared)
     ASSERT_TRUE(t1.has(Channel::T1));
     EXPECT_EQ(t1.metadata().t1Units, "ms");
     EXPECT_NE(t1.metadata().extra.at("mr_weighting_reason").find("declared"), std::string::npos);
-    EXPECT_NE(t1.metadata().extra.at("field_strength_source").find("assumed 1.5T"), std::string::npos);
+    EXPECT_EQ(t1.metadata().fieldStrength, FieldStrength::T1_5);
+    EXPECT_EQ(t1.metadata().fieldStrengthSource, FactSource::Assumed);
     EXPECT_NEAR(t1Grid(t1)->getConstAccessor().getValue({16, 16, 28}), 290.0, 1e-3); // fat at 1.5 T (physics.md §5.1)
 }
 
@@ -138,16 +140,19 @@ TEST_F(ModalityInference, BidsSidecarGivesTheWeightingAndFieldStrength)
                         "SequenceVariant": ["SP", "OSP"], "SequenceName": "*fl2d1", "RepetitionTime": 0.3,
                         "EchoTime": 0.00246, "FlipAngle": 80, "ImageType": ["ORIGINAL", "PRIMARY", "M"]})");
     const Volume v = loadVolume(p);
-    EXPECT_EQ(v.metadata().mrWeighting, "T1-weighted");
+    EXPECT_EQ(v.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T1Weighted);
     ASSERT_TRUE(v.has(Channel::T1));
-    EXPECT_NE(v.metadata().extra.at("modality_source").find("sidecar"), std::string::npos);
+    EXPECT_EQ(v.metadata().modalitySource, FactSource::Sidecar);
+    EXPECT_NE(v.metadata().modalityReason.find("sidecar"), std::string::npos);
+    EXPECT_EQ(v.metadata().fieldStrength, FieldStrength::T3);
+    EXPECT_EQ(v.metadata().fieldStrengthSource, FactSource::Sidecar);
     EXPECT_NEAR(t1Grid(v)->getConstAccessor().getValue({16, 16, 28}), 382.0, 1e-3); // fat at 3 T
 
     // A sidecar that says T2: an intensity grid, named.
     writeSidecar(p, R"({"Modality": "MR", "ScanningSequence": "SE", "SequenceName": "*tse2d1_15",
                         "RepetitionTime": 4.0, "EchoTime": 0.1})");
     const Volume t2 = loadVolume(p);
-    EXPECT_EQ(t2.metadata().mrWeighting, "T2-weighted");
+    EXPECT_EQ(t2.metadata().mrWeighting, voxhap::volume::MrWeightingKind::T2Weighted);
     EXPECT_FALSE(t2.has(Channel::T1));
 }
 
@@ -168,7 +173,8 @@ TEST_F(ModalityInference, ValuesThatAreNeitherAreRefusedNamingChannel)
     mr.modality = DeclaredModality::Mr;
     const Volume v = loadVolume(p, mr);
     EXPECT_EQ(v.metadata().modality, "MR");
-    EXPECT_NE(v.metadata().extra.at("modality_source").find("--channel mr"), std::string::npos);
+    EXPECT_EQ(v.metadata().modalitySource, FactSource::User);
+    EXPECT_NE(v.metadata().modalityReason.find("--channel mr"), std::string::npos);
 }
 
 TEST_F(ModalityInference, TheRuleOnItsOwn)
@@ -214,7 +220,7 @@ TEST_F(ModalityInference, NrrdWithoutVoxhapKeysIsInferredAndAnIntensityGridRound
     const Volume back = loadVolume(mDir / "mr.nrrd");
     EXPECT_TRUE(back.has(Channel::Intensity));
     EXPECT_FALSE(back.has(Channel::T1));
-    EXPECT_EQ(back.metadata().mrWeighting, "unknown");
+    EXPECT_EQ(back.metadata().mrWeighting, voxhap::volume::MrWeightingKind::Unknown);
     EXPECT_EQ(intensityGrid(back)->activeVoxelCount(), intensityGrid(v)->activeVoxelCount());
 }
 

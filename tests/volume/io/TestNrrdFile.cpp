@@ -96,6 +96,63 @@ TEST_F(Nrrd, RoundTripIsExactWithObliqueDirections)
     }
 }
 
+TEST_F(Nrrd, TypedFactsAreSavedUnderTheirOwnKeysAndReadBack)
+{
+    Volume v = makeVolume();
+    VolumeMetadata& md = v.metadata();
+    md.modalitySource = FactSource::Header;
+    md.fieldStrength = FieldStrength::T3;
+    md.fieldStrengthSource = FactSource::Sidecar;
+    md.fieldStrengthTesla = 2.89362;
+    md.seriesUid = "1.2.3";
+    md.volumeChoice = VolumeChoice{2, 3, "echo 2 (TE 7.38 ms)"};
+    md.landmarks = {{"lesion", Vec3d(1, 2, 3)}};
+    md.extra["note"] = "display only: not written";
+    const fs::path p = mDir / "facts.nrrd";
+    saveNrrd(v, Channel::Hu, p);
+    std::string header;
+    {
+        std::ifstream in(p, std::ios::binary);
+        std::getline(in, header, '\0');
+        header = header.substr(0, header.find("\n\n") + 1);
+    }
+    for (const char* line : {"voxhap_field_strength:=3T", "voxhap_field_strength_source:=sidecar",
+             "voxhap_field_strength_tesla:=2.89362", "voxhap_series_uid:=1.2.3", "voxhap_volume:=2",
+             "voxhap_volume_count:=3", "voxhap_volume_label:=echo 2 (TE 7.38 ms)", "voxhap_modality:=CT",
+             R"(voxhap_landmarks:={"lesion":[1.0,2.0,3.0]})"})
+        EXPECT_NE(header.find(std::string("\n") + line + "\n"), std::string::npos) << line << " in\n" << header;
+    EXPECT_EQ(header.find("note"), std::string::npos);
+    const Volume back = loadNrrd(p);
+    VolumeMetadata expected = md;
+    expected.extra.clear();
+    expected.source = "facts.nrrd";
+    // The file names its channel hu: CT by the file's own word.
+    expected.modalityReason = "declared by the file's voxhap_channel:=hu";
+    EXPECT_EQ(back.metadata(), expected);
+}
+
+TEST_F(Nrrd, FilesWrittenBeforeTheFactsWereTypedStayReadable)
+{
+    // voxhap's NRRD header as it was: channel, units, modality and weighting only.
+    const fs::path p = mDir / "old.nrrd";
+    const std::string data(4 * 2 * 2 * 2, '\0');
+    const auto header = [](const std::string& weighting) {
+        return "NRRD0004\ntype: float\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+               "space directions: (1,0,0) (0,1,0) (0,0,1)\nkinds: domain domain domain\nendian: little\n"
+               "encoding: raw\nspace origin: (0,0,0)\nvoxhap_channel:=intensity\nvoxhap_units:=arbitrary units\n"
+               "voxhap_mr_weighting:=" +
+            weighting + "\nvoxhap_modality:=MR\n\n";
+    };
+    writeText(p, header("T2-weighted"), data);
+    const Volume v = loadNrrd(p);
+    EXPECT_EQ(v.metadata().modality, "MR");
+    EXPECT_EQ(v.metadata().mrWeighting, MrWeightingKind::T2Weighted);
+    EXPECT_EQ(v.metadata().fieldStrength, std::nullopt);
+    // A value that is not one: refused naming the file and the key.
+    writeText(p, header("T3-weighted"), data);
+    expectRefused(p, "metadata 'mr_weighting'");
+}
+
 TEST_F(Nrrd, GzipStreamIsCheckedToItsEnd)
 {
     // A reader that stops once it has its voxels would accept a cut or

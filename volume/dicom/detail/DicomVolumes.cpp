@@ -32,6 +32,105 @@ std::string shortNumber(double v)
     return os.str();
 }
 
+/// Two headers describe the same slice grid: orientation, size and pixel spacing
+/// (what checkSameGrid requires of the slices of one volume).
+bool sameGrid(const DicomHeader& a, const DicomHeader& b)
+{
+    constexpr double kDirection = 1e-4, kSpacingMm = 1e-4;
+    return a.rows == b.rows && a.columns == b.columns && (a.rowDirection - b.rowDirection).norm() < kDirection &&
+        (a.columnDirection - b.columnDirection).norm() < kDirection &&
+        std::abs(a.pixelSpacing[0] - b.pixelSpacing[0]) < kSpacingMm &&
+        std::abs(a.pixelSpacing[1] - b.pixelSpacing[1]) < kSpacingMm;
+}
+
+/// A group of CT slices that may join another of a different image type (rule 1's exception).
+struct CtRun {
+    std::string key;       ///< the group's separating key
+    std::string otherKeys; ///< the separating key without the image type: only equal ones join
+    const DicomHeader* grid = nullptr;
+    std::vector<double> along; ///< positions along the normal, ascending
+    double thickness = 0;      ///< (0018,0050), else the median step [mm]
+    std::string types;         ///< the image types in the run, for the volume's label
+};
+
+/// Join the CT groups of @p groups that differ in image type alone, share one grid,
+/// hold distinct positions and whose ranges along the normal follow each other,
+/// overlapping by at most the thinner one's slice thickness. Returns what was
+/// joined ("A (4 mm) and B (7 mm)"); @p typeLabel gets the joined groups' label.
+std::string joinCtImageTypes(std::map<std::string, std::vector<std::size_t>>& groups,
+    const std::vector<DicomSlice>& slices, const std::vector<DicomHeader>& headers, double toleranceMm,
+    std::map<std::string, std::string>& typeLabel)
+{
+    std::vector<CtRun> runs;
+    for (const auto& [key, members] : groups) {
+        const DicomHeader& h0 = headers[slices[members.front()].file];
+        bool ok = true;
+        for (std::size_t i : members) {
+            const DicomHeader& h = headers[slices[i].file];
+            ok = ok && h.modality == "CT" && sameGrid(h0, h);
+        }
+        if (!ok) continue;
+        CtRun r;
+        r.key = key;
+        DicomFrameKey k = h0.frameKey(slices[members.front()].frame);
+        r.types = k.imageType;
+        k.imageType.clear();
+        r.otherKeys = k.separating();
+        r.grid = &h0;
+        const Vec3d normal = h0.rowDirection.cross(h0.columnDirection).normalized();
+        for (std::size_t i : members) r.along.push_back(slices[i].position.dot(normal));
+        std::sort(r.along.begin(), r.along.end());
+        std::vector<double> steps;
+        for (std::size_t i = 1; i < r.along.size(); ++i) steps.push_back(r.along[i] - r.along[i - 1]);
+        if (!steps.empty() && *std::min_element(steps.begin(), steps.end()) <= toleranceMm) continue; // repeats
+        std::sort(steps.begin(), steps.end());
+        r.thickness = h0.sliceThickness > 0 ? h0.sliceThickness : steps.empty() ? 0.0 : steps[steps.size() / 2];
+        if (!(r.thickness > 0)) continue;
+        r.types += " (" + shortNumber(r.thickness) + " mm)";
+        runs.push_back(std::move(r));
+    }
+    std::sort(
+        runs.begin(), runs.end(), [](const CtRun& a, const CtRun& b) { return a.along.front() < b.along.front(); });
+    std::string joined;
+    std::vector<bool> taken(runs.size(), false);
+    for (std::size_t a = 0; a < runs.size(); ++a) {
+        if (taken[a]) continue;
+        CtRun& head = runs[a];
+        std::string types = head.types;
+        double thinnest = head.thickness;
+        for (std::size_t b = a + 1; b < runs.size(); ++b) {
+            const CtRun& next = runs[b];
+            if (taken[b] || next.otherKeys != head.otherKeys || !sameGrid(*head.grid, *next.grid)) continue;
+            const double overlap = head.along.back() - next.along.front();
+            const double thickness = std::min(head.thickness, next.thickness);
+            // Follows: starts after the head's start, ends past its end, overlaps by at most a slice.
+            if (!(next.along.front() > head.along.front() && next.along.back() > head.along.back() &&
+                    overlap <= thickness + toleranceMm))
+                continue;
+            std::vector<double> all = head.along;
+            all.insert(all.end(), next.along.begin(), next.along.end());
+            std::sort(all.begin(), all.end());
+            bool distinct = true;
+            for (std::size_t i = 1; i < all.size(); ++i) distinct = distinct && all[i] - all[i - 1] > toleranceMm;
+            if (!distinct) continue; // a slice of each at one position: not one stack
+            auto& into = groups[head.key];
+            const auto& from = groups[next.key];
+            into.insert(into.end(), from.begin(), from.end());
+            groups.erase(next.key);
+            head.along = std::move(all);
+            types += " and " + next.types;
+            thinnest = std::min(thinnest, next.thickness);
+            head.thickness = thinnest;
+            taken[b] = true;
+        }
+        if (types != head.types) {
+            typeLabel[head.key] = types;
+            joined += (joined.empty() ? "" : "; ") + types;
+        }
+    }
+    return joined;
+}
+
 } // namespace
 
 std::vector<DicomSlice> seriesSlices(const std::vector<DicomHeader>& headers)
@@ -96,9 +195,13 @@ DicomVolumeSet splitVolumes(
     for (std::size_t i = 0; i < slices.size(); ++i) {
         groups[headers[slices[i].file].frameKey(slices[i].frame).separating()].push_back(i);
     }
+    // 1b. CT image types whose ranges follow each other along the normal: one stack.
+    std::map<std::string, std::string> typeLabel;
+    out.joined = joinCtImageTypes(groups, slices, headers, toleranceMm, typeLabel);
     // Which key fields differ between the groups: they name the volumes.
     bool byType = false, byEcho = false, byTime = false, byB = false, byStack = false, byRepeat = false;
-    const DicomFrameKey& k0 = headers[slices.front().file].frameKey(slices.front().frame);
+    const std::size_t s0 = groups.begin()->second.front(); // a slice of a group that remains
+    const DicomFrameKey& k0 = headers[slices[s0].file].frameKey(slices[s0].frame);
     for (const auto& [key, members] : groups) {
         const DicomFrameKey& k = headers[slices[members.front()].file].frameKey(slices[members.front()].frame);
         byType |= k.imageType != k0.imageType;
@@ -152,7 +255,7 @@ DicomVolumeSet splitVolumes(
             label << sep() << "time point "
                   << (k.temporalPosition ? std::to_string(*k.temporalPosition) : std::string("?"));
         if (byStack) label << sep() << "stack " << (k.stack ? std::to_string(*k.stack) : std::string("?"));
-        if (byType) label << sep() << k.imageType;
+        if (byType) label << sep() << (typeLabel.count(key) ? typeLabel.at(key) : k.imageType);
         if (lo != hi) {
             std::ostringstream why;
             why << "slice positions" << (label.tellp() ? " of " + label.str() : std::string()) << " repeat unequally ("

@@ -8,7 +8,14 @@
 /// 1. Slices that differ in image type, echo number, echo time, temporal
 ///    position, b-value or stack are never stacked together, even at distinct
 ///    positions (a two-echo field map whose echoes alternate along the stack
-///    must not become one volume).
+///    must not become one volume). One exception, for CT alone: groups that
+///    differ in image type only, on one grid, each at distinct positions, are
+///    one stack when their ranges along the normal follow each other,
+///    overlapping by at most one slice thickness (the thinner group's). A head
+///    CT of 4 mm slices marked ADD over the posterior fossa and 7 mm slices
+///    above is one CT of one head in calibrated HU; two reconstructions of the
+///    same range (thin and thick over the same slab) stay separate volumes, and
+///    so does every MR split.
 /// 2. Within one such group, a position that occurs m times means m volumes:
 ///    each position's slices are taken in acquisition order (AcquisitionNumber,
 ///    then TriggerTime, then InstanceNumber, then file order) and the k-th
@@ -41,7 +48,10 @@ struct DicomVolumeSet {
     std::vector<std::vector<std::size_t>> volumes; ///< indices into the slices, one list per volume
     std::vector<std::string> labels;               ///< one per volume: "b=1000", "echo 2 (TE 7.38 ms)", ...
     std::string separatedBy;                       ///< "b-value, acquisition order"; empty for one volume
-    std::string problem;                           ///< why the slices form no regular set of volumes; empty if they do
+    /// CT image types stacked as one volume (rule 1's exception): "ORIGINAL\PRIMARY\AXIAL\ADD (4 mm) and
+    /// ORIGINAL\PRIMARY\AXIAL (7 mm)"; empty when none were joined.
+    std::string joined;
+    std::string problem; ///< why the slices form no regular set of volumes; empty if they do
 
     std::size_t count() const { return volumes.size(); }
     /// @brief "13 volumes × 25 slices" or "2 volumes of 17 and 19 slices".

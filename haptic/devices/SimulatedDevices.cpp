@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file SimulatedDevices.cpp
-#include "haptic/servo/SimulatedDevices.h"
+#include "haptic/devices/SimulatedDevices.h"
 
 #include <algorithm>
 #include <cmath>

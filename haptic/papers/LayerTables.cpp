@@ -3,12 +3,12 @@
 /// @brief Layers from labels and from the papers' tables (physics.md §2.2, §2.3,
 /// §3.2, §3.3, §4).
 
-#include "haptic/models/LayerTables.h"
+#include "haptic/papers/LayerTables.h"
 
 #include "haptic/shaft/LabelTrace.h"
 
-#include "haptic/models/LumbarPunctureModel.h"
-#include "haptic/models/SenacModel.h"
+#include "haptic/papers/LumbarPunctureModel.h"
+#include "haptic/papers/SenacModel.h"
 #include "core/Errors.h"
 
 #include <algorithm>

@@ -5,11 +5,11 @@
 
 #include "common/Tolerances.h"
 
-#include "haptic/models/ConciModel.h"
+#include "haptic/papers/ConciModel.h"
 #include "haptic/force/ContactTransient.h"
-#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/force/PivotCorrection.h"
-#include "haptic/models/SenacModel.h"
+#include "haptic/papers/SenacModel.h"
 
 #include <cmath>
 

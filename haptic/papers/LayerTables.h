@@ -9,7 +9,7 @@
 /// layer's parameters are filled, and from what.
 #pragma once
 
-#include "haptic/models/ConciModel.h"
+#include "haptic/papers/ConciModel.h"
 #include "haptic/Layer.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/materials/MaterialField.h"

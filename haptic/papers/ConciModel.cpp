@@ -2,7 +2,7 @@
 /// @file ConciModel.cpp
 /// @brief Fitting and evaluation of the Conci model (physics.md §3).
 
-#include "haptic/models/ConciModel.h"
+#include "haptic/papers/ConciModel.h"
 
 #include "core/Errors.h"
 

@@ -2,7 +2,7 @@
 /// @file LumbarPunctureModel.cpp
 /// @brief [LP] Eq. 1–3 (physics.md §4).
 
-#include "haptic/models/LumbarPunctureModel.h"
+#include "haptic/papers/LumbarPunctureModel.h"
 
 #include <algorithm>
 #include <cmath>

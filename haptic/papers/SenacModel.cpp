@@ -2,7 +2,7 @@
 /// @file SenacModel.cpp
 /// @brief [S19] Eq. 3 and 4 (physics.md §2).
 
-#include "haptic/models/SenacModel.h"
+#include "haptic/papers/SenacModel.h"
 
 #include "core/Errors.h"
 

@@ -1,0 +1,329 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file LevelImage.cpp
+/// @brief Block averages of a sparse channel and of a dense level.
+
+#include "registration/LevelImage.h"
+
+#include "core/Errors.h"
+#include "volume/Grids.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace voxhap::registration {
+
+using volume::Channel;
+using volume::FloatGrid;
+
+namespace {
+
+/// Sums and active counts per output voxel.
+struct Accumulator {
+    explicit Accumulator(std::size_t n) : sum(n, 0.0), active(n, 0) { }
+    std::vector<double> sum;
+    std::vector<std::uint32_t> active;
+};
+
+/// The level lattice of @p factors over a source geometry whose box starts at @p min.
+volume::Geometry levelGeometry(const volume::Geometry& g, const Vec3d& firstCentre, const Vec3i& factors)
+{
+    volume::Geometry out = g;
+    out.spacing = g.spacing.cwiseProduct(factors.cast<double>());
+    const Vec3d centre = firstCentre + 0.5 * (factors.cast<double>() - Vec3d::Ones());
+    out.origin = g.origin + g.direction * g.spacing.cwiseProduct(centre);
+    return out;
+}
+
+LevelImage finish(LevelImage out, const Accumulator& acc, std::uint32_t blockVoxels, float background)
+{
+    const std::size_t n = acc.sum.size();
+    out.values.resize(n);
+    out.body.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const double air = double(blockVoxels - acc.active[i]) * double(background);
+            out.values[i] = float((acc.sum[i] + air) / double(blockVoxels));
+            out.body[i] = 2 * acc.active[i] >= blockVoxels ? 1 : 0;
+        }
+    });
+    return out;
+}
+
+} // namespace
+
+float backgroundOf(Channel c)
+{
+    switch (c) {
+    case Channel::Hu:
+        return volume::kAirHu;
+    case Channel::T1:
+        return volume::kAirT1;
+    case Channel::Intensity:
+        return volume::kAirIntensity;
+    case Channel::Label:
+        break;
+    }
+    throw ValueError("registration: the label channel is not an image (labels are not interpolated)");
+}
+
+bool LevelImage::inside(const Vec3d& w) const
+{
+    const Vec3d ijk = toIndex(w);
+    for (int a = 0; a < 3; ++a) {
+        if (!(ijk[a] >= -0.5 && ijk[a] <= double(dims[a]) - 0.5)) return false;
+    }
+    return true;
+}
+
+std::int64_t LevelImage::bodyCount() const
+{
+    return std::int64_t(std::count(body.begin(), body.end(), std::uint8_t(1)));
+}
+
+Vec3d LevelImage::bodyCentroid() const
+{
+    Vec3d sum = Vec3d::Zero();
+    std::int64_t n = 0;
+    for (int k = 0; k < dims.z(); ++k) {
+        for (int j = 0; j < dims.y(); ++j) {
+            for (int i = 0; i < dims.x(); ++i) {
+                if (!body[std::size_t(index(i, j, k))]) continue;
+                sum += Vec3d(i, j, k);
+                ++n;
+            }
+        }
+    }
+    return n ? world(sum / double(n)) : world(0.5 * (dims.cast<double>() - Vec3d::Ones()));
+}
+
+Vec3i blockFactors(const Vec3d& spacing, double targetMm)
+{
+    Vec3i f;
+    for (int a = 0; a < 3; ++a) f[a] = std::max(1, int(std::lround(targetMm / spacing[a])));
+    return f;
+}
+
+LevelImage blockAverage(const volume::Volume& v, Channel c, const Vec3i& factors)
+{
+    volume::initializeOpenVdb();
+    const float background = backgroundOf(c);
+    const auto grid = openvdb::gridConstPtrCast<FloatGrid>(v.grid(c));
+    if (!grid) throw ValueError("registration: the volume has no " + std::string(volume::channelName(c)) + " grid");
+    const volume::IndexBox box = v.indexBox();
+    LevelImage out;
+    out.dims = box.dims().cwiseQuotient(factors);
+    if ((out.dims.array() < 1).any()) {
+        throw ValueError("registration: the volume (" + std::to_string(box.dims().x()) + " x " +
+            std::to_string(box.dims().y()) + " x " + std::to_string(box.dims().z()) +
+            " voxels) is smaller than one block of the registration's coarsest level");
+    }
+    out.geometry = levelGeometry(v.geometry(), box.min.cast<double>(), factors);
+    const std::size_t n = std::size_t(out.count());
+    const Vec3i last = box.min + out.dims.cwiseProduct(factors) - Vec3i::Ones(); // inclusive, full blocks only
+
+    // Each output slab gathers its blocks through its own accessor: a fixed
+    // summing order (the same answer every run) and no per-thread copies of
+    // the level, which at the finest level would cost more than the level.
+    Accumulator total(n);
+    tbb::parallel_for(tbb::blocked_range<int>(0, out.dims.z()), [&](const tbb::blocked_range<int>& ks) {
+        auto acc = grid->getConstAccessor();
+        for (int k = ks.begin(); k != ks.end(); ++k) {
+            for (int j = 0; j < out.dims.y(); ++j) {
+                for (int i = 0; i < out.dims.x(); ++i) {
+                    const auto cell = std::size_t(out.index(i, j, k));
+                    const Vec3i first = box.min + Vec3i(i, j, k).cwiseProduct(factors);
+                    double sum = 0.0;
+                    std::uint32_t active = 0;
+                    for (int c = 0; c < factors.z(); ++c)
+                        for (int b = 0; b < factors.y(); ++b)
+                            for (int a = 0; a < factors.x(); ++a) {
+                                float value;
+                                if (acc.probeValue(
+                                        openvdb::Coord(first.x() + a, first.y() + b, first.z() + c), value)) {
+                                    sum += double(value);
+                                    ++active;
+                                }
+                            }
+                    total.sum[cell] = sum;
+                    total.active[cell] = active;
+                }
+            }
+        }
+    });
+    return finish(std::move(out), total, std::uint32_t(factors.prod()), background);
+}
+
+LevelImage blockAverage(const LevelImage& fine, const Vec3i& factors)
+{
+    LevelImage out;
+    out.dims = fine.dims.cwiseQuotient(factors).cwiseMax(Vec3i::Ones());
+    const Vec3i f = factors.cwiseMin(fine.dims);
+    out.geometry = levelGeometry(fine.geometry, Vec3d::Zero(), f);
+    const std::size_t n = std::size_t(out.count());
+    out.values.assign(n, 0.0f);
+    out.body.assign(n, 0);
+    const double blockVoxels = double(f.prod());
+    tbb::parallel_for(0, out.dims.z(), [&](int k) {
+        for (int j = 0; j < out.dims.y(); ++j) {
+            for (int i = 0; i < out.dims.x(); ++i) {
+                double sum = 0.0;
+                int body = 0;
+                for (int c = 0; c < f.z(); ++c) {
+                    for (int b = 0; b < f.y(); ++b) {
+                        for (int a = 0; a < f.x(); ++a) {
+                            const std::size_t s = std::size_t(fine.index(i * f.x() + a, j * f.y() + b, k * f.z() + c));
+                            sum += double(fine.values[s]);
+                            body += fine.body[s];
+                        }
+                    }
+                }
+                const std::size_t o = std::size_t(out.index(i, j, k));
+                out.values[o] = float(sum / blockVoxels);
+                out.body[o] = 2 * body >= int(blockVoxels) ? 1 : 0;
+            }
+        }
+    });
+    return out;
+}
+
+namespace {
+
+/// 6-neighbour offsets of voxel @p at that lie inside dims @p d, through @p f(neighbour).
+template <typename F> void forFaceNeighbours(const Vec3i& d, std::int64_t at, F&& f)
+{
+    const std::int64_t nx = d.x(), nxy = std::int64_t(d.x()) * d.y();
+    const int i = int(at % nx), j = int((at / nx) % d.y()), k = int(at / nxy);
+    if (i > 0) f(at - 1);
+    if (i + 1 < d.x()) f(at + 1);
+    if (j > 0) f(at - nx);
+    if (j + 1 < d.y()) f(at + nx);
+    if (k > 0) f(at - nxy);
+    if (k + 1 < d.z()) f(at + nxy);
+}
+
+/// One pass of 6-neighbour erosion (grow = false), or of dilation within @p limit.
+/// Row by row, so that a voxel's neighbours are offsets, not divisions.
+std::vector<std::uint8_t> morphologyPass(
+    const std::vector<std::uint8_t>& in, const Vec3i& d, bool grow, const std::vector<std::uint8_t>* limit)
+{
+    std::vector<std::uint8_t> out = in;
+    const std::int64_t nx = d.x(), nxy = std::int64_t(d.x()) * d.y();
+    const std::uint8_t want = grow ? 1 : 0; // a neighbour in this state changes the voxel
+    tbb::parallel_for(tbb::blocked_range<int>(0, d.z()), [&](const tbb::blocked_range<int>& ks) {
+        for (int k = ks.begin(); k != ks.end(); ++k) {
+            for (int j = 0; j < d.y(); ++j) {
+                const std::int64_t row = k * nxy + j * nx;
+                for (int i = 0; i < d.x(); ++i) {
+                    const auto m = std::size_t(row + i);
+                    if (grow ? in[m] || (limit && !(*limit)[m]) : !in[m]) continue;
+                    const auto is = [&](std::int64_t q) { return (in[std::size_t(q)] != 0) == (want != 0); };
+                    const std::int64_t at = row + i;
+                    const bool hit = (i > 0 && is(at - 1)) || (i + 1 < d.x() && is(at + 1)) || (j > 0 && is(at - nx)) ||
+                        (j + 1 < d.y() && is(at + nx)) || (k > 0 && is(at - nxy)) || (k + 1 < d.z() && is(at + nxy));
+                    if (hit) out[m] = want;
+                }
+            }
+        }
+    });
+    return out;
+}
+
+/// Mark with 1 the voxels 6-connected to @p seeds through voxels where @p pass is true.
+template <typename Pass> std::vector<std::uint8_t> flood(const Vec3i& d, std::vector<std::int64_t> seeds, Pass&& pass)
+{
+    std::vector<std::uint8_t> reached(std::size_t(std::int64_t(d.x()) * d.y() * d.z()), 0);
+    for (std::int64_t s : seeds) reached[std::size_t(s)] = 1;
+    while (!seeds.empty()) {
+        const std::int64_t at = seeds.back();
+        seeds.pop_back();
+        forFaceNeighbours(d, at, [&](std::int64_t q) {
+            if (reached[std::size_t(q)] || !pass(std::size_t(q))) return;
+            reached[std::size_t(q)] = 1;
+            seeds.push_back(q);
+        });
+    }
+    return reached;
+}
+
+} // namespace
+
+void bodyAbove(LevelImage& image, float threshold, int openingVoxels)
+{
+    const Vec3i d = image.dims;
+    const std::size_t n = image.values.size();
+    std::vector<std::uint8_t> mask(n);
+    for (std::size_t q = 0; q < n; ++q) mask[q] = image.values[q] > threshold ? 1 : 0;
+    // Opened: erosion cuts what joins the body only through thin parts (a
+    // table top, a box's lid and walls), and dilation within the mask gives
+    // the part kept back its skin.
+    std::vector<std::uint8_t> core = mask;
+    for (int p = 0; p < openingVoxels; ++p) core = morphologyPass(core, d, false, nullptr);
+    // The parts of the core, labelled one flood each; the largest is the body.
+    std::vector<std::int32_t> part(n, -1);
+    std::int32_t best = -1, next = 0;
+    std::int64_t bestSize = 0;
+    std::vector<std::int64_t> stack;
+    for (std::size_t seed = 0; seed < n; ++seed) {
+        if (part[seed] >= 0 || !core[seed]) continue;
+        std::int64_t size = 0;
+        part[seed] = next;
+        stack.push_back(std::int64_t(seed));
+        while (!stack.empty()) {
+            const std::int64_t at = stack.back();
+            stack.pop_back();
+            ++size;
+            forFaceNeighbours(d, at, [&](std::int64_t q) {
+                if (part[std::size_t(q)] >= 0 || !core[std::size_t(q)]) return;
+                part[std::size_t(q)] = next;
+                stack.push_back(q);
+            });
+        }
+        if (size > bestSize) bestSize = size, best = next;
+        ++next;
+    }
+    std::vector<std::uint8_t> body(n);
+    for (std::size_t q = 0; q < n; ++q) body[q] = best >= 0 && part[q] == best ? 1 : 0;
+    for (int p = 0; p < openingVoxels; ++p) body = morphologyPass(body, d, true, &mask);
+    // Its holes filled: what the border cannot reach through the rest is
+    // inside (gas, marrow, a dark cyst), so that the body's surface is its skin.
+    auto inBody = [&](std::size_t q) { return body[q] != 0; };
+    std::vector<std::int64_t> border;
+    for (int k = 0; k < d.z(); ++k)
+        for (int j = 0; j < d.y(); ++j)
+            for (int i = 0; i < d.x(); ++i) {
+                const auto m = image.index(i, j, k);
+                const bool edge = i == 0 || j == 0 || k == 0 || i == d.x() - 1 || j == d.y() - 1 || k == d.z() - 1;
+                if (edge && !inBody(std::size_t(m))) border.push_back(m);
+            }
+    const auto outside = flood(d, std::move(border), [&](std::size_t q) { return !inBody(q); });
+    for (std::size_t q = 0; q < n; ++q) image.body[q] = best >= 0 && !outside[q] ? 1 : 0;
+}
+
+std::vector<std::uint8_t> grownBody(const LevelImage& image, int passes)
+{
+    std::vector<std::uint8_t> body = image.body;
+    for (int p = 0; p < passes; ++p) body = morphologyPass(body, image.dims, true, nullptr);
+    return body;
+}
+
+void clampValues(LevelImage& image, float lo, float hi)
+{
+    for (float& v : image.values) v = std::clamp(v, lo, hi);
+}
+
+float bodyQuantile(const LevelImage& image, double fraction)
+{
+    std::vector<float> values;
+    values.reserve(std::size_t(image.bodyCount()));
+    for (std::size_t i = 0; i < image.values.size(); ++i) {
+        if (image.body[i]) values.push_back(image.values[i]);
+    }
+    if (values.empty()) return 0.0f;
+    const auto at = values.begin() + std::ptrdiff_t(std::clamp(fraction, 0.0, 1.0) * double(values.size() - 1));
+    std::nth_element(values.begin(), at, values.end());
+    return *at;
+}
+
+} // namespace voxhap::registration

@@ -1,0 +1,401 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file MetricStage.cpp
+/// @brief ITK v4 registration pieces: Mattes MI, regular-step gradient descent,
+/// Euler 3D and affine transforms, body masks and a fixed sample set.
+
+#include "registration/detail/MetricStage.h"
+
+#include "core/Errors.h"
+
+#include <itkAffineTransform.h>
+#include <itkCommand.h>
+#include <itkEuler3DTransform.h>
+#include <itkImage.h>
+#include <itkSpatialObject.h>
+#include <itkMattesMutualInformationImageToImageMetricv4.h>
+#include <itkRegularStepGradientDescentOptimizerv4.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <tuple>
+#include <random>
+
+namespace voxhap::registration::detail {
+
+namespace {
+
+using ImageF = itk::Image<float, 3>;
+using MattesMetric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
+
+/// ITK's Mattes mutual information on one work unit. With more, each work unit
+/// fills its own derivative buffer and adds it to the shared one under a
+/// try-lock, in whatever order the units reach it: the sums, and from them the
+/// optimiser's path, change from run to run (the porcine pair's answer moved by
+/// a millimetre). `SetMaximumNumberOfWorkUnits` caps the threads, not the work
+/// units, so the units are set here on the metric's own threaders. The
+/// orientation search runs its candidates in parallel instead (Registration.cpp).
+class SerialMattes : public MattesMetric {
+public:
+    ITK_DISALLOW_COPY_AND_MOVE(SerialMattes);
+    using Self = SerialMattes;
+    using Superclass = MattesMetric;
+    using Pointer = itk::SmartPointer<Self>;
+    using ConstPointer = itk::SmartPointer<const Self>;
+    itkNewMacro(Self);
+    itkTypeMacro(SerialMattes, MattesMutualInformationImageToImageMetricv4);
+
+protected:
+    SerialMattes()
+    {
+        this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+        this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+    }
+    ~SerialMattes() override = default;
+};
+using Metric = SerialMattes;
+using PointSet = Metric::FixedSampledPointSetType;
+using Optimizer = itk::RegularStepGradientDescentOptimizerv4<double>;
+using Rigid = itk::Euler3DTransform<double>;
+using Affine = itk::AffineTransform<double, 3>;
+
+template <typename ImageT> typename ImageT::Pointer emptyImage(const LevelImage& li)
+{
+    auto img = ImageT::New();
+    typename ImageT::SizeType size;
+    typename ImageT::SpacingType spacing;
+    typename ImageT::PointType origin;
+    typename ImageT::DirectionType direction;
+    for (unsigned a = 0; a < 3; ++a) {
+        size[a] = itk::SizeValueType(li.dims[int(a)]);
+        spacing[a] = li.geometry.spacing[int(a)];
+        origin[a] = li.geometry.origin[int(a)];
+        for (unsigned b = 0; b < 3; ++b) direction(a, b) = li.geometry.direction(int(a), int(b));
+    }
+    img->SetRegions(typename ImageT::RegionType(size));
+    img->SetSpacing(spacing);
+    img->SetOrigin(origin);
+    img->SetDirection(direction);
+    img->Allocate();
+    return img;
+}
+
+ImageF::Pointer toItk(const LevelImage& li)
+{
+    auto img = emptyImage<ImageF>(li);
+    std::copy(li.values.begin(), li.values.end(), img->GetBufferPointer());
+    return img;
+}
+
+/// A body mask as the metric asks it, "is this world point inside?", answered
+/// as ImageMaskSpatialObject answers it (the nearest voxel, rounding halves up)
+/// but from a precomputed world-to-index map: ITK's own object went through its
+/// object-to-world transforms and image at every sample and took a seventh of
+/// the registration's time.
+class LevelMask : public itk::SpatialObject<3> {
+public:
+    ITK_DISALLOW_COPY_AND_MOVE(LevelMask);
+    using Self = LevelMask;
+    using Superclass = itk::SpatialObject<3>;
+    using Pointer = itk::SmartPointer<Self>;
+    using ConstPointer = itk::SmartPointer<const Self>;
+    itkNewMacro(Self);
+    itkTypeMacro(LevelMask, SpatialObject);
+
+    void set(const LevelImage& li, const std::vector<std::uint8_t>& mask)
+    {
+        mMask = mask;
+        mDims = li.dims;
+        mOrigin = li.geometry.origin;
+        mWorldToIndex = (li.geometry.direction * li.geometry.spacing.asDiagonal()).inverse();
+    }
+    bool IsInsideInObjectSpace(const PointType& p) const override
+    {
+        const Vec3d c = mWorldToIndex * (Vec3d(p[0], p[1], p[2]) - mOrigin);
+        const Vec3i i((c.array() + 0.5).floor().cast<int>());
+        if ((i.array() < 0).any() || (i.array() >= mDims.array()).any()) return false;
+        return mMask[std::size_t((std::int64_t(i.z()) * mDims.y() + i.y()) * mDims.x() + i.x())] != 0;
+    }
+    bool IsInsideInWorldSpace(const PointType& p, unsigned int, const std::string&) const override
+    {
+        return IsInsideInObjectSpace(p); // object space is world space here
+    }
+
+protected:
+    LevelMask() = default;
+    ~LevelMask() override = default;
+
+private:
+    std::vector<std::uint8_t> mMask;
+    Vec3i mDims = Vec3i::Zero();
+    Vec3d mOrigin = Vec3d::Zero();
+    Mat3d mWorldToIndex = Mat3d::Identity();
+};
+using MaskObject = LevelMask;
+
+MaskObject::Pointer toMask(const LevelImage& li, const std::vector<std::uint8_t>& mask)
+{
+    auto object = MaskObject::New();
+    object->set(li, mask);
+    return object;
+}
+
+/// Per-parameter scales that make a unit step of each parameter move the body
+/// by about the same distance (ITK divides the gradient by them): a rotation
+/// of δ moves a point at radius R by R·δ, a translation of δ by δ.
+Optimizer::ScalesType scalesFor(StageKind kind, double radius)
+{
+    const double r2 = radius * radius;
+    if (kind == StageKind::Rigid) {
+        Optimizer::ScalesType s(6);
+        for (unsigned i = 0; i < 3; ++i) s[i] = r2;
+        for (unsigned i = 3; i < 6; ++i) s[i] = 1.0;
+        return s;
+    }
+    Optimizer::ScalesType s(12);
+    for (unsigned i = 0; i < 9; ++i) s[i] = r2;
+    for (unsigned i = 9; i < 12; ++i) s[i] = 1.0;
+    return s;
+}
+
+using TransformBase = itk::MatrixOffsetTransformBase<double, 3, 3>;
+
+/// Set @p xform (made by makeTransform for @p kind) to @p map with rotations about @p centre.
+void assignTransform(TransformBase& xform, StageKind kind, const AffineMap& map, const Vec3d& centre)
+{
+    itk::Matrix<double, 3, 3> m;
+    itk::Point<double, 3> c;
+    itk::Vector<double, 3> t;
+    const Vec3d translation = map.offset - centre + map.linear * centre;
+    for (unsigned a = 0; a < 3; ++a) {
+        c[a] = centre[int(a)];
+        t[a] = translation[int(a)];
+        for (unsigned b = 0; b < 3; ++b) m(a, b) = map.linear(int(a), int(b));
+    }
+    xform.SetCenter(c);
+    if (kind == StageKind::Rigid) {
+        static_cast<Rigid&>(xform).SetMatrix(m, 1e-6); // the start is a rotation: orthonormal to rounding
+    } else {
+        xform.SetMatrix(m);
+    }
+    xform.SetTranslation(t);
+}
+
+/// An ITK transform starting at @p map with rotations about @p centre.
+TransformBase::Pointer makeTransform(StageKind kind, const AffineMap& map, const Vec3d& centre)
+{
+    TransformBase::Pointer xform;
+    if (kind == StageKind::Rigid) {
+        xform = Rigid::New();
+    } else {
+        xform = Affine::New();
+    }
+    assignTransform(*xform, kind, map, centre);
+    return xform;
+}
+
+AffineMap mapOf(const itk::MatrixOffsetTransformBase<double, 3, 3>& xform)
+{
+    AffineMap map;
+    const auto& m = xform.GetMatrix();
+    const auto& o = xform.GetOffset();
+    for (int a = 0; a < 3; ++a) {
+        map.offset[a] = o[unsigned(a)];
+        for (int b = 0; b < 3; ++b) map.linear(a, b) = m(unsigned(a), unsigned(b));
+    }
+    return map;
+}
+
+/// Records the metric of each iteration and the best position seen.
+///
+/// ITK 5.2's optimisers report an iteration after moving: GetCurrentMetricValue()
+/// is the value at the position before the step, GetCurrentPosition() the one
+/// after it (and ReturnBestParametersAndValue pairs them the same way, returning
+/// a position one step past the best value). The observer pairs each value with
+/// the position it was computed at.
+class HistoryObserver : public itk::Command {
+public:
+    using Self = HistoryObserver;
+    using Pointer = itk::SmartPointer<Self>;
+    itkNewMacro(Self);
+    std::vector<double>* history = nullptr;
+    Optimizer::ParametersType evaluatedAt; ///< where the next reported value was computed
+    Optimizer::ParametersType bestPosition;
+    double bestValue = std::numeric_limits<double>::max();
+    void Execute(itk::Object* caller, const itk::EventObject& event) override
+    {
+        Execute(static_cast<const itk::Object*>(caller), event);
+    }
+    void Execute(const itk::Object* caller, const itk::EventObject& event) override
+    {
+        if (!itk::IterationEvent().CheckEvent(&event)) return;
+        const auto* opt = dynamic_cast<const Optimizer*>(caller);
+        if (!opt) return;
+        const double value = opt->GetCurrentMetricValue();
+        if (history) history->push_back(value);
+        if (value < bestValue) {
+            bestValue = value;
+            bestPosition = evaluatedAt;
+        }
+        evaluatedAt = opt->GetCurrentPosition();
+    }
+};
+
+} // namespace
+
+struct MetricPair::Impl {
+    LevelImage fixedLevel;
+    ImageF::Pointer fixed, moving;
+    MaskObject::Pointer movingMask;
+    std::vector<Vec3d> candidates; ///< index positions of the fixed body (dilated), for sampling
+    double radius = 1.0;           ///< RMS distance of the fixed body from its centroid [mm]
+    Vec3d centroid = Vec3d::Zero();
+
+    PointSet::Pointer samples(int count, std::uint32_t seed) const
+    {
+        auto points = PointSet::New();
+        points->Initialize();
+        std::mt19937 rng(seed);
+        std::uniform_int_distribution<std::size_t> pick(0, candidates.size() - 1);
+        std::uniform_real_distribution<double> jitter(-0.5, 0.5);
+        for (int n = 0; n < count; ++n) {
+            const Vec3d ijk = candidates[pick(rng)] + Vec3d(jitter(rng), jitter(rng), jitter(rng));
+            const Vec3d w = fixedLevel.world(ijk);
+            PointSet::PointType p;
+            for (unsigned a = 0; a < 3; ++a) p[a] = w[int(a)];
+            points->SetPoint(PointSet::PointIdentifier(n), p);
+        }
+        return points;
+    }
+
+    /// A metric with its transform, kept per stage setting: ITK's Mattes metric
+    /// scans every voxel of both images (through their masks) for their value
+    /// ranges when it is initialised, which at the finest level cost more than
+    /// the optimisation itself; a pair initialises it once per setting.
+    struct Prepared {
+        TransformBase::Pointer xform;
+        Metric::Pointer metric;
+    };
+    mutable std::map<std::tuple<int, int, int, std::uint32_t>, Prepared> prepared;
+
+    Prepared& prepare(const AffineMap& map, const Vec3d& centre, const StageSettings& s) const
+    {
+        const auto key = std::make_tuple(int(s.kind), s.samples, s.bins, s.seed);
+        auto it = prepared.find(key);
+        if (it == prepared.end()) {
+            Prepared p;
+            p.xform = makeTransform(s.kind, map, centre);
+            p.metric = metric(p.xform.GetPointer(), s);
+            it = prepared.emplace(key, std::move(p)).first;
+        } else {
+            assignTransform(*it->second.xform, s.kind, map, centre);
+        }
+        return it->second;
+    }
+
+    Metric::Pointer metric(TransformBase* xform, const StageSettings& s) const
+    {
+        auto m = Metric::New();
+        m->SetNumberOfHistogramBins(itk::SizeValueType(s.bins));
+        // The gradient images would cost a filter pass over each level per
+        // stage; the metric takes central differences at the samples instead.
+        m->SetUseMovingImageGradientFilter(false);
+        m->SetUseFixedImageGradientFilter(false);
+        m->SetFixedImage(fixed);
+        m->SetMovingImage(moving);
+        // No fixed mask: the samples are drawn from the fixed body (grown by
+        // the margin) and jittered within their own voxel, so each is inside it.
+        m->SetMovingImageMask(movingMask);
+        m->SetMovingTransform(xform);
+        m->SetFixedSampledPointSet(samples(s.samples, s.seed));
+        m->SetUseSampledPointSet(true);
+        m->SetVirtualDomainFromImage(fixed);
+        m->SetMaximumNumberOfWorkUnits(1); // and one thread for it (SerialMattes says why)
+        m->Initialize();
+        return m;
+    }
+};
+
+MetricPair::MetricPair(const LevelImage& fixed, const LevelImage& moving, double marginMm)
+    : mImpl(std::make_unique<Impl>())
+{
+    Impl& p = *mImpl;
+    p.fixedLevel = fixed;
+    p.fixed = toItk(fixed);
+    p.moving = toItk(moving);
+    auto voxels = [&](const LevelImage& l) {
+        return std::max(1, int(std::lround(marginMm / l.geometry.spacing.minCoeff())));
+    };
+    const auto fixedBody = grownBody(fixed, voxels(fixed));
+    p.movingMask = toMask(moving, grownBody(moving, voxels(moving)));
+    for (int k = 0; k < fixed.dims.z(); ++k) {
+        for (int j = 0; j < fixed.dims.y(); ++j) {
+            for (int i = 0; i < fixed.dims.x(); ++i) {
+                if (fixedBody[std::size_t(fixed.index(i, j, k))]) p.candidates.emplace_back(i, j, k);
+            }
+        }
+    }
+    if (p.candidates.empty()) throw ValueError("registration: the CT has no body voxels at this level");
+    Vec3d sum = Vec3d::Zero();
+    for (const Vec3d& c : p.candidates) sum += fixed.world(c);
+    p.centroid = sum / double(p.candidates.size());
+    double r2 = 0.0;
+    for (const Vec3d& c : p.candidates) r2 += (fixed.world(c) - p.centroid).squaredNorm();
+    p.radius = std::max(1.0, std::sqrt(r2 / double(p.candidates.size())));
+}
+
+MetricPair::~MetricPair() = default;
+
+double MetricPair::metricAt(const AffineMap& map, const Vec3d& centre, const StageSettings& settings) const
+{
+    try {
+        return mImpl->prepare(map, centre, settings).metric->GetValue();
+    } catch (const itk::ExceptionObject& e) {
+        throw ValueError(std::string("registration: the metric cannot be evaluated here (") + e.GetDescription() + ")");
+    }
+}
+
+StageResult MetricPair::run(const AffineMap& start, const Vec3d& centre, const StageSettings& settings) const
+{
+    StageResult r;
+    TransformBase::Pointer xform;
+    try {
+        Impl::Prepared& prepared = mImpl->prepare(start, centre, settings);
+        xform = prepared.xform;
+        const Metric::Pointer metric = prepared.metric;
+        r.startMetric = metric->GetValue();
+        auto opt = Optimizer::New();
+        opt->SetNumberOfWorkUnits(1);
+        opt->SetMetric(metric);
+        opt->SetScales(scalesFor(settings.kind, mImpl->radius));
+        opt->SetLearningRate(settings.stepMm);
+        opt->SetMinimumStepLength(settings.minimumStepMm);
+        opt->SetRelaxationFactor(settings.relaxation);
+        opt->SetGradientMagnitudeTolerance(1e-12);
+        opt->SetNumberOfIterations(itk::SizeValueType(settings.iterations));
+        opt->SetDoEstimateLearningRateAtEachIteration(false);
+        opt->SetDoEstimateLearningRateOnce(false);
+        auto observer = HistoryObserver::New();
+        observer->history = &r.history;
+        observer->evaluatedAt = xform->GetParameters();
+        opt->AddObserver(itk::IterationEvent(), observer);
+        opt->StartOptimization();
+        r.iterations = int(opt->GetCurrentIteration());
+        r.hitIterationLimit =
+            opt->GetStopCondition() == itk::StopConditionObjectToObjectOptimizerEnum::MAXIMUM_NUMBER_OF_ITERATIONS;
+        r.stopReason = opt->GetStopConditionDescription();
+        // The last position, then the best the observer saw (the start included).
+        r.finalMetric = metric->GetValue();
+        if (observer->bestValue < r.finalMetric) {
+            metric->SetParameters(observer->bestPosition);
+            r.finalMetric = observer->bestValue;
+        }
+    } catch (const itk::ExceptionObject& e) {
+        throw ValueError(std::string("registration: the optimiser failed (") + e.GetDescription() + ")");
+    }
+    r.map = mapOf(*xform);
+    return r;
+}
+
+} // namespace voxhap::registration::detail
