@@ -27,7 +27,8 @@ struct Pair {
     volume::PhantomScanTruth truth;
 };
 
-Pair lumbarPair(const std::filesystem::path& dir, const Vec3d& shift, const Vec3d& degrees = Vec3d::Zero())
+Pair lumbarPair(const std::filesystem::path& dir, const Vec3d& shift, const Vec3d& degrees = Vec3d::Zero(),
+    volume::FieldStrength field = volume::FieldStrength::T1_5)
 {
     const auto& table = volume::TissueTable::builtin();
     volume::PhantomSpec spec;
@@ -38,6 +39,7 @@ Pair lumbarPair(const std::filesystem::path& dir, const Vec3d& shift, const Vec3
     volume::PhantomMrScan scan;
     scan.rotation = test::rotationDeg(degrees);
     scan.translationMm = shift;
+    scan.field = field;
     volume::PhantomScanTruth truth;
     const volume::Volume scanned = volume::phantomMrScan(model, table, scan, &truth);
     volume::writePhantomMrScan(scanned, scan.field, dir / "mr.nrrd");
@@ -219,6 +221,32 @@ TEST_F(RegistrationRepeat, TheSameInputsGiveTheSameAnswerBitForBit)
     EXPECT_EQ(a.iterations, b.iterations);
     ASSERT_EQ(a.candidates.size(), b.candidates.size());
     for (std::size_t i = 0; i < a.candidates.size(); ++i) EXPECT_EQ(a.candidates[i].metric, b.candidates[i].metric);
+}
+
+} // namespace
+} // namespace voxhap::registration
+
+namespace voxhap::registration {
+namespace {
+
+class FusionField : public test::TempDirTest { };
+
+/// The fused volume keeps what the MR's sidecar said of its field, and so
+/// takes the damping law of that field (physics.md §5.4): a 3 T MR gives the
+/// fused volume 3 T from the sidecar, a 1.5 T one 1.5 T.
+TEST_F(FusionField, TheFusedVolumeKeepsTheMrsFieldStrengthAndItsSource)
+{
+    for (const auto field : {volume::FieldStrength::T3, volume::FieldStrength::T1_5}) {
+        const Pair p = lumbarPair(mDir, Vec3d(4, -3, 6), Vec3d::Zero(), field);
+        ASSERT_EQ(p.mr.metadata().fieldStrength, field) << "the sidecar says the field";
+        FusionOptions o;
+        o.ctFile = "ct";
+        o.mrFile = "mr.nrrd";
+        const FusionResult f = fuse(p.ct, p.mr, o);
+        EXPECT_EQ(f.volume.metadata().fieldStrength, field);
+        EXPECT_EQ(f.volume.metadata().fieldStrengthSource, volume::FactSource::Sidecar);
+        EXPECT_EQ(f.volume.metadata().t1Kind, volume::T1Kind::Map);
+    }
 }
 
 } // namespace

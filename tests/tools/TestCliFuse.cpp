@@ -113,6 +113,13 @@ TEST_F(CliFuse, FusesAMovedPhantomMrAndInfoAndRenderShowTheRegistration)
     EXPECT_NE(info.out.find("registration"), std::string::npos) << info.out;
     EXPECT_NE(info.out.find("mr.nrrd"), std::string::npos) << info.out;
 
+    // The fused volume is a .vdb like any other: segment and render read it.
+    const Result seg = run("segment fused.vdb --out segmented.vdb");
+    EXPECT_EQ(seg.exitCode, 0) << seg.err;
+    EXPECT_TRUE(fs::exists(mDir / "segmented.vdb"));
+    const Result plain = run("render fused.vdb --out plain");
+    EXPECT_EQ(plain.exitCode, 0) << plain.err;
+
     const Result views = run("render fused.vdb --fusion --out views");
     ASSERT_EQ(views.exitCode, 0) << views.err;
     for (const char* plane : {"axial", "coronal", "sagittal"}) {
