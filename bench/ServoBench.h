@@ -18,7 +18,9 @@
 namespace voxhap::bench {
 
 struct ServoBenchOptions {
-    std::vector<std::string> scenes{"senac-average", "kyung"};
+    /// The bending scenes beside their straight twins (physics.md §9.4), in one run.
+    std::vector<std::string> scenes{
+        "senac-average", "kyung", "kyung-bending", "lumbar-puncture", "lumbar-puncture-bending"};
     double seconds = 30.0;                                             ///< the 1 kHz run
     std::vector<double> rates{1e3, 2e3, 5e3, 10e3, 20e3, 50e3, 100e3}; ///< the rate ladder [Hz]
     double ladderSeconds = 2.0;

@@ -183,7 +183,10 @@ void checkScene(const Json& doc, const Scene& s)
     if (!at(doc, {"terms"})) finding("terms: accepted without");
     onlyKnown(at(doc, {"terms"}), "terms",
         {"tip", "cutting", "viscous", "karnopp", "damping", "bone", "pivot", "lock", "lor", "critical",
-            "coupling_N_per_mm", "bone_texture", "palpation", "guidance"});
+            "coupling_N_per_mm", "bone_texture", "palpation", "guidance", "bending"});
+    term(doc, "bending", t.bending.on);
+    onlyKnown(at(doc, {"terms", "bending"}), "terms.bending", {});
+    if (t.bending.on && (t.lock.on || t.pivot.on)) finding("terms.bending: accepted beside the lock or the pivot");
     term(doc, "bone_texture", t.boneTexture.on);
     onlyKnown(at(doc, {"terms", "bone_texture"}), "terms.bone_texture", {"c_N"});
     number(doc, {"terms", "bone_texture", "c_N"}, t.boneTexture.cN, Sign::NonNegative);
@@ -227,7 +230,22 @@ void checkScene(const Json& doc, const Scene& s)
     number(doc, {"terms", "coupling_N_per_mm"}, t.couplingNPerMm, Sign::Positive);
 
     // needle: whole gauges from 14 to 27, the recipe follows it
-    onlyKnown(at(doc, {"needle"}), "needle", {"gauge", "reference_gauge", "length_mm", "tip"});
+    onlyKnown(at(doc, {"needle"}), "needle",
+        {"gauge", "reference_gauge", "length_mm", "tip", "material", "youngs_modulus_GPa", "inner_diameter_mm",
+            "stylet", "bevel_angle_deg", "bevel_orientation_deg"});
+    if (at(doc, {"needle", "youngs_modulus_GPa"}))
+        number(doc, {"needle", "youngs_modulus_GPa"}, s.needle.youngsModulusMPa, Sign::Positive, 1e3);
+    if (at(doc, {"needle", "inner_diameter_mm"})) {
+        number(doc, {"needle", "inner_diameter_mm"}, s.needle.innerDiameterGivenMm, Sign::NonNegative);
+        if (!(s.needle.innerDiameterMm() < s.needle.outerDiameterMm())) finding("needle: ID not below the OD accepted");
+    }
+    number(doc, {"needle", "bevel_angle_deg"}, s.needle.bevelAngleDeg, Sign::Positive);
+    if (!(s.needle.bevelAngleDeg > 0.0 && s.needle.bevelAngleDeg < 90.0))
+        finding("needle.bevel_angle_deg: outside (0, 90) accepted");
+    number(doc, {"needle", "bevel_orientation_deg"}, s.needle.bevelOrientationDeg, Sign::Any);
+    string(doc, {"needle", "material"}, voxhap::haptic::needleMaterialName(s.needle.material));
+    if (const Json* b = at(doc, {"needle", "stylet"}); b && *b != s.needle.stylet)
+        finding("needle.stylet: read differs");
     for (const int g : {s.needle.gauge, s.needle.referenceGauge}) {
         if (g < 14 || g > 27) finding("needle: gauge " + std::to_string(g) + " outside 14..27");
     }

@@ -7,6 +7,7 @@
 /// build for functions no parser reaches. Each stand-in aborts, so a parser
 /// that ever reached one would be reported, not silently stubbed.
 
+#include "haptic/beam/Foundation.h"
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/force/Palpation.h"
 #include "haptic/materials/MaterialField.h"
@@ -53,6 +54,7 @@ std::vector<LabelRun> traceLabelRuns(const MaterialField&, const Vec3d&, const V
 {
     notLinked("traceLabelRuns");
 }
+std::unique_ptr<Foundation> makeLabelFoundation(const MaterialField&) { notLinked("makeLabelFoundation"); }
 NeedleForceModel::NeedleForceModel(ForceModelSetup) { notLinked("NeedleForceModel"); }
 void NeedleForceModel::step(const NeedleInput&, NeedleOutput&) noexcept { notLinked("NeedleForceModel::step"); }
 } // namespace voxhap::haptic

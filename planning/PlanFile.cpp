@@ -48,6 +48,28 @@ NeedlePose parseNeedle(Fields n)
     if (!(d.norm() > 1e-9)) n.fail("direction", "must not be zero");
     pose.direction = d.normalized();
     pose.lengthMm = n.number("length_mm", pose.lengthMm, true);
+    if (n.has("shaft")) { // a bending needle's polyline, hub to tip
+        const Json& s = n.raw("shaft");
+        if (!s.is_array() || s.size() < 2) n.fail("shaft", "must be a list of at least two [x, y, z] points in mm");
+        for (const Json& q : s) {
+            if (!q.is_array() || q.size() != 3 || !q[0].is_number() || !q[1].is_number() || !q[2].is_number())
+                n.fail("shaft", "must be a list of [x, y, z] points in mm");
+            const Vec3d p(q[0].get<double>(), q[1].get<double>(), q[2].get<double>());
+            if (!p.allFinite()) n.fail("shaft", "points must be finite");
+            pose.shaft.push_back(p);
+        }
+    }
+    if (n.has("shaft")) { // a bending needle's polyline, hub to tip
+        const Json& s = n.raw("shaft");
+        if (!s.is_array() || s.size() < 2) n.fail("shaft", "must be a list of at least two [x, y, z] points in mm");
+        for (const Json& q : s) {
+            if (!q.is_array() || q.size() != 3 || !q[0].is_number() || !q[1].is_number() || !q[2].is_number())
+                n.fail("shaft", "must be a list of [x, y, z] points in mm");
+            const Vec3d p(q[0].get<double>(), q[1].get<double>(), q[2].get<double>());
+            if (!p.allFinite()) n.fail("shaft", "points must be finite");
+            pose.shaft.push_back(p);
+        }
+    }
     return pose;
 }
 
@@ -138,6 +160,11 @@ std::string planJson(const Plan& plan)
         if (p.needle) {
             j["needle"] = {{"tip", point(p.needle->tip)}, {"direction", point(p.needle->direction)},
                 {"length_mm", p.needle->lengthMm}};
+            if (!p.needle->shaft.empty()) {
+                Json shaft = Json::array();
+                for (const Vec3d& q : p.needle->shaft) shaft.push_back(point(q));
+                j["needle"]["shaft"] = std::move(shaft);
+            }
         }
         paths.push_back(std::move(j));
     }

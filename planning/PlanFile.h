@@ -27,6 +27,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace voxhap::planning {
@@ -39,7 +40,17 @@ struct NeedlePose {
     Vec3d tip{0, 0, 0};       ///< [mm, LPS]
     Vec3d direction{0, 0, 1}; ///< unit, hub to tip
     double lengthMm = 90.0;   ///< shaft length drawn behind the tip [mm] (haptic::Needle's default)
+    /// A bending needle's shaft, hub to tip (physics.md §9); empty: straight from hub() to tip.
+    std::vector<Vec3d> shaft;
     Vec3d hub() const { return tip - lengthMm * direction; }
+    /// @brief The shaft as segments: the bent polyline, or the one straight segment.
+    std::vector<std::pair<Vec3d, Vec3d>> segments() const
+    {
+        std::vector<std::pair<Vec3d, Vec3d>> out;
+        if (shaft.size() < 2) return {{hub(), tip}};
+        for (std::size_t i = 1; i < shaft.size(); ++i) out.emplace_back(shaft[i - 1], shaft[i]);
+        return out;
+    }
 };
 
 struct PlannedPath {

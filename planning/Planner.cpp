@@ -113,6 +113,8 @@ std::vector<std::string> Planner::criticalStructures() const
     return out;
 }
 
+const haptic::MaterialField& Planner::field() const { return *mImpl->field; }
+
 int Planner::labelAt(const Vec3d& w) const
 {
     const Vec3d ijk = mVolume->worldToIndex(w);

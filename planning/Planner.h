@@ -73,6 +73,8 @@ public:
     double distanceBandMm() const { return mBandMm; }
     int skinLabel() const { return mSkin; }
     int labelAt(const Vec3d& world) const;
+    /// @brief The scene's material field over the volume (the bending prediction's foundation).
+    const haptic::MaterialField& field() const;
 
 private:
     struct Impl;

@@ -47,6 +47,22 @@ nlohmann::json pathJson(const TrajectoryReport& r, int rank)
     j["risk"] = {{"total", r.risk.total}, {"breach", r.risk.breach}, {"too_short", r.risk.tooShort},
         {"bone_obstacles", r.risk.boneObstacles}, {"over_force", r.risk.overForce}, {"proximity", r.risk.proximity},
         {"length", r.risk.length}, {"force", r.risk.force}};
+    if (r.deflection) { // a bending needle (physics.md §9.6)
+        const auto choice = [](const BevelChoice& c) {
+            return nlohmann::json{{"bevel_orientation_deg", c.orientationDeg}, {"turn_depth_mm", depth(c.turnDepthMm)},
+                {"tip_deviation_mm", c.tipDeviationMm}, {"tip_to_target_mm", c.tipToTargetMm}};
+        };
+        nlohmann::json d;
+        d["best"] = choice(r.deflection->best);
+        d["without_turn"] = nlohmann::json::array();
+        for (const auto& c : r.deflection->tried) {
+            if (!std::isfinite(c.turnDepthMm)) d["without_turn"].push_back(choice(c));
+        }
+        d["choices_tried"] = r.deflection->tried.size();
+        d["bent_shaft"] = nlohmann::json::array();
+        for (const Vec3d& p : r.deflection->bentShaft) d["bent_shaft"].push_back(point(p));
+        j["deflection"] = std::move(d);
+    }
     return j;
 }
 

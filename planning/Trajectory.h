@@ -9,6 +9,7 @@
 #include "core/Math.h"
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,23 @@ struct RiskTerms {
     double total = 0;
 };
 
+/// @brief One way of inserting a bending needle along a straight plan (physics.md §9.6).
+struct BevelChoice {
+    double orientationDeg = 0;     ///< the bevel's orientation at the entry (the scene's, or turned 180°)
+    double turnDepthMm = kNoDepth; ///< one half turn at this depth [mm], or none
+    double tipDeviationMm = 0;     ///< the bent tip's distance from the planned line at the target's depth [mm]
+    double tipToTargetMm = 0;      ///< the bent tip's distance from the target [mm]
+};
+
+/// @brief The predicted deflection of a path: each orientation and turn tried, the
+/// one ending nearest the target, and that one's bent needle.
+struct DeflectionPrediction {
+    std::vector<BevelChoice> tried; ///< the scene's orientation, its reverse, then each turn depth
+    BevelChoice best;
+    std::vector<Vec3d> bentShaft; ///< the best choice's needle at the end, hub to tip [mm, LPS]
+    std::vector<Vec3d> bentTrack; ///< the track its tip cut, from the entry [mm, LPS]
+};
+
 struct TrajectoryReport {
     Vec3d entry{0, 0, 0}, target{0, 0, 0};
     double lengthMm = 0;
@@ -70,6 +88,9 @@ struct TrajectoryReport {
     double contactMm = kNoDepth; ///< the profile stops at rigid (bone) contact here (physics.md §1.3)
     std::vector<Warning> warnings;
     RiskTerms risk;
+    /// With a bending needle (scene terms.bending): where its tip is predicted to end
+    /// (Deflection.h); filled for the ranked paths only.
+    std::optional<DeflectionPrediction> deflection;
     bool hasWarning(const std::string& code) const;
 };
 

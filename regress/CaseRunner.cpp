@@ -8,6 +8,7 @@
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
 #include "core/Version.h"
+#include "haptic/beam/Foundation.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/shaft/LabelTrace.h"
@@ -227,7 +228,9 @@ std::unique_ptr<haptic::NeedleForceModel> makeModel(const haptic::SceneInstance&
         .needle = s.needle,
         .device = s.device,
         .integrator = std::move(integrator),
-        .field = inst.field()});
+        .field = inst.field(),
+        // A bending needle's tissue (physics.md §9.2), as the scene builds it.
+        .foundation = s.terms.bending.on ? haptic::makeLabelFoundation(*inst.field()) : nullptr});
 }
 
 /// A palpation sweep (Suite.h) through @p model at @p rateHz: down onto the skin,
@@ -636,6 +639,7 @@ CaseRun Runner::runOne(std::size_t k) const
 
     CaseRun out;
     out.profile = profileOf(r, c.sampleMm);
+    if (r.summary.bending) out.tipDeviationMm = r.summary.tipDeviationMm;
     for (const haptic::Layer& l : inst.layers()) {
         if (l.role != haptic::LayerRole::Air) out.layers.push_back({l.name, l.startMm, l.endMm});
     }
@@ -696,7 +700,14 @@ CaseRun Runner::runOne(std::size_t k) const
             }
         }
     }
-    for (const std::string& name : used) recordTissue(p.table->at(name), in);
+    for (const std::string& name : used) {
+        const volume::Tissue& t = p.table->at(name);
+        recordTissue(t, in);
+        // A bending needle reads the foundation (physics.md §9.2); a straight one does
+        // not, so the fingerprints of the other cases stay as they were.
+        if (scene.terms.bending.on && t.foundationModulus)
+            putNumber(in, t.name + ".foundation_modulus", t.foundationModulus->value, "N/mm²");
+    }
     out.elapsedS = std::chrono::duration<double>(Clock::now() - t0).count();
     return out;
 }

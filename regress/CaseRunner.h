@@ -89,6 +89,8 @@ struct CaseRun {
     Profile profile;
     Inputs inputs;
     std::vector<Band> layers;
+    /// A bending needle's tip off the straight line at the last tick [mm] (physics.md §9.6)
+    std::optional<double> tipDeviationMm;
     double elapsedS = 0; ///< the case's own time (its share of the volume build not included)
 };
 

@@ -620,6 +620,9 @@ ClosedFormCheck closedForm(
 {
     const Lookup in{recorded, current};
     if (c.sweep) return ClosedFormCheck::none("a palpation sweep (§7 has no profile across the back)");
+    // The closed forms are those of a straight needle; a bending one's tip lags them by
+    // what its deflection takes from the depth (physics.md §9.1).
+    if (termOn(in, "bending")) return ClosedFormCheck::none("a bending needle (§7's forms are a straight needle's)");
     const std::string model = in.text("scene.model"), layersFrom = in.text("scene.layers");
     if (model == "lumbar-puncture" && layersFrom == "table") return lumbarPunctureStack(c, in, samples);
     if (model == "conci" && layersFrom == "table") return conciProfile(c, in, samples);

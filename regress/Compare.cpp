@@ -346,7 +346,22 @@ CaseReport compareCase(const Case& c, const CaseRun& run, const std::optional<Ba
             note(std::min(e.depthMm, is[k]), 0.0, 0.0, cf->rule + " (" + e.event + " moved)");
         }
     }
-    r.pass = baseline && !r.first && r.eventDiffs.empty() && r.peakDiffs.empty();
+    // A deflection measured in the literature (physics.md §9.2): the deviation is
+    // stated whether it passes or not.
+    r.tipDeviationMm = run.tipDeviationMm;
+    if (c.measured) {
+        const Measured& m = *c.measured;
+        const double got = run.tipDeviationMm.value_or(0.0);
+        r.measuredPass = run.tipDeviationMm && std::abs(got - m.tipDeviationMm) <= m.toleranceMm;
+        r.measured = fixed(m.tipDeviationMm, 2) + " mm measured (" + m.source + "), model " +
+            (run.tipDeviationMm ? fixed(got, 2) + " mm" : std::string("no bending needle")) +
+            (m.tipDeviationMm > 0.0 && run.tipDeviationMm ? ", " + std::string(got >= m.tipDeviationMm ? "+" : "") +
+                        fixed(100.0 * (got - m.tipDeviationMm) / m.tipDeviationMm, 0) + " %"
+                                                          : std::string()) +
+            ", tolerance " + fixed(m.toleranceMm, 2) + " mm";
+        r.reference += " + measured tip deviation";
+    }
+    r.pass = baseline && !r.first && r.eventDiffs.empty() && r.peakDiffs.empty() && r.measuredPass;
     return r;
 }
 

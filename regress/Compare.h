@@ -58,6 +58,11 @@ struct CaseReport {
     std::vector<std::string> peakDiffs;
     std::vector<std::string> inputDiffs; ///< "skin.cutting_force 2 → 2.1 N"
     std::optional<double> closedFormMaxDeltaN;
+    std::optional<double> tipDeviationMm; ///< a bending needle's, at the last tick [mm]
+    /// Against the case's measured deflection: "5.00 mm measured (source), model
+    /// 6.10 mm, +22 %, tolerance 1.50 mm"; empty without one.
+    std::string measured;
+    bool measuredPass = true;
     std::string closedForm;  ///< "closed form: R1", or "no closed form: <why>" (ClosedFormCheck::line)
     std::string digest;      ///< of this run's profile (CaseRunner.h)
     std::string png;         ///< the failing case's plot, when drawn

@@ -75,6 +75,7 @@ std::vector<std::string> explanation(const CaseReport& c)
     }
     for (const auto& e : c.eventDiffs) lines.push_back("event: " + e);
     for (const auto& p : c.peakDiffs) lines.push_back(p);
+    if (!c.measuredPass) lines.push_back("measured: " + c.measured + ": outside");
     if (c.hasBaseline) {
         if (c.inputDiffs.empty())
             lines.push_back("inputs: the same as the baseline's record (a change in voxhap's code, not in its data)");
@@ -231,6 +232,10 @@ void printReport(std::ostream& os, const RegressResult& r)
            << std::setw(19) << (c.first ? fixed(c.first->depthMm, 2) : std::string("-")) << "  " << std::setw(int(we))
            << eventsOf(c) << "  " << c.closedForm << '\n';
     }
+    // The literature's deflections, stated pass or fail (physics.md §9.2).
+    for (const auto& c : r.cases) {
+        if (!c.measured.empty()) os << "\ntip deviation of " << c.name << ": " << c.measured << '\n';
+    }
     for (const auto& c : r.cases) {
         if (c.pass && c.inputDiffs.empty()) continue;
         os << '\n' << (c.pass ? "note " : "FAIL ") << c.name << " (" << c.reference << ")\n";
@@ -263,6 +268,8 @@ nlohmann::json reportJson(const RegressResult& r)
             {"peak_differences", c.peakDiffs}, {"input_differences", c.inputDiffs}, {"seconds", c.seconds}};
         j["closed_form_max_delta_N"] = c.closedFormMaxDeltaN ? Json(*c.closedFormMaxDeltaN) : Json(nullptr);
         j["closed_form"] = c.closedForm; // "closed form: R1" or "no closed form: <why>"
+        if (c.tipDeviationMm) j["tip_deviation_mm"] = *c.tipDeviationMm;
+        if (!c.measured.empty()) j["measured"] = {{"pass", c.measuredPass}, {"text", c.measured}};
         j["first_past_tolerance"] = c.first
             ? Json{{"depth_mm", c.first->depthMm}, {"delta_N", c.first->deltaN}, {"tolerance_N", c.first->toleranceN},
                   {"against", c.first->against}, {"tissue", c.first->tissue}}

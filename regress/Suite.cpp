@@ -179,6 +179,16 @@ Case parseCase(
     }
     k.sampleMm = c.number("sample_mm", k.sampleMm, true);
     k.tolerance = parseTolerance(c);
+    if (c.has("measured")) {
+        Fields m = c.sub("measured");
+        Measured d;
+        d.tipDeviationMm = m.number("tip_deviation_mm", -1.0);
+        if (!(d.tipDeviationMm >= 0.0)) m.fail("tip_deviation_mm", "missing or negative");
+        d.toleranceMm = m.number("tolerance_mm", 0.0, true);
+        d.source = m.string("source", "");
+        if (d.source.empty()) m.fail("source", "missing: who measured it, with what, in what");
+        k.measured = d;
+    }
     c.string("comment", "");
     return k;
 }

@@ -62,6 +62,15 @@ struct VolumeSpec {
 inline const std::vector<std::string> kStrategies = {
     "servo", "exact-voxel", "exact-trilinear", "march-trilinear", "march-nearest"};
 
+/// @brief A deflection measured in the literature that a bending case's run is
+/// held to (physics.md §9.2): the bent tip's distance from the straight line at
+/// the last tick, within the stated tolerance.
+struct Measured {
+    double tipDeviationMm = 0; ///< the measurement [mm]
+    double toleranceMm = 0;    ///< allowed |model − measurement| [mm], > 0
+    std::string source;        ///< who measured it, with what, in what
+};
+
 /// @brief A palpation sweep across the back (a case kind of its own): the
 /// fingertip comes down onto the skin at @ref from, presses @ref pressMm in along
 /// the scene's path direction, slides to @ref to at that depth and lifts, at a
@@ -88,6 +97,7 @@ struct Case {
     std::string strategy = "servo";
     double sampleMm = 0.2; ///< spacing of the stored profile samples along the depth [mm]
     Tolerance tolerance;
+    std::optional<Measured> measured; ///< a literature deflection (bending scenes only)
 };
 
 /// @brief A parsed suite.

@@ -124,10 +124,12 @@ void drawSliceOverlays(Image& img, const ViewFrame& f, const Overlays& o, const 
         drawRing(img, f.toPixel(p.entry), kMarkerPx, Stroke{s.entry, 2.0, 0.0, 1.0});
         drawRing(img, f.toPixel(p.target), kMarkerPx, Stroke{s.target, 2.0, 0.0, 1.0});
         drawSegment(img, f, p.entry, p.target, s.path, 1.0, s);
-        if (p.needle) drawSegment(img, f, p.needle->hub(), p.needle->tip, s.needle, 2.0, s);
+        if (p.needle) {
+            for (const auto& [a, b] : p.needle->segments()) drawSegment(img, f, a, b, s.needle, 2.0, s);
+        }
     }
     if (o.needle) {
-        drawSegment(img, f, o.needle->hub(), o.needle->tip, s.needle, 2.0, s);
+        for (const auto& [a, b] : o.needle->segments()) drawSegment(img, f, a, b, s.needle, 2.0, s);
         fillDisc(img, f.toPixel(o.needle->tip), 2.5, s.needle);
     }
     drawAnnotations(img, f, o, s);

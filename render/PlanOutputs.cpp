@@ -104,7 +104,18 @@ PlanFiles writePlanOutputs(const planning::Planner& planner, const std::vector<p
                 f.why3d = x->why();
             }
             req.point = paths.front().target;
-            for (const auto& l : lines) req.plan.paths.push_back({l.name, l.entry, l.target, std::nullopt});
+            for (std::size_t i = 0; i < lines.size(); ++i) {
+                planning::PlannedPath p{lines[i].name, lines[i].entry, lines[i].target, std::nullopt};
+                if (const auto& d = paths[i].deflection) { // the predicted bent needle (physics.md §9.6)
+                    planning::NeedlePose pose;
+                    pose.tip = d->bentShaft.back();
+                    pose.direction = (d->bentShaft.back() - d->bentShaft.front()).normalized();
+                    pose.lengthMm = planner.scene().needle.lengthMm;
+                    pose.shaft = d->bentShaft;
+                    p.needle = pose;
+                }
+                req.plan.paths.push_back(std::move(p));
+            }
             Snapshot snap(planner.volume(), req, planner.table());
             std::vector<Image> images;
             for (ViewKind k : snap.views()) images.push_back(snap.render(k));

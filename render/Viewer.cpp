@@ -357,11 +357,16 @@ void Viewer::drawOver3d(Image& img) const
         drawLine(img, f.toPixel(p.entry), f.toPixel(p.target), Stroke{style.path, 2.0, 0.0, 1.0});
         fillDisc(img, f.toPixel(p.entry), 4.0, style.entry);
         fillDisc(img, f.toPixel(p.target), 4.0, style.target);
-        if (p.needle)
-            drawLine(img, f.toPixel(p.needle->hub()), f.toPixel(p.needle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
+        if (p.needle) {
+            for (const auto& [a, b] : p.needle->segments())
+                drawLine(img, f.toPixel(a), f.toPixel(b), Stroke{style.needle, 3.0, 0.0, 1.0});
+        }
     }
     if (const auto& entry = mEditor.pendingEntry()) fillDisc(img, f.toPixel(*entry), 4.0, style.entry);
-    if (mNeedle) drawLine(img, f.toPixel(mNeedle->hub()), f.toPixel(mNeedle->tip), Stroke{style.needle, 3.0, 0.0, 1.0});
+    if (mNeedle) {
+        for (const auto& [a, b] : mNeedle->segments())
+            drawLine(img, f.toPixel(a), f.toPixel(b), Stroke{style.needle, 3.0, 0.0, 1.0});
+    }
 }
 
 Image Viewer::render()

@@ -419,7 +419,9 @@ VolumeView3d::VolumeView3d(const RenderVolume& v, const ViewFrame& frame, const 
         paths.emplace_back(p.entry, p.target);
         entries.push_back(p.entry);
         targets.push_back(p.target);
-        if (p.needle) needles.emplace_back(p.needle->hub(), p.needle->tip);
+        if (p.needle) {
+            for (const auto& segment : p.needle->segments()) needles.push_back(segment);
+        }
     }
     if (!paths.empty()) {
         m.lines->AddActor(lineActor(paths, m.style.path, 2.0));
@@ -492,7 +494,7 @@ void VolumeView3d::setNeedle(const std::optional<planning::NeedlePose>& needle)
     if (m.needle) m.lines->RemoveActor(m.needle);
     m.needle = nullptr;
     if (!needle) return;
-    m.needle = lineActor({{needle->hub(), needle->tip}}, m.style.needle, 3.0);
+    m.needle = lineActor(needle->segments(), m.style.needle, 3.0);
     m.lines->AddActor(m.needle);
 }
 

@@ -191,7 +191,8 @@ Action registerBench(CLI::App& app)
         ->add_option("--floor-seconds", o->servo.floorSeconds,
             "Length of the interruption probe, a real-time thread that only reads the clock (default 10, 0: none)")
         ->check(CLI::Range(0.0, 3600.0));
-    servo->add_option("--scenes", o->servo.scenes, "Scenes to run (default senac-average kyung)");
+    servo->add_option("--scenes", o->servo.scenes,
+        "Scenes to run (default senac-average kyung kyung-bending lumbar-puncture lumbar-puncture-bending)");
     servo
         ->add_option(
             "--rates", o->servo.rates, "The rate ladder [Hz] (default 1000 2000 5000 10000 20000 50000 100000)")

@@ -9,6 +9,7 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
+#include "planning/Deflection.h"
 #include "planning/Markups.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
@@ -87,6 +88,17 @@ void printPath(std::ostream& os, const planning::TrajectoryReport& r, int rank)
         os << (i ? " > " : "") << r.segments[i].tissue << " " << fixed(r.segments[i].lengthMm());
     }
     os << "\n";
+    if (const auto& d = r.deflection) { // physics.md §9.6
+        const planning::BevelChoice& b = d->best;
+        os << "     bent needle: tip " << fixed(b.tipToTargetMm, 1) << " mm from the target ("
+           << fixed(b.tipDeviationMm, 1) << " mm off the line) with the bevel at " << fixed(b.orientationDeg, 0)
+           << " deg" << (std::isfinite(b.turnDepthMm) ? ", turned 180 deg at " + fixed(b.turnDepthMm, 0) + " mm" : "");
+        for (const auto& c : d->tried) {
+            if (!std::isfinite(c.turnDepthMm))
+                os << "; " << fixed(c.tipDeviationMm, 1) << " mm at " << fixed(c.orientationDeg, 0) << " deg unturned";
+        }
+        os << "\n";
+    }
     for (const auto& w : r.warnings) os << "     warning: " << w.message << "\n";
 }
 
@@ -170,6 +182,9 @@ int run(const PlanCliOptions& o)
         report["pareto"] = nlohmann::json::array();
         for (const auto& p : found->pareto) report["pareto"].push_back(planning::pathJson(p, 0));
     }
+    // A bending needle: where its tip will end on each path, per bevel orientation
+    // and turn depth (physics.md §9.6); only for the paths reported.
+    planning::predictDeflections(planner, paths);
     report["paths"] = nlohmann::json::array();
     for (std::size_t i = 0; i < paths.size(); ++i) report["paths"].push_back(planning::pathJson(paths[i], int(i) + 1));
 

@@ -120,7 +120,9 @@ Action registerSimulate(CLI::App& app)
         ->check(CLI::PositiveNumber);
     cmd->add_option("--depth", o->depth, "Insert this far past the entry [mm] (default: to the target)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--script", o->script, "Scripted motion: a CSV of t_s,depth_mm rows (depth past the entry)");
+    cmd->add_option("--script", o->script,
+        "Scripted motion: a CSV of t_s,depth_mm rows (depth past the entry), or t_s,depth_mm,roll_deg "
+        "(the needle turned about its axis: a bending needle's bevel turns with it)");
     cmd->add_option("--rate", o->rate, "Servo rate [Hz] (default: the scene's, 1000)")->check(CLI::Range(1.0, 1e6));
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-simulate)");
     cmd->add_flag("--no-plot", o->noPlot, "Skip the PNG");

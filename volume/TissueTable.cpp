@@ -33,7 +33,8 @@ enum class Dimension {
     Length,
     Force,
     Stiffness,
-    DampingDensity
+    DampingDensity,
+    FoundationModulus
 };
 
 struct UnitFactor {
@@ -51,6 +52,8 @@ const std::vector<UnitFactor>& unitsOf(Dimension d)
         {Dimension::Stiffness, {{"N/mm", 1.0}, {"N/m", 1e-3}}},
         // N·s/m² → N·s/mm²: 1 m² = 1e6 mm².
         {Dimension::DampingDensity, {{"N*s/mm^2", 1.0}, {"N*s/m^2", 1e-6}}},
+        // A Winkler modulus is force per length of shaft per mm of deflection: N/mm², = MPa.
+        {Dimension::FoundationModulus, {{"N/mm^2", 1.0}, {"MPa", 1.0}, {"kPa", 1e-3}}},
     };
     return kUnits.at(d);
 }
@@ -73,6 +76,8 @@ double maxCanonical(Dimension d)
         return 100.0; // N/mm
     case Dimension::DampingDensity:
         return 1.0; // N·s/mm² (1e6 N·s/m²)
+    case Dimension::FoundationModulus:
+        return 1e4; // N/mm²: 10 GPa, cortical bone's Young's modulus order
     case Dimension::Hounsfield:
         return 32767.0; // HU: the largest 16-bit signed CT number
     }
@@ -106,6 +111,7 @@ const std::vector<MechanicalField>& mechanicalFields()
         {"friction_viscous", Dimension::DampingDensity, &Tissue::frictionViscous},
         {"friction_coulomb", Dimension::Force, &Tissue::frictionCoulomb},
         {"damping", Dimension::DampingDensity, &Tissue::damping},
+        {"foundation_modulus", Dimension::FoundationModulus, &Tissue::foundationModulus},
     };
     return kFields;
 }
@@ -113,7 +119,7 @@ const std::vector<MechanicalField>& mechanicalFields()
 const std::set<std::string, std::less<>> kTopKeys{"schema", "description", "tissues"};
 const std::set<std::string, std::less<>> kTissueKeys{"id", "name", "colour", "critical", "rigid", "description", "hu",
     "t1_1.5T", "t1_3T", "thickness", "puncture_force", "cutting_force", "elasticity", "friction_viscous",
-    "friction_coulomb", "damping"};
+    "friction_coulomb", "damping", "foundation_modulus"};
 const std::set<std::string, std::less<>> kQuantityKeys{"value", "unit", "source", "chosen", "note"};
 const std::set<std::string, std::less<>> kRangeKeys{"min", "typical", "max", "unit", "source", "chosen", "note"};
 

@@ -49,6 +49,8 @@ struct Tissue {
     std::optional<Quantity> frictionViscous; ///< shaft viscous friction b [N·s/mm²] (§4)
     std::optional<Quantity> frictionCoulomb; ///< Coulomb friction C [N] (§4)
     std::optional<Quantity> damping;         ///< damping density β [N·s/mm²] (§1.2, §5.4)
+    /// Winkler modulus k holding a bending needle [N/mm²] (physics.md §9.2).
+    std::optional<Quantity> foundationModulus;
 
     /// @brief T1 at the given field strength [ms].
     double t1(FieldStrength f) const { return f == FieldStrength::T3 ? t1At3T.value : t1At1p5T.value; }

@@ -34,6 +34,7 @@ pictures=(
   python-plan-force.png   # examples/python/plan_and_plot.py: predicted and rendered force, phantom and CT
   fusion-axial.png        # voxhap render --fusion: the porcine CT and MR, before and after registration
   fusion-plan-force.png   # voxhap plan on a fused torso phantom: damping from the MR's T1
+  plan-bending-views.png  # voxhap plan with a bending needle: the predicted bent needles on the CT
 )
 
 while (($#)); do
@@ -110,6 +111,10 @@ step "a phantom scan pair, fused, and a plan on it"
 "$voxhap" fuse pair/ct.nrrd pair/mr.nrrd --out torso-fused.vdb >/dev/null
 "$voxhap" plan torso-fused.vdb --target 5,-78,0 --allow-bone --out fused-plan >/dev/null
 cp fused-plan/force-depth.png fusion-plan-force.png
+
+step "plan on the CT with a needle that bends"
+"$voxhap" plan "$ct" --target 4,128,296 --allow-bone --scene kyung-bending --top 3 --out plan-bend >plan-bend.txt
+cp plan-bend/views.png plan-bending-views.png
 
 mkdir -p "$out"
 for p in "${pictures[@]}"; do

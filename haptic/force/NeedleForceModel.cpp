@@ -51,6 +51,15 @@ NeedleForceModel::NeedleForceModel(ForceModelSetup setup)
     if (mTerms.guidance.on)
         mGuide.emplace(
             mTerms.guidance.params, setup.guide.value_or(GuideLine{mPath.origin, mPath.origin + mPath.direction}));
+    if (mTerms.bending.on) {
+        // §9.5: the beam's foundation holds the shaft where the pivot correction did, and
+        // the lock's straight line is one a bent shaft leaves.
+        if (mTerms.lock.on || mTerms.pivot.on)
+            throw ValueError("force model: bending replaces the pivot correction and cannot run beside the lock");
+        if (!setup.foundation) throw ValueError("force model: bending needs the tissue's foundation");
+        mBeam = std::make_unique<BentNeedle>(
+            BeamParams::fromNeedle(mNeedle), std::move(setup.foundation), bevelReferenceAxis(mPath.direction));
+    }
     mIntegral.reset();
 }
 
@@ -68,6 +77,7 @@ void NeedleForceModel::reset() noexcept
     mLockAnchor = Vec3d::Zero();
     if (mPalp) mPalp->reset();
     if (mGuide) mGuide->reset();
+    if (mBeam) mBeam->reset();
     mPalpating = false;
     mLastDirection = 1;
     mLastTimeS = 0;
@@ -136,6 +146,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     out.events.clear();
     out.terms = ForceBreakdown{};
     out.fault = out.critical = out.palpating = false;
+    out.hubTorque = Vec3d::Zero();
     out.palpation = PalpationOutput{};
     const double t = std::isfinite(in.timeS) ? in.timeS : mLastTimeS;
     const double dt = std::isfinite(in.dtS) && in.dtS > 0.0 ? std::min(in.dtS, mSafety.params().maxDtS) : 0.0;
@@ -158,13 +169,22 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     // 1. Kinematics along the path.
     const Vec3d& u = mPath.direction;
     const Vec3d dir = in.direction / dirNorm;
-    const double d = (in.tip - mPath.origin).dot(u);
+    const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
+    // A bending needle (§9): the device holds the hub, the terms read the bent tip.
+    NeedleInput bent;
+    if (mBeam) {
+        mBeam->setRoll(in.rollRad); // a NaN keeps the last roll
+        mBeam->update(hub, dir);
+        bent = in;
+        bent.tip = mBeam->tip();
+    }
+    const NeedleInput& reading = mBeam ? bent : in;
+    const double d = (reading.tip - mPath.origin).dot(u);
     const double v = in.velocity.dot(u);
     if (v > 0.0)
         mLastDirection = 1;
     else if (v < 0.0)
         mLastDirection = -1;
-    const Vec3d hub = in.tip - mNeedle.lengthMm * dir;
     ForceBreakdown& f = out.terms;
 
     // Palpation (issue 23, Palpation.h): before the needle touches the skin the tip is
@@ -190,7 +210,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         if (mTerms.lor.on) out.plungerN = mLor.update(0.0, dt);
     } else {
         if (mPalp) mPalp->reset();
-        needleTerms(in, t, dt, d, v, dir, hub, out);
+        needleTerms(reading, t, dt, d, v, dir, hub, out);
     }
     if (mGuide) f.guidance = mGuide->update(in.tip, t);
 
@@ -204,6 +224,16 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
     }
     out.axialN = f.elastic + f.proxy + f.viscous + f.damping + f.bone + f.transient + f.keepDirection;
     Vec3d model = -out.axialN * u + f.lateral;
+    if (mBeam) { // only here, so that a straight needle's sum keeps its bits
+        // §9.5: the beam's hub force reaches the hand through a virtual coupling at the
+        // device's stiffness k_c in series with the hub's own K: K·k_c/(K + k_c) is
+        // below both, whatever the free span.
+        const double kc = mDevice.maxStiffnessNPerMm, kHub = mBeam->hubStiffnessNPerMm();
+        const double share = kc > 0.0 ? kc / (kHub + kc) : 0.0;
+        f.bending = mPalpating ? Vec3d::Zero() : Vec3d(share * mBeam->hubForce());
+        out.hubTorque = mPalpating ? Vec3d::Zero() : mBeam->hubTorque();
+        model += f.bending;
+    }
     if (mPalp) model += f.palpation;
     if (mGuide) model += f.guidance;
     // §1.1 Eq. 1: F = F_R + F_C + F_G. A critical structure zeroes the tissue's forces;
@@ -243,12 +273,22 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
         // planned path: a spring stretched at entry would store energy nobody put in (§1.1).
         if (e.type == EventType::SkinEntry) mLockAnchor = lateralOf(in.tip - mPath.origin, u);
         popped = popped || e.type == EventType::Pop;
+        if (mBeam) bendingEvent(e, in.tip, d, dir);
     }
+    // Backed off a tenting skin before its puncture: no Withdrawn event, but nothing
+    // was cut either.
+    if (mBeam && mBeam->entered() && !mState.skinEntered() && d < mState.surfaceMm()) mBeam->withdraw();
 
     // After skin entry the needle is tied to its line: the profile answers in O(1) (it
-    // rebuilds itself, without allocating, if the shaft strays from the line).
+    // rebuilds itself, without allocating, if the shaft strays from the line). A bent
+    // shaft is integrated along its polyline (§9.5).
     ShaftIntegrator* integ = mLocked && mState.skinEntered() ? mLocked.get() : mIntegrator.get();
-    if (integ && (mTerms.damping.on || mTerms.critical)) integ->integrate(Segment{hub, in.tip}, mIntegral);
+    if (integ && (mTerms.damping.on || mTerms.critical)) {
+        if (mBeam && mBeam->entered())
+            integ->integratePolyline(mBeam->shaft(), mIntegral);
+        else
+            integ->integrate(Segment{hub, in.tip}, mIntegral);
+    }
 
     // 3. Force terms, axial resistance positive outward.
     ForceBreakdown& f = out.terms;
@@ -301,6 +341,22 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
     if (mTerms.lor.on)
         out.plungerN = mLor.update(tip.inLayer >= 0 ? layers[std::size_t(tip.inLayer)].lorResistance : 0.0, dt);
     out.tip = tip;
+}
+
+void NeedleForceModel::bendingEvent(const Event& e, const Vec3d& tip, double d, const Vec3d& dir) noexcept
+{
+    // The track starts where the tip first meets the tissue, before a tenting skin is
+    // punctured (§9.5): the deflection is made in the first millimetres (§9.2), and
+    // a track started at the puncture would hold the tip straight through the tent.
+    if (e.type == EventType::SkinContact || (e.type == EventType::SkinEntry && !mBeam->entered())) {
+        // The track starts on the skin: back along the shaft from the tip by its depth
+        // past the surface (the needle is straight until it touches).
+        const double along = dir.dot(mPath.direction);
+        const double back = along > 0.1 ? std::max(0.0, d - mState.surfaceMm()) / along : 0.0;
+        mBeam->enter(tip - back * dir);
+    } else if (e.type == EventType::Withdrawn) {
+        mBeam->withdraw();
+    }
 }
 
 } // namespace voxhap::haptic

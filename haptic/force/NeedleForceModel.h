@@ -9,6 +9,7 @@
 /// resistance is reported positive when it pushes the needle back out.
 #pragma once
 
+#include "haptic/beam/BentNeedle.h"
 #include "haptic/force/ContactTransient.h"
 #include "haptic/DeviceLimits.h"
 #include "haptic/Events.h"
@@ -22,6 +23,7 @@
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/force/StickSlipProxy.h"
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -70,6 +72,9 @@ struct ForceTerms {
         bool on = false; ///< virtual fixture toward the planned line (Guidance.h)
         GuidanceParams params;
     } guidance;
+    struct Bending {
+        bool on = false; ///< the needle bends (§9): a beam on the tissue, the bevel's force, the shaft a polyline
+    } bending;
     bool critical = true;        ///< touching a critical structure zeroes the force (§1.1)
     double couplingNPerMm = 0.0; ///< stick-slip proxy stiffness; 0: the device's maximum stiffness (§6.2)
     /// Uniform scale on the force sent to the device (the scene's force_scale):
@@ -87,6 +92,10 @@ struct NeedleInput {
     Vec3d tip{0, 0, 0};       ///< [mm, LPS]
     Vec3d direction{0, 0, 1}; ///< shaft direction, hub to tip (normalised here)
     Vec3d velocity{0, 0, 0};  ///< tip velocity [mm/s]
+    /// The needle's roll about its axis [rad], NaN when the device senses none: a
+    /// bending needle's bevel turns with it (physics.md §9.3); without a roll it
+    /// keeps the scene's bevel orientation and the last roll read.
+    double rollRad = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// @brief Each term's axial share [N] (positive pushes out) and the lateral terms.
@@ -96,6 +105,8 @@ struct ForceBreakdown {
     Vec3d gravity{0, 0, 0};   ///< Kyung's F_G = −m·g holding up the handle (§1.1 Eq. 1) [N]
     Vec3d palpation{0, 0, 0}; ///< the skin's push on the palpating tip [N]
     Vec3d guidance{0, 0, 0};  ///< the guidance fixture's pull toward the planned line [N]
+    /// A bending needle's lateral force at the hub through the virtual coupling (§9.5) [N]
+    Vec3d bending{0, 0, 0};
 };
 
 struct NeedleOutput {
@@ -110,6 +121,9 @@ struct NeedleOutput {
     double plungerN = 0;    ///< syringe plunger force [N]
     double speedMmPerS = 0; ///< along the path [mm/s]
     TipState tip;
+    /// A bending needle's torque at the hub [N·mm] (§9.5): recorded for a device
+    /// with a torque channel; none of the presets has one, so it is not rendered.
+    Vec3d hubTorque{0, 0, 0};
     bool critical = false; ///< force zeroed by a critical structure
     bool fault = false;    ///< latched safety fault
     /// Palpating: the tip is felt against the skin map, not yet a needle on its
@@ -165,12 +179,15 @@ struct ForceModelSetup {
     /// The planned line guidance pulls toward; with terms.guidance.on and none
     /// given, the path itself.
     std::optional<GuideLine> guide;
+    /// The tissue holding a bending needle (BentNeedle.h); required with terms.bending.on.
+    std::unique_ptr<Foundation> foundation;
 };
 
 class NeedleForceModel {
 public:
     /// @throw ValueError on a degenerate path, damping without an integrator,
-    /// palpation without a skin map, or a degenerate guide line
+    /// palpation without a skin map, a degenerate guide line, or bending without a
+    /// foundation or beside the lock or the pivot correction
     explicit NeedleForceModel(ForceModelSetup setup);
 
     /// @brief One tick. Never allocates, locks or throws.
@@ -188,12 +205,17 @@ public:
     const PalpationContact* palpation() const { return mPalp ? &*mPalp : nullptr; }
     /// @brief The guidance fixture, when the term is on.
     const Guidance* guidance() const { return mGuide ? &*mGuide : nullptr; }
+    /// @brief The bending needle (physics.md §9), when the term is on.
+    const BentNeedle* bentNeedle() const { return mBeam.get(); }
+    BentNeedle* bentNeedle() { return mBeam.get(); }
 
 private:
     bool touchingCritical() const noexcept;
     /// The needle on its path: insertion state and the layer terms (steps 2 and 3).
     void needleTerms(const NeedleInput& in, double t, double dt, double d, double v, const Vec3d& dir, const Vec3d& hub,
         NeedleOutput& out) noexcept;
+    /// Skin entry starts the bending needle's track, withdrawal ends it (§9.3).
+    void bendingEvent(const Event& e, const Vec3d& tip, double d, const Vec3d& dir) noexcept;
 
     InsertionState mState;
     NeedlePath mPath;
@@ -218,7 +240,8 @@ private:
     bool mLimited = false; ///< the device limits cut the last tick's demand
     std::optional<PalpationContact> mPalp;
     std::optional<Guidance> mGuide;
-    bool mPalpating = false; ///< palpation mode (switched only while out of contact)
+    std::unique_ptr<BentNeedle> mBeam; ///< with terms.bending.on (§9)
+    bool mPalpating = false;           ///< palpation mode (switched only while out of contact)
     int mLastDirection = 1;
     double mLastTimeS = 0;
 };

@@ -293,6 +293,7 @@ void MaterialField::fillPerLabel(const TissueTable& table)
         m.elasticityNPerMm = value(t.elasticity);
         m.frictionViscousNsPerMm2 = value(t.frictionViscous);
         m.frictionCoulombN = value(t.frictionCoulomb);
+        m.foundationNPerMm2 = value(t.foundationModulus);
     }
 }
 

@@ -53,6 +53,7 @@ struct LabelMaterial {
     double elasticityNPerMm = 0;        ///< [N/mm]
     double frictionViscousNsPerMm2 = 0; ///< b [N·s/mm²]
     double frictionCoulombN = 0;        ///< C [N]
+    double foundationNPerMm2 = 0;       ///< Winkler modulus k holding a bending needle [N/mm²] (§9.2)
 };
 
 /// @brief Bone stiffness as computed from HU, and as rendered.

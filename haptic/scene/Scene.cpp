@@ -7,6 +7,7 @@
 
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
+#include "core/Format.h"
 #include "core/JsonFields.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
@@ -160,9 +161,45 @@ void parseTerms(Fields& top, ForceTerms& t)
         q.captureRadiusMm = g.within("capture_radius_mm", q.captureRadiusMm, 0.0, 500.0, "mm");
         q.fadeOutS = g.within("fade_out_s", q.fadeOutS, 0.0, 1e6, "s");
     }
+    if ((t.bending.on = terms.term("bending")) && terms.isObject("bending"))
+        (void)terms.sub("bending"); // no parameters yet
+    // §9.5: the beam's foundation holds the shaft where the pivot correction did; the
+    // lock's straight line is one a bent shaft leaves.
+    if (t.bending.on && t.lock.on)
+        terms.fail("bending", "cannot run beside \"lock\", which ties the needle to a straight line");
+    if (t.bending.on && t.pivot.on) terms.fail("bending", "replaces the pivot correction: turn \"pivot\" off");
     t.critical = terms.term("critical");
     if (terms.has("coupling_N_per_mm"))
         t.couplingNPerMm = terms.within("coupling_N_per_mm", 0.0, 0.0, 20.0, "N/mm", true);
+}
+
+/// The needle's bending keys (physics.md §9.1): material, E, wall, stylet, bevel.
+void parseNeedleBending(Fields& n, Needle& needle)
+{
+    if (n.has("material")) {
+        try {
+            needle.material = parseNeedleMaterial(n.string("material", ""));
+        } catch (const ValueError& e) {
+            n.fail("material", e.what());
+        }
+    }
+    // Steels and nickel–titanium lie near 40–210 GPa; 1000 GPa (diamond's order) leaves margin.
+    if (const auto e = n.optWithin("youngs_modulus_GPa", 0.0, 1000.0, "GPa", true)) needle.youngsModulusMPa = *e * 1e3;
+    if (n.has("inner_diameter_mm")) {
+        const double id = n.number("inner_diameter_mm", 0.0);
+        const double od = needle.outerDiameterMm();
+        if (!(id < od))
+            n.fail("inner_diameter_mm",
+                "must be below the outer diameter (" + fixed(od, 3) + " mm for " + std::to_string(needle.gauge) +
+                    " G; got " + fixed(id, 3) + ")");
+        needle.innerDiameterGivenMm = id;
+    }
+    needle.stylet = n.boolean("stylet", needle.stylet);
+    const double angle = n.number("bevel_angle_deg", needle.bevelAngleDeg);
+    if (!(angle > 0.0 && angle < 90.0))
+        n.fail("bevel_angle_deg", "must be in (0, 90) deg (got " + fixed(angle, 3) + ")");
+    needle.bevelAngleDeg = angle;
+    needle.bevelOrientationDeg = n.within("bevel_orientation_deg", needle.bevelOrientationDeg, -360.0, 360.0, "deg");
 }
 
 void parseOverrides(Fields& top, const std::string& origin, LayerRecipe& r)
@@ -315,6 +352,7 @@ Scene readScene(const std::string& text, const std::string& origin)
         } catch (const ValueError& e) {
             n.fail("", e.what());
         }
+        parseNeedleBending(n, s.needle);
     }
     s.recipe.tip = s.needle.tip;
     s.recipe.forceScale = s.needle.forceScale();
@@ -393,7 +431,7 @@ SceneInstance::SceneInstance(const Scene& scene, std::shared_ptr<const volume::V
     const volume::TissueTable& table, std::optional<Vec3d> entry, std::optional<Vec3d> target)
     : mScene(scene), mVolume(vol ? std::move(vol) : makeSourceVolume(scene.volume, table))
 {
-    const bool needLabels = !scene.fixedTable || scene.terms.critical;
+    const bool needLabels = !scene.fixedTable || scene.terms.critical || scene.terms.bending.on;
     if (needLabels && !mVolume->has(volume::Channel::Label)) {
         throw ValueError(scene.origin +
             ": the volume has no tissue labels, which this scene's layers and critical-structure "
@@ -455,6 +493,8 @@ std::unique_ptr<NeedleForceModel> SceneInstance::makeModel(const std::optional<G
     }
     ForceTerms terms = mScene.terms;
     if (guide) terms.guidance.on = true; // a planned line turns guidance on, at the scene's parameters
+    std::unique_ptr<Foundation> foundation;
+    if (terms.bending.on) foundation = makeLabelFoundation(*mField); // §9.2: k per label
     return std::make_unique<NeedleForceModel>(ForceModelSetup{.layers = mLayers,
         .path = NeedlePath{mEntry, mTarget - mEntry},
         .terms = terms,
@@ -464,7 +504,8 @@ std::unique_ptr<NeedleForceModel> SceneInstance::makeModel(const std::optional<G
         .field = mField.get(),
         .locked = std::move(locked),
         .skin = mSkin,
-        .guide = guide});
+        .guide = guide,
+        .foundation = std::move(foundation)});
 }
 
 } // namespace voxhap::haptic

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace voxhap::haptic {
@@ -33,15 +34,20 @@ InsertionScript InsertionScript::load(const std::filesystem::path& file)
             continue;
         std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream ls(line);
-        double t = 0, d = 0;
+        double t = 0, d = 0, roll = 0;
         std::string rest;
-        if (!(ls >> t >> d) || (ls >> rest) || !std::isfinite(t) || !std::isfinite(d)) {
-            throw ValueError(file.string() + ": line " + std::to_string(n) + ": expected \"t_s,depth_mm\"");
+        const bool rolls = s.knots.empty() ? bool(ls >> t >> d >> roll) : !s.rollsDeg.empty();
+        if (s.knots.empty()) ls = std::istringstream(line);
+        const bool ok = rolls ? bool(ls >> t >> d >> roll) : bool(ls >> t >> d);
+        if (!ok || (ls >> rest) || !std::isfinite(t) || !std::isfinite(d) || !std::isfinite(roll)) {
+            throw ValueError(file.string() + ": line " + std::to_string(n) + ": expected \"t_s,depth_mm" +
+                (rolls ? ",roll_deg" : "") + "\"" + (s.knots.empty() ? "" : " as on the first row"));
         }
         if (!s.knots.empty() && !(t > s.knots.back().first)) {
             throw ValueError(file.string() + ": line " + std::to_string(n) + ": t_s must increase");
         }
         s.knots.emplace_back(t, d);
+        if (rolls) s.rollsDeg.push_back(roll);
     }
     if (s.knots.size() < 2) throw ValueError(file.string() + ": an insertion script needs at least two rows");
     if (s.knots.front().first != 0.0) throw ValueError(file.string() + ": line 1: the script must start at t_s = 0");
@@ -75,6 +81,16 @@ double InsertionScript::speedAt(double t) const
     return (knots[i].second - knots[i - 1].second) / (knots[i].first - knots[i - 1].first);
 }
 
+double InsertionScript::rollAt(double t) const
+{
+    if (rollsDeg.size() != knots.size() || knots.empty()) return std::numeric_limits<double>::quiet_NaN();
+    if (t <= knots.front().first) return degToRad(rollsDeg.front());
+    if (t >= knots.back().first) return degToRad(rollsDeg.back());
+    const std::size_t i = segmentOf(*this, t);
+    const double t0 = knots[i - 1].first, t1 = knots[i].first;
+    return degToRad(rollsDeg[i - 1] + (rollsDeg[i] - rollsDeg[i - 1]) * (t - t0) / (t1 - t0));
+}
+
 InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& script, double rateHz,
     const SuccessCriteria& success, std::optional<Vec3d> target)
 {
@@ -95,6 +111,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
         in.tip = path.origin + script.depthAt(t) * path.direction;
         in.direction = path.direction;
         in.velocity = script.speedAt(t) * path.direction;
+        in.rollRad = script.rollAt(t);
         model.step(in, out);
         InsertionRow row;
         row.timeS = t;
@@ -150,6 +167,13 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
             s.guidance = true;
             s.peakGuidanceN = std::max(s.peakGuidanceN, out.terms.guidance.norm());
             s.maxOffsetMm = std::max(s.maxOffsetMm, g->offset(in.tip).norm());
+        }
+        if (const BentNeedle* b = model.bentNeedle()) {
+            // The bent tip off the straight line the hand drives along (physics.md §9.6).
+            const Vec3d off = b->tip() - path.origin;
+            s.bending = true;
+            s.tipDeviationMm = (off - off.dot(path.direction) * path.direction).norm();
+            s.maxTipDeviationMm = std::max(s.maxTipDeviationMm, s.tipDeviationMm);
         }
         r.rows.push_back(row);
     }
@@ -218,6 +242,10 @@ std::string insertionSummaryText(const InsertionResult& r, const std::vector<Lay
     if (s.guidance) {
         o << "  " << std::setw(20) << "guidance" << s.peakGuidanceN << " N peak pull, " << s.maxOffsetMm
           << " mm largest offset from the planned line\n";
+    }
+    if (s.bending) {
+        o << "  " << std::setw(20) << "tip deviation" << fixed(s.tipDeviationMm, 2)
+          << " mm from the straight line at the end, " << fixed(s.maxTipDeviationMm, 2) << " mm at most\n";
     }
     o << std::setprecision(1) << "  " << std::setw(20) << "inserted" << fixed(s.finalDepthMm) << " mm in "
       << s.durationS << " s\n";

@@ -17,15 +17,21 @@ namespace voxhap::haptic {
 /// @brief Tip depth along the path over time, piecewise linear between knots.
 struct InsertionScript {
     std::vector<std::pair<double, double>> knots; ///< (t [s], depth [mm]), t increasing
+    /// The needle's roll at each knot [deg], or empty: a script without the column
+    /// leaves the bevel as the scene sets it (a bending needle turns with it, physics.md §9.3).
+    std::vector<double> rollsDeg;
 
     /// @brief From @p fromMm to @p toMm at @p speedMmPerS. @throw ValueError on a non-positive speed
     static InsertionScript constantSpeed(double fromMm, double toMm, double speedMmPerS);
-    /// @brief A CSV file of "t_s,depth_mm" rows (a header line is allowed).
+    /// @brief A CSV file of "t_s,depth_mm" rows, or "t_s,depth_mm,roll_deg" rows on
+    /// every line (a header line is allowed).
     /// @throw IoError, ValueError naming the file and line
     static InsertionScript load(const std::filesystem::path& file);
     double duration() const { return knots.empty() ? 0.0 : knots.back().first; }
     double depthAt(double t) const;
     double speedAt(double t) const; ///< [mm/s], the slope of the segment holding t
+    /// [rad], linear between knots (a turn takes the time between its rows); NaN without a roll column
+    double rollAt(double t) const;
 };
 
 /// @brief One tick of the record.
@@ -53,6 +59,10 @@ struct InsertionSummary {
     bool guidance = false;    ///< the guidance term ran (Guidance.h)
     double peakGuidanceN = 0; ///< its largest pull [N]
     double maxOffsetMm = 0;   ///< the tip's largest distance from the planned line [mm]
+    bool bending = false;     ///< the needle bends (physics.md §9)
+    /// The bent tip's distance from the straight line of the path at the last tick,
+    /// and the largest over the run [mm].
+    double tipDeviationMm = 0, maxTipDeviationMm = 0;
 };
 
 struct InsertionResult {

@@ -31,6 +31,10 @@ struct DeviceReading {
     /// Fraction of the loss-of-resistance syringe emptied, 0..1, for devices with a
     /// plunger channel ([S19]'s pneumatic syringe); NaN otherwise.
     double plungerFraction = std::numeric_limits<double>::quiet_NaN();
+    /// The needle's roll about its axis [rad], for devices that sense it; NaN
+    /// otherwise (a bending needle's bevel then keeps the scene's orientation,
+    /// physics.md §9.3).
+    double rollRad = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Device {

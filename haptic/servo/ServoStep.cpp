@@ -35,6 +35,7 @@ Vec3d ServoStep::step(const DeviceReading& r, double t, double dt, double period
         in.tip = r.tip;
         in.direction = r.direction;
         in.velocity = r.velocity;
+        in.rollRad = r.rollRad;
         mModel.step(in, mOut);
         target = mOut.force;
     } else {

@@ -43,10 +43,20 @@ inline bool begin(const Sources& src, const Segment& seg, double shift, IndexSeg
     return s.valid;
 }
 
-/// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally.
-void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out) noexcept
+/// Walk the voxel cells of s: chord-weighted β (if wanted) and label tally; @p offsetMm
+/// is where s starts along a polyline.
+void voxelPass(Sources& src, const IndexSegment& s, bool wantBeta, ShaftIntegral& out, double offsetMm = 0.0) noexcept
 {
-    detail::chordPass(s, src.voxelLo, src.voxelHi, wantBeta ? src.betaCursorPtr() : nullptr, src.labelCursorPtr(), out);
+    detail::chordPass(
+        s, src.voxelLo, src.voxelHi, wantBeta ? src.betaCursorPtr() : nullptr, src.labelCursorPtr(), out, offsetMm);
+}
+
+/// Shared start of integratePolyline(): reset, and whether the points make a shaft.
+inline bool beginPolyline(const Sources& src, std::span<const Vec3d> points, ShaftIntegral& out) noexcept
+{
+    out.reset(src.labelReader.has_value());
+    out.labelsValid = src.labelReader.has_value();
+    return detail::polylineValid(points);
 }
 
 class ExactVoxel final : public ShaftIntegrator {
@@ -57,6 +67,12 @@ public:
     {
         IndexSegment s;
         if (begin(mSrc, seg, 0.5, s, out)) voxelPass(mSrc, s, true, out);
+    }
+    void integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept override
+    {
+        if (!beginPolyline(mSrc, points, out)) return;
+        detail::eachSegment(mSrc.indexMap, points, 0.5, out,
+            [&](const IndexSegment& s, double offset) { voxelPass(mSrc, s, true, out, offset); });
     }
     std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactVoxel>(*this); }
     std::string name() const override { return "exact-voxel"; }
@@ -74,9 +90,27 @@ public:
         IndexSegment cells;
         if (!begin(mSrc, seg, 0.0, cells, out)) return;
         if (mSrc.labelReader) voxelPass(mSrc, detail::toIndex(mSrc.indexMap, seg, 0.5), false, out);
+        out.dampingIntegral = cellSum(cells);
+    }
+    void integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept override
+    {
+        if (!beginPolyline(mSrc, points, out)) return;
+        if (mSrc.labelReader) {
+            detail::eachSegment(mSrc.indexMap, points, 0.5, out,
+                [&](const IndexSegment& s, double offset) { voxelPass(mSrc, s, false, out, offset); });
+        }
+        detail::eachSegment(mSrc.indexMap, points, 0.0, out,
+            [&](const IndexSegment& cells, double) { out.dampingIntegral = cellSum(cells); });
+    }
+    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactTrilinear>(*this); }
+    std::string name() const override { return "exact-trilinear"; }
 
+private:
+    /// ∫β [N·s/mm] over the trilinear cells of one segment (unshifted frame).
+    double cellSum(const IndexSegment& cells) noexcept
+    {
         double t0 = 0.0, t1 = 0.0;
-        if (!detail::clip(cells, mSrc.cellLo, mSrc.cellHi, t0, t1)) return;
+        if (!detail::clip(cells, mSrc.cellLo, mSrc.cellHi, t0, t1)) return 0.0;
         // Along a chord the trilinear field is a cubic in t; two-point Gauss–Legendre
         // quadrature is exact for cubics, so each cell's integral is exact.
         constexpr double kGauss = 0.57735026918962576451; // 1/sqrt(3)
@@ -103,12 +137,9 @@ public:
             if (std::isfinite(v)) sum += double(v) * (tb - ta);
         };
         detail::walkCellsSkipping(cells, t0, t1, 1, uniform, cell, run);
-        out.dampingIntegral = sum * cells.lengthMm;
+        return sum * cells.lengthMm;
     }
-    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<ExactTrilinear>(*this); }
-    std::string name() const override { return "exact-trilinear"; }
 
-private:
     Sources mSrc;
 };
 

@@ -12,6 +12,7 @@
 #include "haptic/materials/MaterialField.h"
 
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace voxhap::haptic {
@@ -45,6 +46,11 @@ public:
     /// @throw ValueError on a degenerate line
     std::vector<LabelRun> trace(const Vec3d& origin, const Vec3d& direction, double lengthMm,
         std::vector<DampingPiece>* damping = nullptr) const;
+    /// @brief As trace(), along a bent path (physics.md §9.5): the polyline
+    /// @p points, run bounds in mm along it from its first point.
+    /// @throw ValueError on fewer than two points or a non-finite point
+    std::vector<LabelRun> tracePolyline(
+        std::span<const Vec3d> points, std::vector<DampingPiece>* damping = nullptr) const;
 
 private:
     struct Impl;

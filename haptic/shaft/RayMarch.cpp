@@ -48,7 +48,30 @@ public:
         out.lengthMm = s.lengthMm;
         out.labelsValid = mSrc.labelReader.has_value();
         if (!s.valid) return;
-        detail::LabelTally tally(out, s.lengthMm);
+        march(s, out, 0.0);
+    }
+    void integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept override
+    {
+        out.reset();
+        out.labelsValid = mSrc.labelReader.has_value();
+        if (!detail::polylineValid(points)) return;
+        detail::eachSegment(*mSrc.xform, points, 0.0, out,
+            [&](const detail::IndexSegment& s, double offset) { march(s, out, offset); });
+    }
+    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<RayMarch>(*this); }
+    std::string name() const override
+    {
+        std::ostringstream os;
+        os << (mTrilinear ? "march-trilinear" : "march-nearest") << " h=" << mStep << "mm";
+        return os.str();
+    }
+
+private:
+    /// One segment s (valid), starting @p offset mm along the shaft: labels into
+    /// @p out, ∫β into out.dampingIntegral.
+    void march(const detail::IndexSegment& s, ShaftIntegral& out, double offset) noexcept
+    {
+        detail::LabelTally tally(out, s.lengthMm, offset);
         double t0 = 0.0, t1 = 0.0;
         if (!detail::clip(s, mLo, mHi, t0, t1)) {
             if (mSrc.labelReader) tally.add(0, 0.0, 1.0);
@@ -74,15 +97,7 @@ public:
         if (mSrc.labelReader && t1 < 1.0) tally.add(0, t1, 1.0);
         out.dampingIntegral = sum * dt * s.lengthMm;
     }
-    std::unique_ptr<ShaftIntegrator> clone() const override { return std::make_unique<RayMarch>(*this); }
-    std::string name() const override
-    {
-        std::ostringstream os;
-        os << (mTrilinear ? "march-trilinear" : "march-nearest") << " h=" << mStep << "mm";
-        return os.str();
-    }
 
-private:
     double trilinear(const openvdb::Vec3d& p) noexcept
     {
         const openvdb::Coord c = openvdb::Coord::floor(p);

@@ -4,7 +4,8 @@
 /// in each label and the first hit of each label, with interchangeable
 /// strategies (architecture.md "Shaft integration"; physics.md §1.2, §7).
 ///
-/// A shaft is the segment from the entry point to the tip, in world mm. Two
+/// A shaft is the segment from the entry point to the tip, in world mm, or a
+/// polyline when the needle bends (physics.md §9.5). Two
 /// readings of a voxel field are integrated exactly:
 /// - piecewise constant: each voxel's value fills its cell (Kyung's Σ b_k,
 ///   chord-weighted); the exact traversal is exact for it;
@@ -19,6 +20,7 @@
 #include <array>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 
 namespace voxhap::haptic {
@@ -68,6 +70,11 @@ public:
     /// @brief Integrate along @p s into @p out. Never throws or allocates; a
     /// non-finite or degenerate input gives zero integrals.
     virtual void integrate(const Segment& s, ShaftIntegral& out) noexcept = 0;
+    /// @brief Integrate along a bent shaft, the polyline @p points[0] → … → the
+    /// last (physics.md §9.5): the sum over its segments, lengthMm its length and
+    /// first hits measured along it from its first point. Never throws or
+    /// allocates; a non-finite point or fewer than two points give zero integrals.
+    virtual void integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept = 0;
     /// @brief An independent copy for another thread.
     virtual std::unique_ptr<ShaftIntegrator> clone() const = 0;
     /// @brief Short name for tables, e.g. "exact-voxel", "march-trilinear h=0.125mm".

@@ -349,6 +349,15 @@ bool TrajectoryProfile::integrateOffLine(const Segment& s, double length, ShaftI
     return lock(s.entry, s.tip - s.entry);
 }
 
+void TrajectoryProfile::integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept
+{
+    Impl& m = *mImpl;
+    out.reset(m.labels);
+    out.labelsValid = m.labels;
+    // The exact traversal's own index map: the same answer as ExactVoxel, bit for bit.
+    detail::polylineChordPass(m.src.indexMap, points, m.lo, m.hi, m.src.betaCursorPtr(), m.src.labelCursorPtr(), out);
+}
+
 void TrajectoryProfile::fillLabels(
     double se, double st, std::size_t ke, std::size_t kt, double scale, ShaftIntegral& out) const noexcept
 {

@@ -20,7 +20,8 @@
 ///   The shaft and the line sample different voxels only there. Inside uniform
 ///   tissue span_v = 0 and the bound vanishes; it grows only near interfaces.
 /// A shaft farther than δ from the line triggers a rebuild along the new line;
-/// a shaft longer than the profile's reach is integrated directly (exact voxel).
+/// a shaft longer than the profile's reach, or bent (a polyline), is integrated
+/// directly (exact voxel).
 #pragma once
 
 #include "haptic/shaft/ShaftIntegration.h"
@@ -46,6 +47,9 @@ public:
 
     /// @brief Integrate; rebuilds along entry -> tip first if the shaft is off the line.
     void integrate(const Segment& s, ShaftIntegral& out) noexcept override;
+    /// @brief A bent shaft leaves the line: integrated directly (exact voxel) along
+    /// the polyline, the profile kept for the straight shaft (physics.md §9.5).
+    void integratePolyline(std::span<const Vec3d> points, ShaftIntegral& out) noexcept override;
     std::unique_ptr<ShaftIntegrator> clone() const override;
     std::string name() const override;
 

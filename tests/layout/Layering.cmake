@@ -62,13 +62,13 @@ function(volume_rank path out)
 endfunction()
 
 # haptic/: the root's shared types (device limits, events, layers, the needle)
-# <- materials <- shaft <- papers <- force <- scene <- servo <- devices <- igtl
+# <- materials <- shaft <- beam <- papers <- force <- scene <- servo <- devices <- igtl
 # (devices/ holds the drivers and the device factory the servo loop runs;
 # igtl/ registers its kind there).
 function(haptic_rank path out)
   set(r 0)
   set(i 1)
-  foreach(sub materials shaft papers force scene servo devices igtl)
+  foreach(sub materials shaft beam papers force scene servo devices igtl)
     if(path MATCHES "^haptic/${sub}/")
       set(r ${i})
     endif()

@@ -102,6 +102,15 @@ TEST(RegressSuite, DamagedSuitesAreRefusedNamingFileCaseAndField)
     expectSuiteRefused(
         std::string(kHeader) + R"({"name": "a", "scene": "kyung"}, {"name": "a", "scene": "conci"}]})", "duplicate");
     expectSuiteRefused(std::string(kHeader) + R"({"name": "A/b", "scene": "kyung"}]})", "name");
+    expectSuiteRefused(std::string(kHeader) +
+            R"({"name": "a", "scene": "kyung", "measured": {"tip_deviation_mm": 5, "tolerance_mm": 1}}]})",
+        "cases.a.measured.source: missing");
+    expectSuiteRefused(std::string(kHeader) +
+            R"({"name": "a", "scene": "kyung", "measured": {"tip_deviation_mm": 5, "tolerance_mm": 0, "source": "x"}}]})",
+        "cases.a.measured.tolerance_mm: must be positive");
+    expectSuiteRefused(
+        std::string(kHeader) + R"({"name": "a", "scene": "kyung", "measured": {"tolerance_mm": 1, "source": "x"}}]})",
+        "cases.a.measured.tip_deviation_mm");
     expectSuiteRefused( // the slab phantom's range
         std::string(kHeader) + R"({"name": "a", "scene": "kyung", "volume": {"phantom": "slab", "tilt_deg": 78}}]})",
         "cases.a.volume.tilt_deg: must be a number of degrees within ±75");
@@ -526,6 +535,42 @@ TEST(RegressBuiltin, CompiledInSuiteAndBaselinesAreTheSourceTrees)
 
 /// Issue 29 item 7: the profiles are the same bit for bit with one thread and
 /// with all, and from one run to the next.
+// A deflection measured in the literature as a regress case (physics.md §9.2): the
+// built-in suite holds one whose needle bends, not on the datum the foundation was
+// fitted on; its run passes within the stated tolerance and states the deviation.
+// Control: the same run against a measurement two tolerances away fails.
+TEST(RegressMeasured, BuiltinMeasuredDeflectionPassesAndAMovedMeasurementFails)
+{
+    const Suite s = builtinSuite();
+    const auto sel = indicesOf(s, {"drummond-beef-22g"});
+    ASSERT_EQ(sel.size(), 1u);
+    const Case& c = s.cases[sel[0]];
+    ASSERT_TRUE(c.measured);
+    EXPECT_NE(c.measured->source.find("Drummond"), std::string::npos);
+    EXPECT_TRUE(haptic::loadScene(c.scene).terms.bending.on);
+    Runner r(s, sel, {});
+    const CaseRun run = r.run().at(0);
+    ASSERT_TRUE(run.tipDeviationMm);
+    const auto baseline = readBaseline(baselinePath(s.baselinesDir, c.name));
+    const CaseReport ok = compareCase(c, run, baseline);
+    EXPECT_TRUE(ok.measuredPass) << ok.measured;
+    EXPECT_TRUE(ok.pass) << ok.measured;
+    // The report states the model's figure (to the 0.01 mm it prints).
+    const std::size_t at = ok.measured.find("model ");
+    ASSERT_NE(at, std::string::npos) << ok.measured;
+    EXPECT_NEAR(std::stod(ok.measured.substr(at + 6)), *run.tipDeviationMm, 0.005 + 1e-12) << ok.measured;
+    EXPECT_NEAR(*run.tipDeviationMm, c.measured->tipDeviationMm, c.measured->toleranceMm);
+    Case moved = c;
+    moved.measured->tipDeviationMm += 2.0 * c.measured->toleranceMm;
+    const CaseReport bad = compareCase(moved, run, baseline);
+    EXPECT_FALSE(bad.measuredPass);
+    EXPECT_FALSE(bad.pass);
+    // A case whose needle does not bend has no deviation to hold to a measurement.
+    CaseRun straight = run;
+    straight.tipDeviationMm.reset();
+    EXPECT_FALSE(compareCase(c, straight, baseline).pass);
+}
+
 TEST(RegressDeterminism, OneThreadAllThreadsAndRunToRunAgreeBitForBit)
 {
     const Suite s = builtinSuite();

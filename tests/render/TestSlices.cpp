@@ -262,6 +262,40 @@ TEST_F(Slices, PathOverlayThroughEntryAndTargetPixels)
     }
 }
 
+// A bending needle (physics.md §9) is drawn along its shaft, not along the chord
+// from its hub to its tip: a needle pixel at the bent shaft's middle vertex and
+// none at the chord's middle; the straight pose (control) the other way round.
+TEST_F(Slices, BentNeedleIsDrawnAlongItsShaft)
+{
+    const double px = 0.5, z = mPhantom.centre.z();
+    const OverlayStyle style;
+    const Vec3d hub(-30, -20, z), mid(0, -10, z), tip(30, -20, z);
+    NeedlePose bent{tip, Vec3d(1, 0, 0), 60.0};
+    bent.shaft = {hub, mid, tip};
+    const NeedlePose straight{tip, Vec3d(1, 0, 0), 60.0};
+    const ViewFrame f = viewFrame(parseViews("axial").front(), mBox, mPhantom.centre, px);
+    const auto needleNear = [&](const NeedlePose& pose, const Vec3d& p) {
+        Image img(f.width, f.height);
+        Overlays o;
+        o.needle = pose;
+        o.letters = o.scaleBar = false;
+        drawSliceOverlays(img, f, o, style);
+        const Vec2d e = expectedPixel("axial", p, mBox.min, mBox.max, px);
+        for (int dy = -kLineReachPx; dy <= kLineReachPx; ++dy) {
+            for (int dx = -kLineReachPx; dx <= kLineReachPx; ++dx) {
+                const int x = int(std::lround(e.x())) + dx, y = int(std::lround(e.y())) + dy;
+                if (img.contains(x, y) && img.at(x, y) == style.needle) return true;
+            }
+        }
+        return false;
+    };
+    const Vec3d chordMid = 0.5 * (hub + tip);
+    EXPECT_TRUE(needleNear(bent, mid));
+    EXPECT_FALSE(needleNear(bent, chordMid));
+    EXPECT_TRUE(needleNear(straight, chordMid));
+    EXPECT_FALSE(needleNear(straight, mid));
+}
+
 TEST_F(Slices, DashedLinesKeepBothEnds)
 {
     Image img(200, 50);

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 namespace voxhap::haptic::detail {
 
@@ -168,21 +169,57 @@ inline void activeBox(const openvdb::GridBase& g, double pad, openvdb::Vec3d& lo
 }
 
 /// @brief Accumulates label lengths and first hits, the air outside the box included.
+/// @p offsetMm: where the segment starts along a polyline (first hits are measured from its start).
 class LabelTally {
 public:
-    explicit LabelTally(ShaftIntegral& out, double lengthMm) noexcept : mOut(out), mLength(lengthMm) { }
+    explicit LabelTally(ShaftIntegral& out, double lengthMm, double offsetMm = 0.0) noexcept
+        : mOut(out), mLength(lengthMm), mOffset(offsetMm)
+    {
+    }
     void add(int label, double ta, double tb) noexcept
     {
         if (static_cast<unsigned>(label) >= static_cast<unsigned>(kMaxLabels)) label = 0;
         mOut.labelLengthMm[std::size_t(label)] += (tb - ta) * mLength;
         double& hit = mOut.firstHitMm[std::size_t(label)];
-        if (hit == kNotHit) hit = ta * mLength;
+        if (hit == kNotHit) hit = mOffset + ta * mLength;
     }
 
 private:
     ShaftIntegral& mOut;
     double mLength;
+    double mOffset;
 };
+
+/// @brief Every point of a polyline is finite and there is at least one segment.
+inline bool polylineValid(std::span<const Vec3d> points) noexcept
+{
+    if (points.size() < 2) return false;
+    for (const Vec3d& p : points) {
+        if (!p.allFinite()) return false;
+    }
+    return true;
+}
+
+/// @brief Run @p pass(segment, offsetMm) over each segment of non-zero length of
+/// a polyline (points checked with polylineValid), offsetMm being the length
+/// before it; the damping each pass leaves in out.dampingIntegral is summed.
+/// out.lengthMm becomes the polyline's length.
+template <typename IndexMap, typename Pass>
+inline void eachSegment(
+    const IndexMap& xf, std::span<const Vec3d> points, double shift, ShaftIntegral& out, Pass&& pass) noexcept
+{
+    double offset = 0.0, damping = 0.0;
+    for (std::size_t i = 1; i < points.size(); ++i) {
+        const IndexSegment s = toIndex(xf, Segment{points[i - 1], points[i]}, shift);
+        if (!s.valid) continue;
+        out.dampingIntegral = 0.0;
+        pass(s, offset);
+        damping += out.dampingIntegral;
+        offset += s.lengthMm;
+    }
+    out.dampingIntegral = damping;
+    out.lengthMm = offset;
+}
 
 /// @brief The 8 values at the corners c + {0,1}³ of a trilinear cell; corner i is
 /// (i>>2 & 1, i>>1 & 1, i & 1). Non-finite voxels read as 0.

@@ -666,9 +666,10 @@ inline double sumVoxels(
 /// frame, box [lo, hi] of voxel cells): chord-weighted β into out.dampingIntegral
 /// when @p beta is given, label lengths and first hits when @p labels is given.
 /// A non-finite voxel contributes nothing. The walk is voxelWalk (VoxelWalk.h).
+/// @p offsetMm: where s starts along a polyline (first hits are measured from its start).
 template <typename BetaCursor, typename LabelCursor>
 inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const openvdb::Vec3d& hi, BetaCursor* beta,
-    LabelCursor* labels, ShaftIntegral& out) noexcept
+    LabelCursor* labels, ShaftIntegral& out, double offsetMm = 0.0) noexcept
 {
     if (beta && !labels) { // the damping alone: sumVoxels() clips and walks
         out.dampingIntegral = sumVoxels(s, lo, hi, *beta) * s.lengthMm;
@@ -676,7 +677,7 @@ inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const ope
     }
     double t0 = 0.0, t1 = 0.0;
     const bool inside = clip(s, lo, hi, t0, t1);
-    LabelTally tally(out, s.lengthMm);
+    LabelTally tally(out, s.lengthMm, offsetMm);
     if (!inside) {
         if (labels) tally.add(0, 0.0, 1.0); // all air
         return;
@@ -705,6 +706,18 @@ inline void chordPass(const IndexSegment& s, const openvdb::Vec3d& lo, const ope
     }
     if (labels && t1 < 1.0) tally.add(0, t1, 1.0);
     if (beta) out.dampingIntegral = sum * s.lengthMm;
+}
+
+/// @brief chordPass along a polyline (architecture.md "Shaft integration"): the
+/// segments' integrals summed, first hits measured from its first point; zero
+/// integrals for a non-finite point or fewer than two points.
+template <typename IndexMap, typename BetaCursor, typename LabelCursor>
+inline void polylineChordPass(const IndexMap& xf, std::span<const Vec3d> points, const openvdb::Vec3d& lo,
+    const openvdb::Vec3d& hi, BetaCursor* beta, LabelCursor* labels, ShaftIntegral& out) noexcept
+{
+    if (!polylineValid(points)) return;
+    eachSegment(xf, points, 0.5, out,
+        [&](const IndexSegment& s, double offset) { chordPass(s, lo, hi, beta, labels, out, offset); });
 }
 
 } // namespace voxhap::haptic::detail

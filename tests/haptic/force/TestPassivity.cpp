@@ -78,7 +78,9 @@ double largestDampingNsPerMm(const SceneInstance& inst)
 /// - the model's force before any safety stage;
 /// - that force through a Safety with the passivity controller off (the clamps only);
 /// - the rendered force, controller on (the model's own safety stage).
-/// It also accumulates the bound the model must meet (see leakNmm below).
+/// It also accumulates the bound the model must meet (see leakNmm below). The
+/// bending scenes' hub force reaches the hand through a coupling no stiffer than
+/// the device (§9.5), so the device's maximum stiffness bounds it too.
 class Meter {
 public:
     Meter(const SceneInstance& inst, double maxDepthMm)
@@ -118,6 +120,9 @@ public:
             // [LP]'s f_keepdir (§4 Eq. 1) is device compensation, active by design: a
             // constant force along the last motion, at most keepDirectionN·|Δx| a tick.
             mActiveNmm += mInst.scene().terms.keepDirectionN * dx.norm();
+            // A bending needle's bevel force (§9.5) is a follower load, active by design:
+            // it does at most |P|·|Δx| a tick on the shaft that moves with the hand.
+            mActiveNmm += mBevelN * dx.norm();
         }
         NeedleInput in;
         in.timeS = mT;
@@ -131,6 +136,7 @@ public:
                 mTransientUntil = mT + mInst.scene().terms.bone.params.durationS + mDt;
         }
         mModelF = mOut.modelForce;
+        mBevelN = mModel->bentNeedle() ? mModel->bentNeedle()->bevelForce().norm() : 0.0;
         // The same stages the model renders through: the scene's force scale on the
         // tissue's force, F_G beside the observer (NeedleForceModel step 4).
         const Vec3d g = mOut.terms.gravity;
@@ -164,6 +170,7 @@ private:
     double mModelNmm = 0, mOffNmm = 0, mOnNmm = 0, mLeakNmm = 0, mActiveNmm = 0;
     double mMaxChange = 0, mMaxSilentChange = 0;
     double mTransientUntil = -1.0;
+    double mBevelN = 0.0; ///< the bevel's force this tick [N] (bending scenes)
     bool mHave = false, mSilent = true;
     Vec3d mModelF = Vec3d::Zero(), mOffF = Vec3d::Zero(), mOnF = Vec3d::Zero();
     Vec3d mLastHub = Vec3d::Zero(), mLastTip = Vec3d::Zero();

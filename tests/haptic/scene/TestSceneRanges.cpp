@@ -135,6 +135,43 @@ TEST(SceneRanges, TheValuesOnceAcceptedAreRefused)
     expectRefused(with(baseScene(), "needle.gauge", 18.5), "needle.gauge: must be a whole gauge number");
 }
 
+// Needle bending (physics.md §9.1): the values a beam cannot take are refused in
+// one line naming the key, and bending beside the lock or the pivot correction
+// (§9.5) likewise. Each with an accepted neighbour as the control.
+TEST(SceneRanges, BendingValuesAreRefusedNamingTheKey)
+{
+    const auto expectRefused = [](const Json& j, const std::string& what) {
+        const std::string e = refusal(j);
+        EXPECT_NE(e.find(what), std::string::npos) << "'" << e << "' lacks '" << what << "'";
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    };
+    const Json base = baseScene(); // 18 G: OD 1.270 mm
+    expectRefused(with(base, "needle.youngs_modulus_GPa", -193.0),
+        "ranges.json: needle.youngs_modulus_GPa: must be in (0, 1000] GPa");
+    expectRefused(with(base, "needle.youngs_modulus_GPa", 0.0), "ranges.json: needle.youngs_modulus_GPa: must be in");
+    EXPECT_EQ(refusal(with(base, "needle.youngs_modulus_GPa", 193.0)), "");
+    expectRefused(with(base, "needle.inner_diameter_mm", 1.27),
+        "ranges.json: needle.inner_diameter_mm: must be below the outer diameter (1.270 mm for 18 G");
+    expectRefused(with(base, "needle.inner_diameter_mm", 2.0), "ranges.json: needle.inner_diameter_mm: must be below");
+    expectRefused(with(base, "needle.inner_diameter_mm", -0.1), "ranges.json: needle.inner_diameter_mm: must not be");
+    EXPECT_EQ(refusal(with(base, "needle.inner_diameter_mm", 1.2)), "");
+    for (const double angle : {0.0, 90.0, 135.0}) {
+        expectRefused(
+            with(base, "needle.bevel_angle_deg", angle), "ranges.json: needle.bevel_angle_deg: must be in (0, 90)");
+    }
+    expectRefused(with(base, "needle.bevel_angle_deg", -10.0), "ranges.json: needle.bevel_angle_deg: must not be");
+    EXPECT_EQ(refusal(with(base, "needle.bevel_angle_deg", 89.9)), "");
+
+    Json locked = base; // senac-average has the trajectory lock
+    locked["terms"]["bending"] = true;
+    expectRefused(locked, "ranges.json: terms.bending: cannot run beside \"lock\"");
+    Json pivoted = Json::parse(slurp(VOXHAP_SOURCE_DIR "/data/scenes/kyung.json"));
+    pivoted["terms"]["bending"] = true;
+    expectRefused(pivoted, "ranges.json: terms.bending: replaces the pivot correction");
+    pivoted["terms"].erase("pivot");
+    EXPECT_EQ(refusal(pivoted), "") << "control: bending without the pivot";
+}
+
 // A scene without device or insertion block loads with the documented defaults and
 // says so (the CLI prints these lines); a complete scene says nothing.
 TEST(SceneRanges, LeftOutBlocksAreDefaultedAndSaid)

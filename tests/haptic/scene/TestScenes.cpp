@@ -9,12 +9,15 @@
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/scene/Scene.h"
 #include "core/Errors.h"
+#include "core/Math.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/phantoms/Rasterize.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 
@@ -63,8 +66,9 @@ double first(const SceneRun& r, EventType t)
 TEST(Scenes, AllBuiltinScenesParse)
 {
     const std::vector<std::string> names = builtinSceneNames();
-    for (const char* expected : {"kyung", "kyung-damping", "senac-average", "senac-overweight", "senac-calcified",
-             "conci", "conci-labels", "lumbar-puncture", "lumbar-puncture-labels"}) {
+    for (const char* expected :
+        {"kyung", "kyung-damping", "senac-average", "senac-overweight", "senac-calcified", "conci", "conci-labels",
+            "lumbar-puncture", "lumbar-puncture-labels", "kyung-bending", "lumbar-puncture-bending"}) {
         EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
     }
     for (const std::string& n : names) EXPECT_NO_THROW(loadScene(n)) << n;
@@ -245,6 +249,64 @@ TEST(Scenes, LockedProfileMatchesExactTraversal)
         worst = std::max(worst, std::abs(a.rows[i].axialN - b.rows[i].axialN));
     EXPECT_LT(worst, 1e-9);               // N: cumulative-sum round-off over ~100 mm of 0.5 mm voxels
     EXPECT_GT(a.summary.peakModelN, 0.1); // and there was damping to compare
+}
+
+// Issue: a script turns the needle at a depth, and the run reports the bent tip's
+// deviation from the straight line (physics.md §9.3, §9.6). A half turn at 25 mm
+// steers the 22 G Quincke needle back: the tip ends nearer the line than without it.
+TEST(Scenes, AScriptTurnsTheBendingNeedleAndTheRunReportsTheTipsDeviation)
+{
+    const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "voxhap-roll-script";
+    std::filesystem::create_directories(dir);
+    const auto write = [&](const std::string& name, const std::string& text) {
+        std::ofstream(dir / name) << text;
+        return dir / name;
+    };
+    // 20 mm/s from 5 mm outside to 45 mm; the half turn over 0.1 s at 25 mm.
+    const InsertionScript turned =
+        InsertionScript::load(write("turn.csv", "t_s,depth_mm,roll_deg\n0,-5,0\n1.5,25,0\n1.6,25,180\n2.6,45,180\n"));
+    const InsertionScript straightOn =
+        InsertionScript::load(write("straight.csv", "t_s,depth_mm\n0,-5\n1.5,25\n1.6,25\n2.6,45\n"));
+    EXPECT_TRUE(std::isnan(straightOn.rollAt(1.0)));
+    EXPECT_NEAR(turned.rollAt(1.55), kPi / 2.0, 1e-12);
+
+    const SceneInstance& inst = instance("lumbar-puncture-bending");
+    const auto deviation = [&](const InsertionScript& script) {
+        auto model = inst.makeModel();
+        const InsertionResult r = runInsertion(*model, script, 1000.0);
+        EXPECT_TRUE(r.summary.bending);
+        EXPECT_GE(r.summary.maxTipDeviationMm, r.summary.tipDeviationMm);
+        // The summary's figure is the bent tip's distance from the path's line.
+        const Vec3d off = model->bentNeedle()->tip() - model->path().origin;
+        const Vec3d& u = model->path().direction;
+        EXPECT_NEAR(r.summary.tipDeviationMm, (off - off.dot(u) * u).norm(), 1e-12);
+        EXPECT_NE(insertionSummaryText(r, inst.layers()).find("tip deviation"), std::string::npos);
+        return r.summary.tipDeviationMm;
+    };
+    const double without = deviation(straightOn), with = deviation(turned);
+    EXPECT_GT(without, 1.0) << "the bevel takes the tip off the line";
+    EXPECT_LT(with, without - 0.5) << "the half turn steers it back";
+
+    // A straight needle reports none (control: the figure belongs to bending).
+    auto straightModel = instance("lumbar-puncture").makeModel();
+    const InsertionResult plain = runInsertion(*straightModel, straightOn, 1000.0);
+    EXPECT_FALSE(plain.summary.bending);
+    EXPECT_EQ(
+        insertionSummaryText(plain, instance("lumbar-puncture").layers()).find("tip deviation"), std::string::npos);
+
+    // Every row has the roll, or none has.
+    const auto refused = [&](const std::string& name, const std::string& text, const std::string& what) {
+        try {
+            (void)InsertionScript::load(write(name, text));
+        } catch (const ValueError& e) {
+            return std::string(e.what()).find(what) != std::string::npos;
+        }
+        return false;
+    };
+    EXPECT_TRUE(refused("mixed.csv", "0,0,0\n1,10\n", "line 2: expected \"t_s,depth_mm,roll_deg\""));
+    EXPECT_TRUE(refused("extra.csv", "0,0\n1,10,90\n", "line 2: expected \"t_s,depth_mm\""));
+    EXPECT_TRUE(refused("nan.csv", "0,0,0\n1,10,nan\n", "line 2"));
+    EXPECT_FALSE(refused("fine.csv", "0,0,0\n1,10,90\n", "line")) << "control";
 }
 
 } // namespace

@@ -6,8 +6,10 @@
 #include "common/Phantom.h"
 #include "common/Tolerances.h"
 
+#include "haptic/shaft/LabelTrace.h"
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/shaft/TrajectoryProfile.h"
+#include "core/Errors.h"
 #include "haptic/shaft/detail/VoxelWalk.h"
 
 #include <Eigen/Geometry>
@@ -238,6 +240,154 @@ TEST_P(ShaftOnLayeredSlab, ProfileOnTheLockedLineIsExact)
         }
         EXPECT_EQ(profile.rebuilds(), rebuilds) << "queries on the line must not rebuild";
     }
+}
+
+/// A bent shaft (physics.md §9.5): an arc of radius @p radius from the entry, bending
+/// sideways as it goes down, cut into @p pieces chords; depth grows along every chord.
+std::vector<Vec3d> arcPolyline(const Vec3d& entry, double length, double radius, int pieces)
+{
+    const Vec3d down(0, -1, 0), side = Vec3d(0.8, 0, 0.6);
+    std::vector<Vec3d> p;
+    for (int i = 0; i <= pieces; ++i) {
+        const double a = length * i / pieces / radius;
+        p.push_back(entry + radius * (std::sin(a) * down + (1.0 - std::cos(a)) * side));
+    }
+    return p;
+}
+
+/// R1 along a chord from depth za to zb (zb > za), length len: Σ_j β_j·overlap_j·len/(zb − za).
+double r1Chord(double za, double zb, double len)
+{
+    double z = 0.0, sum = 0.0;
+    for (const auto& l : kR1Layers) {
+        sum += storedBeta(l.tissue) * std::max(0.0, std::min(zb, z + l.thicknessMm) - std::max(za, z));
+        z += l.thicknessMm;
+    }
+    return sum * len / (zb - za);
+}
+
+TEST_P(ShaftOnLayeredSlab, BentShaftMatchesTheClosedFormChordByChord)
+{
+    auto exact = makeIntegrator(*fixture().field, {Strategy::ExactVoxel});
+    const auto& table = volume::TissueTable::builtin();
+    const std::vector<Vec3d> shaft = arcPolyline(kEntry, 28.0, 60.0, 37);
+    ShaftIntegral out;
+    exact->integratePolyline(shaft, out);
+    double expected = 0.0, length = 0.0, muscleHit = kNotHit;
+    for (std::size_t i = 1; i < shaft.size(); ++i) {
+        const double za = kEntry.y() - shaft[i - 1].y(), zb = kEntry.y() - shaft[i].y();
+        const double len = (shaft[i] - shaft[i - 1]).norm();
+        expected += r1Chord(za, zb, len);
+        if (muscleHit == kNotHit && zb > 10.0) muscleHit = length + len * (10.0 - za) / (zb - za); // skin 2 + fat 8
+        length += len;
+    }
+    EXPECT_NEAR(out.dampingIntegral, expected, kExactRelative * expected);
+    EXPECT_NEAR(out.lengthMm, length, kChordSumRelative * length);
+    const double sum = std::accumulate(out.labelLengthMm.begin(), out.labelLengthMm.end(), 0.0);
+    EXPECT_NEAR(sum, length, kChordSumRelative * length);
+    EXPECT_NEAR(out.firstHitMm[std::size_t(table.at("muscle").id)], muscleHit, 1e-9);
+    // Control: the chord from entry to tip, the straight needle, integrates less tissue.
+    ShaftIntegral chord;
+    exact->integrate({shaft.front(), shaft.back()}, chord);
+    EXPECT_GT(std::abs(chord.dampingIntegral - expected), 100.0 * kExactRelative * expected);
+}
+
+TEST_P(ShaftOnLayeredSlab, EveryStrategyIntegratesAPolylineAsTheSumOfItsChords)
+{
+    const std::vector<Vec3d> shaft = arcPolyline(kEntry, 28.0, 40.0, 23);
+    TrajectoryProfile profile(*fixture().field, 0.05, 200.0, true);
+    ShaftIntegral exactBent;
+    makeIntegrator(*fixture().field, {Strategy::ExactVoxel})->integratePolyline(shaft, exactBent);
+    for (const Strategy st : {Strategy::ExactVoxel, Strategy::ExactTrilinear, Strategy::MarchNearest,
+             Strategy::MarchTrilinear, Strategy::Profile}) {
+        IntegratorOptions o;
+        o.strategy = st;
+        auto integ = makeIntegrator(*fixture().field, o);
+        ShaftIntegral bent, piece;
+        integ->integratePolyline(shaft, bent);
+        // The reference: each chord integrated on its own (the straight shaft, checked
+        // against R1 above), lengths summed, first hits offset by the length before.
+        double damping = 0.0, offset = 0.0;
+        std::array<double, kMaxLabels> lengths{}, hits;
+        hits.fill(kNotHit);
+        for (std::size_t i = 1; i < shaft.size(); ++i) {
+            auto single = makeIntegrator(*fixture().field, o); // a fresh profile locks on each chord
+            single->integrate({shaft[i - 1], shaft[i]}, piece);
+            damping += piece.dampingIntegral;
+            for (std::size_t l = 0; l < kMaxLabels; ++l) {
+                lengths[l] += piece.labelLengthMm[l];
+                if (hits[l] == kNotHit && piece.firstHitMm[l] != kNotHit) hits[l] = offset + piece.firstHitMm[l];
+            }
+            offset += piece.lengthMm;
+        }
+        EXPECT_NEAR(bent.dampingIntegral, damping, 1e-12 * damping) << integ->name();
+        EXPECT_NEAR(bent.lengthMm, offset, 1e-12 * offset) << integ->name();
+        for (std::size_t l = 0; l < kMaxLabels; ++l) {
+            EXPECT_NEAR(bent.labelLengthMm[l], lengths[l], 1e-12 * offset) << integ->name() << " label " << l;
+            if (hits[l] == kNotHit)
+                EXPECT_EQ(bent.firstHitMm[l], kNotHit) << integ->name() << " label " << l;
+            else
+                EXPECT_NEAR(bent.firstHitMm[l], hits[l], 1e-12 * offset) << integ->name() << " label " << l;
+        }
+        // The profile answers a bent shaft exactly as the exact traversal does (§9.5).
+        if (st == Strategy::Profile) {
+            EXPECT_EQ(bent.dampingIntegral, exactBent.dampingIntegral);
+        }
+    }
+}
+
+TEST_P(ShaftOnLayeredSlab, BentShaftsOfOnePointOrANonFinitePointIntegrateToZero)
+{
+    std::vector<Vec3d> shaft = arcPolyline(kEntry, 20.0, 40.0, 9);
+    for (const Strategy st :
+        {Strategy::ExactVoxel, Strategy::ExactTrilinear, Strategy::MarchTrilinear, Strategy::Profile}) {
+        IntegratorOptions o;
+        o.strategy = st;
+        auto integ = makeIntegrator(*fixture().field, o);
+        ShaftIntegral out;
+        integ->integratePolyline(shaft, out);
+        EXPECT_GT(out.dampingIntegral, 0.0) << "control: the shaft is in tissue";
+        integ->integratePolyline(std::span<const Vec3d>(shaft.data(), 1), out);
+        EXPECT_EQ(out.dampingIntegral, 0.0);
+        EXPECT_EQ(out.lengthMm, 0.0);
+        std::vector<Vec3d> bad = shaft;
+        bad[4].x() = std::nan("");
+        integ->integratePolyline(bad, out);
+        EXPECT_EQ(out.dampingIntegral, 0.0);
+        EXPECT_EQ(out.lengthMm, 0.0);
+    }
+}
+
+TEST_P(ShaftOnLayeredSlab, LabelRunsAlongABentPathFollowTheLayers)
+{
+    const auto& table = volume::TissueTable::builtin();
+    const LabelTracer tracer(*fixture().field);
+    // From 3 mm above the skin, so that leading air is dropped.
+    const std::vector<Vec3d> shaft = arcPolyline(kEntry + Vec3d(0, 3, 0), 30.0, 50.0, 31);
+    const std::vector<LabelRun> runs = tracer.tracePolyline(shaft);
+    // Where the path reaches each depth, walking its chords (the reference).
+    const auto arcAtDepth = [&](double depth) {
+        double s = 0.0;
+        for (std::size_t i = 1; i < shaft.size(); ++i) {
+            const double za = -shaft[i - 1].y(), zb = -shaft[i].y(), len = (shaft[i] - shaft[i - 1]).norm();
+            if (zb >= depth) return s + len * (depth - za) / (zb - za);
+            s += len;
+        }
+        return kNotHit;
+    };
+    ASSERT_GE(runs.size(), 4u);
+    const char* names[] = {"skin", "fat", "muscle", "interspinous_ligament"};
+    const double tops[] = {0.0, 2.0, 10.0, 20.0};
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(runs[std::size_t(i)].label, table.at(names[i]).id) << i;
+        EXPECT_NEAR(runs[std::size_t(i)].startMm, arcAtDepth(tops[i]), 1e-9) << names[i];
+    }
+    // Control: the straight trace from the same start along the first chord meets
+    // the muscle elsewhere.
+    const std::vector<LabelRun> straight = tracer.trace(shaft.front(), shaft[1] - shaft[0], 30.0);
+    ASSERT_GE(straight.size(), 3u);
+    EXPECT_GT(std::abs(straight[2].startMm - runs[2].startMm), 1e-3);
+    EXPECT_THROW(tracer.tracePolyline(std::span<const Vec3d>(shaft.data(), 1)), ValueError);
 }
 
 INSTANTIATE_TEST_SUITE_P(Spacings, ShaftOnLayeredSlab, testing::Values(Vec3d(0.5, 0.5, 0.5), Vec3d(0.6, 0.4, 0.9)),

@@ -1,0 +1,57 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file Foundation.cpp
+/// @brief The label-grid foundation (OpenVDB stays in this file).
+
+#include "haptic/beam/Foundation.h"
+
+#include "haptic/materials/FieldGrids.h"
+#include "core/Errors.h"
+
+namespace voxhap::haptic {
+
+namespace {
+
+class LabelFoundation final : public Foundation {
+public:
+    explicit LabelFoundation(const MaterialField& field)
+        : mField(field), mLabels(detail::labelGrid(field)), mAccessor(checked(mLabels).getConstAccessor())
+    {
+    }
+    LabelFoundation(const LabelFoundation& o)
+        : mField(o.mField), mLabels(o.mLabels), mAccessor(mLabels->getConstAccessor())
+    {
+    }
+
+    double modulusAt(const Vec3d& world) noexcept override
+    {
+        if (!world.allFinite()) return 0.0;
+        const openvdb::Vec3d i = mLabels->transform().worldToIndex(volume::toVdb(world));
+        // Beyond the int range of a coordinate the point is far outside any volume.
+        constexpr double kFar = 1e9;
+        if (!(std::abs(i[0]) < kFar && std::abs(i[1]) < kFar && std::abs(i[2]) < kFar)) return 0.0;
+        const int label = mAccessor.getValue(openvdb::Coord::round(i));
+        if (static_cast<unsigned>(label) >= static_cast<unsigned>(kMaxLabels)) return 0.0;
+        return mField.perLabel()[std::size_t(label)].foundationNPerMm2;
+    }
+    std::unique_ptr<Foundation> clone() const override { return std::make_unique<LabelFoundation>(*this); }
+
+private:
+    static const detail::LabelGrid& checked(const detail::LabelGrid::ConstPtr& g)
+    {
+        if (!g) throw ValueError("needle bending: the material field has no tissue labels to read the foundation from");
+        return *g;
+    }
+
+    const MaterialField& mField;
+    detail::LabelGrid::ConstPtr mLabels;
+    detail::LabelGrid::ConstAccessor mAccessor;
+};
+
+} // namespace
+
+std::unique_ptr<Foundation> makeLabelFoundation(const MaterialField& field)
+{
+    return std::make_unique<LabelFoundation>(field);
+}
+
+} // namespace voxhap::haptic
