@@ -270,11 +270,11 @@ TEST_F(Slices, BentNeedleIsDrawnAlongItsShaft)
     const double px = 0.5, z = mPhantom.centre.z();
     const OverlayStyle style;
     const Vec3d hub(-30, -20, z), mid(0, -10, z), tip(30, -20, z);
-    NeedlePose bent{tip, Vec3d(1, 0, 0), 60.0};
+    planning::NeedlePose bent{tip, Vec3d(1, 0, 0), 60.0};
     bent.shaft = {hub, mid, tip};
-    const NeedlePose straight{tip, Vec3d(1, 0, 0), 60.0};
+    const planning::NeedlePose straight{tip, Vec3d(1, 0, 0), 60.0};
     const ViewFrame f = viewFrame(parseViews("axial").front(), mBox, mPhantom.centre, px);
-    const auto needleNear = [&](const NeedlePose& pose, const Vec3d& p) {
+    const auto needleNear = [&](const planning::NeedlePose& pose, const Vec3d& p) {
         Image img(f.width, f.height);
         Overlays o;
         o.needle = pose;

@@ -197,13 +197,13 @@ TEST(Plan, WrittenPlanReadsBack)
     EXPECT_TRUE(q.paths[1].needle->shaft.empty());
     // A bending needle's shaft (physics.md §9) reads back point for point.
     p.paths[1].needle->shaft = {Vec3d(0, 0, -79), Vec3d(0.5, 0, -40), Vec3d(1.25, 0, 1)};
-    const Plan bent = parsePlan(planJson(p), "memory");
+    const planning::Plan bent = planning::parsePlan(planning::planJson(p), "memory");
     EXPECT_EQ(bent.paths[1].needle->shaft, p.paths[1].needle->shaft);
     // Control: a shaft of one point is refused, naming the field.
     const std::string one = R"({"schema": "voxhap-plan/1", "paths": [{"entry": [0, 0, 0], "target": [0, 0, 1],
         "needle": {"tip": [0, 0, 1], "direction": [0, 0, 1], "shaft": [[0, 0, 0]]}}]})";
     try {
-        (void)parsePlan(one, "plan.json");
+        (void)planning::parsePlan(one, "plan.json");
         ADD_FAILURE() << "a one-point shaft was accepted";
     } catch (const ValueError& e) {
         EXPECT_NE(std::string(e.what()).find("needle.shaft"), std::string::npos) << e.what();
