@@ -59,17 +59,6 @@ NeedlePose parseNeedle(Fields n)
             pose.shaft.push_back(p);
         }
     }
-    if (n.has("shaft")) { // a bending needle's polyline, hub to tip
-        const Json& s = n.raw("shaft");
-        if (!s.is_array() || s.size() < 2) n.fail("shaft", "must be a list of at least two [x, y, z] points in mm");
-        for (const Json& q : s) {
-            if (!q.is_array() || q.size() != 3 || !q[0].is_number() || !q[1].is_number() || !q[2].is_number())
-                n.fail("shaft", "must be a list of [x, y, z] points in mm");
-            const Vec3d p(q[0].get<double>(), q[1].get<double>(), q[2].get<double>());
-            if (!p.allFinite()) n.fail("shaft", "points must be finite");
-            pose.shaft.push_back(p);
-        }
-    }
     return pose;
 }
 
