@@ -126,7 +126,9 @@ Action registerFuse(CLI::App& app)
     cmd->add_option("--out", o->out, "The fused volume (.vdb); the transform goes beside it as .tfm")->required();
     cmd->add_option("--ct-series", o->ctSeries, "DICOM: the CT's series (UID, SeriesNumber or #N, as for --series)");
     cmd->add_option("--mr-series", o->mrSeries, "DICOM: the MR's series");
-    cmd->add_option("--mr-volume", o->mrVolume, "DICOM: which 3D volume of a 4D MR series, from 1")
+    // --volume too: the loader's refusal of a 4D series names --volume, and
+    // only the MR of a pair can be one.
+    cmd->add_option("--mr-volume,--volume", o->mrVolume, "DICOM: which 3D volume of a 4D MR series, from 1")
         ->check(CLI::Range(std::size_t(1), std::size_t(1000000)));
     cmd->add_flag("--affine", o->affine, "Add an affine stage after the rigid one (scanner scale and shear)");
     cmd->add_flag("--different-patients", o->differentPatients,
@@ -138,6 +140,8 @@ Action registerFuse(CLI::App& app)
            "head first against feet first), geometry (the header geometry as it is)")
         ->check(CLI::IsMember({"auto", "search", "geometry"}));
     cmd->add_flag("--resample", o->reader.resample, "DICOM: resample uneven, gapped or tilted slice stacks");
+    cmd->add_flag("--skip-bad", o->reader.skipBad,
+        "DICOM: load a series without its unreadable files (each named on stderr), as the loader's refusal offers");
     cmd->add_option(
            "--memory-cap", o->reader.memoryCapMb, "Refuse inputs whose grid could exceed this many MiB (default 4096)")
         ->check(CLI::Range(1.0, 1e7));

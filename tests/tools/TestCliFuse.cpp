@@ -172,6 +172,10 @@ TEST_F(CliFuse, AFourDimensionalMrNeedsItsVolume)
     VOXHAP_REQUIRE_DIR(dwi);
     voxhap::test::expectFailure(run("fuse ct.nrrd '" + dwi.string() + "' --out dwi.vdb"), "--volume");
     expectNoOutput("dwi");
+    // Control: the option the refusal names gets the load past it (the phantom
+    // and the volunteer's head then fail later, on the registration's checks).
+    const Result chosen = run("fuse ct.nrrd '" + dwi.string() + "' --out dwi.vdb --volume 2");
+    EXPECT_EQ(chosen.err.find("--volume"), std::string::npos) << chosen.err;
 }
 
 TEST_F(CliFuse, TheOutputMustBeAVdb)
