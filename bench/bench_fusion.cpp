@@ -21,6 +21,7 @@
 /// 1.2 mm); elastix's is its own (3 levels of its recursive pyramid, full
 /// resolution last), as the pinned parameter file says.
 
+#include "bench/ProcessFigures.h"
 #include "bench/Stats.h"
 #include "registration/Fusion.h"
 #include "registration/Registration.h"
@@ -52,41 +53,13 @@
 namespace {
 
 using namespace voxhap;
+using bench::loadAverage;
+using bench::peakRssMb;
+using bench::rssMb;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-double peakRssMb()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_maxrss) / 1024.0;
-}
-
-/// The resident memory now [MiB] (VmRSS), as against the peak.
-double rssMb()
-{
-    std::ifstream in("/proc/self/status");
-    std::string key;
-    double kb = 0;
-    while (in >> key) {
-        if (key == "VmRSS:") {
-            in >> kb;
-            break;
-        }
-        std::getline(in, key);
-    }
-    return kb / 1024.0;
-}
-
-double loadAverage()
-{
-    std::ifstream in("/proc/loadavg");
-    double l = -1;
-    in >> l;
-    return l;
-}
 
 fs::path elastixDir() { return fs::path(VOXHAP_SOURCE_DIR) / "tests" / "registration" / "elastix"; }
 

@@ -17,6 +17,7 @@
 #include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
+#include "bench/ProcessFigures.h"
 #include "bench/Stats.h"
 
 #include <nlohmann/json.hpp>
@@ -37,29 +38,9 @@
 namespace {
 
 using namespace voxhap;
-
-double peakRssMb()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_maxrss) / 1024.0;
-}
-
-double cpuSeconds()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-/// The 1-minute load average: other processes' demand for the same cores.
-double loadAverage()
-{
-    std::ifstream in("/proc/loadavg");
-    double l = -1;
-    in >> l;
-    return l;
-}
+using bench::cpuSeconds;
+using bench::loadAverage;
+using bench::peakRssMb;
 
 } // namespace
 
