@@ -75,24 +75,33 @@ BentNeedle::BentNeedle(const BeamParams& params, std::unique_ptr<Foundation> fou
 
 BentNeedle::BentNeedle(const BentNeedle& o)
     : mParams(o.mParams), mBeam(o.mBeam), mTrack(o.mTrack), mFoundation(o.mFoundation->clone()),
-      mReference(o.mReference), mRoll(o.mRoll), mHub(o.mHub), mU(o.mU), mE1(o.mE1), mE2(o.mE2), mCutAhead(o.mCutAhead),
-      mNodes(o.mNodes), mAxial(o.mAxial), mTipDirection(o.mTipDirection), mBevelForce(o.mBevelForce),
-      mHubForce(o.mHubForce), mHubTorque(o.mHubTorque), mInserted(o.mInserted), mHubStiffness(o.mHubStiffness),
-      mScale(o.mScale)
+      mReference(o.mReference), mRoll(o.mRoll), mHub(o.mHub), mU(o.mU), mE1(o.mE1), mE2(o.mE2), mNodes(o.mNodes),
+      mAxial(o.mAxial), mTipDirection(o.mTipDirection), mBevelForce(o.mBevelForce), mHubForce(o.mHubForce),
+      mHubTorque(o.mHubTorque), mInserted(o.mInserted), mHubStiffness(o.mHubStiffness), mScale(o.mScale),
+      mBevelModulus(o.mBevelModulus), mPinned(o.mPinned), mPin(o.mPin), mLastHeading(o.mLastHeading)
 {
 }
 
 void BentNeedle::reset() noexcept
 {
     mTrack.clear();
+    mPinned = false;
     straight();
 }
 
 void BentNeedle::enter(const Vec3d& entry) noexcept
 {
     if (!entry.allFinite()) return;
-    mTrack.start(entry, mFoundation->modulusAt(entry));
-    mCutAhead = mU;
+    mTrack.start(entry, mFoundation->modulusAt(entry), mU);
+    mBevelModulus = mFoundation->bevelModulusAt(entry);
+    mLastHeading = mU;
+}
+
+void BentNeedle::pinTip(const Vec3d& at) noexcept
+{
+    if (!at.allFinite()) return;
+    mPin = at;
+    mPinned = true;
 }
 
 void BentNeedle::straight() noexcept
@@ -113,17 +122,6 @@ double BentNeedle::tipDeflectionMm() const noexcept
 {
     const Vec3d d = tip() - mHub;
     return (d - d.dot(mU) * mU).norm();
-}
-
-Vec3d BentNeedle::nodeAt(double x) const noexcept
-{
-    const double h = mBeam.elementLengthMm();
-    const int e = std::clamp(int(std::floor(x / h)), 0, mBeam.elements() - 1);
-    const double f = std::clamp(x / h - e, 0.0, 1.0);
-    const double axial = mAxial[std::size_t(e)] + f * (mAxial[std::size_t(e + 1)] - mAxial[std::size_t(e)]);
-    double w1 = 0.0, w2 = 0.0;
-    mBeam.deflectionAt(x, w1, w2);
-    return mHub + axial * mU + mScale * (w1 * mE1 + w2 * mE2);
 }
 
 bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
@@ -158,22 +156,28 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
     const double from = length - inserted;
     mBeam.addFoundation(from, [&](double x, double& k, double& r1, double& r2) {
         Vec3d p;
-        mTrack.sample(x - from, mCutAhead, p, k);
+        mTrack.sample(x - from, p, k);
         const Vec3d d = p - hub;
         r1 = d.dot(mE1);
         r2 = d.dot(mE2);
     });
-    // The bevel (§9.3): pressed into uncut tissue at the track's end; backed into its
-    // own cut, the face's contact fades over the bevel's length.
+    // The bevel (§9.3): its face, b = D·cot α long, pressed into the tissue at the cut
+    // front over the part of it below the skin (the first b of insertion) and not
+    // backed into its own cut (retraction).
     double p = 0.0;
-    if (mParams.bevelFactorMm2 > 0.0) {
-        const double back = mTrack.lengthMm() - inserted;
-        const double contact = back <= 0.0 ? 1.0 : std::clamp(1.0 - back / mParams.bevelLengthMm, 0.0, 1.0);
-        p = mTrack.modulus(mTrack.count() - 1) * mParams.bevelFactorMm2 * contact;
+    if (mParams.bevelFactorMm2 > 0.0 && !mPinned) {
+        const double b = mParams.bevelLengthMm;
+        const double back = std::max(0.0, mTrack.frontMm() - inserted);
+        const double contact = std::clamp((std::min(inserted, b) - back) / b, 0.0, 1.0);
+        p = mBevelModulus * mParams.bevelFactorMm2 * contact;
     }
     const double phi = mParams.orientationRad + mRoll;
     const double p1 = p * std::cos(phi), p2 = p * std::sin(phi);
     mBeam.addEndForce(p1, p2);
+    if (mPinned) {
+        const Vec3d d = mPin - hub;
+        mBeam.pinEnd(d.dot(mE1), d.dot(mE2));
+    }
     if (!mBeam.solve()) {
         straight();
         return false;
@@ -216,16 +220,16 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
 
 void BentNeedle::extendTrack(double tipTau) noexcept
 {
-    // The tip has cut past the track's end: each new point is where the shaft now
-    // lies at that arc length (within one step of the tip).
-    const double step = mTrack.stepMm();
-    while (mTrack.count() < mTrack.capacity()) {
-        const double tau = double(mTrack.count()) * step;
-        if (tau > tipTau) break;
-        const Vec3d p = nodeAt(mParams.lengthMm - (tipTau - tau));
-        mTrack.append(p, mFoundation->modulusAt(p));
+    // The tip cuts along its heading (§9.3): the nonholonomic rule of bevel-tip
+    // needles (Webster et al. 2006), the front moving on by what the tip advanced.
+    if (mPinned) { // bone holds the tip: nothing is cut
+        mLastHeading = mTipDirection;
+        return;
     }
-    mCutAhead = mTipDirection;
+    const bool cut =
+        mTrack.cut(tipTau, mLastHeading, mTipDirection, [&](const Vec3d& p) { return mFoundation->modulusAt(p); });
+    if (cut) mBevelModulus = mFoundation->bevelModulusAt(mTrack.front());
+    mLastHeading = mTipDirection;
 }
 
 } // namespace voxhap::haptic

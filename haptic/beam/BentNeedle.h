@@ -9,10 +9,14 @@
 /// solve O(n); nothing allocates (every buffer is sized for the needle's length
 /// at construction), nothing throws.
 ///
-/// The state between ticks is the cut track (CutTrack.h) and the entry point;
-/// the beam itself is solved afresh from them and the hub's pose, so a hand that
-/// moves the hub loads the shaft against the track. Small-slope theory, in the
-/// hub's frame: the deflection w(x) is lateral to the hub's axis, x along it.
+/// The state between ticks is the cut track (CutTrack.h), in the tissue's rest
+/// frame: the tissue rests on it and on its straight continuation ahead of the
+/// cut front, so uncut tissue holds the tip from the first millimetre. The beam
+/// is solved afresh from the track and the hub's pose, so a hand that moves the
+/// hub loads the shaft against the track; then the front advances along the tip's
+/// heading by what the tip advanced (the tip cuts where it points, Webster et al.
+/// 2006), so the path converges as the step shrinks (§9.3). Small-slope theory,
+/// in the hub's frame: the deflection w(x) is lateral to the hub's axis, x along it.
 #pragma once
 
 #include "haptic/beam/CutTrack.h"
@@ -77,6 +81,14 @@ public:
     /// @brief The needle's roll about its axis [rad]: the bevel turns with it (a
     /// half turn flips it, physics.md §9.3).
     void setRoll(double rollRad) noexcept { mRoll = std::isfinite(rollRad) ? rollRad : mRoll; }
+    /// @brief Bone holds the tip at @p at [mm, LPS] (physics.md §9.5): from the next
+    /// update() the beam's tip node is pinned there across the shaft, the bevel cuts
+    /// nothing and presses on nothing, and the track does not grow. A non-finite
+    /// point is ignored.
+    void pinTip(const Vec3d& at) noexcept;
+    /// @brief The tip is free again (contact with the bone ended).
+    void releaseTip() noexcept { mPinned = false; }
+    bool tipPinned() const noexcept { return mPinned; }
 
     /// @brief Solve for the hub at @p hub, the shaft leaving it along @p direction.
     /// @return false (and a straight needle) on a non-finite pose or a failed solve.
@@ -109,7 +121,6 @@ public:
 private:
     void straight() noexcept;
     void extendTrack(double tipTau) noexcept;
-    Vec3d nodeAt(double x) const noexcept;
 
     BeamParams mParams;
     WinklerBeam mBeam;
@@ -119,14 +130,17 @@ private:
     double mRoll = 0.0;
     // This tick's frame: hub, axis and the lateral pair.
     Vec3d mHub{0, 0, 0}, mU{0, 0, 1}, mE1{1, 0, 0}, mE2{0, 1, 0};
-    Vec3d mCutAhead{0, 0, 1}; ///< where uncut tissue ahead of the track is cut: the last tip direction
     std::vector<Vec3d> mNodes;
     std::vector<double> mAxial; ///< each node's distance along the axis (the bent shaft is shorter) [mm]
     Vec3d mTipDirection{0, 0, 1};
     Vec3d mBevelForce{0, 0, 0}, mHubForce{0, 0, 0}, mHubTorque{0, 0, 0};
     double mInserted = 0.0;
     double mHubStiffness = 0.0;
-    double mScale = 1.0; ///< this tick's solution, scaled to kMaxSlope when steeper
+    double mScale = 1.0;        ///< this tick's solution, scaled to kMaxSlope when steeper
+    double mBevelModulus = 0.0; ///< k the bevel presses on: the tissue at the cut front (0 in bone)
+    bool mPinned = false;       ///< bone holds the tip at mPin
+    Vec3d mPin{0, 0, 0};
+    Vec3d mLastHeading{0, 0, 1}; ///< the tip's direction at the last solve: where the next cut's heading starts
 };
 
 } // namespace voxhap::haptic

@@ -18,28 +18,30 @@ CutTrack::CutTrack(double stepMm, double maxLengthMm) : mStep(stepMm)
     mModulus.assign(n, 0.0);
 }
 
-void CutTrack::start(const Vec3d& entry, double modulusNPerMm2) noexcept
+void CutTrack::start(const Vec3d& entry, double modulusNPerMm2, const Vec3d& ahead) noexcept
 {
     mPoints[0] = entry;
     mModulus[0] = modulusNPerMm2;
     mCount = 1;
+    mFront = entry;
+    mFrontTau = 0.0;
+    mFrontModulus = modulusNPerMm2;
+    mAhead = ahead;
 }
 
-bool CutTrack::append(const Vec3d& p, double modulusNPerMm2) noexcept
+void CutTrack::sample(double tau, Vec3d& p, double& k) const noexcept
 {
-    if (mCount >= capacity()) return false;
-    mPoints[std::size_t(mCount)] = p;
-    mModulus[std::size_t(mCount)] = modulusNPerMm2;
-    ++mCount;
-    return true;
-}
-
-void CutTrack::sample(double tau, const Vec3d& ahead, Vec3d& p, double& k) const noexcept
-{
+    if (tau >= mFrontTau) {
+        p = mFront + (tau - mFrontTau) * mAhead;
+        k = mFrontModulus;
+        return;
+    }
     const double end = lengthMm();
-    if (tau >= end) {
-        p = mPoints[std::size_t(mCount - 1)] + (tau - end) * ahead;
-        k = mModulus[std::size_t(mCount - 1)];
+    if (tau >= end) { // between the deepest point and the front: one straight cut
+        const double f = mFrontTau > end ? (tau - end) / (mFrontTau - end) : 0.0;
+        const std::size_t last = std::size_t(mCount - 1);
+        p = mPoints[last] + f * (mFront - mPoints[last]);
+        k = mModulus[last] + f * (mFrontModulus - mModulus[last]);
         return;
     }
     const double s = std::max(0.0, tau) / mStep;

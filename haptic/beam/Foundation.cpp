@@ -24,18 +24,30 @@ public:
 
     double modulusAt(const Vec3d& world) noexcept override
     {
-        if (!world.allFinite()) return 0.0;
-        const openvdb::Vec3d i = mLabels->transform().worldToIndex(volume::toVdb(world));
-        // Beyond the int range of a coordinate the point is far outside any volume.
-        constexpr double kFar = 1e9;
-        if (!(std::abs(i[0]) < kFar && std::abs(i[1]) < kFar && std::abs(i[2]) < kFar)) return 0.0;
-        const int label = mAccessor.getValue(openvdb::Coord::round(i));
-        if (static_cast<unsigned>(label) >= static_cast<unsigned>(kMaxLabels)) return 0.0;
-        return mField.perLabel()[std::size_t(label)].foundationNPerMm2;
+        const LabelMaterial* m = at(world);
+        return m ? m->foundationNPerMm2 : 0.0;
+    }
+    double bevelModulusAt(const Vec3d& world) noexcept override
+    {
+        const LabelMaterial* m = at(world);
+        return m && !m->rigid ? m->foundationNPerMm2 : 0.0;
     }
     std::unique_ptr<Foundation> clone() const override { return std::make_unique<LabelFoundation>(*this); }
 
 private:
+    /// The tissue whose voxel holds @p world; null in air, outside the volume, or far.
+    const LabelMaterial* at(const Vec3d& world) noexcept
+    {
+        if (!world.allFinite()) return nullptr;
+        const openvdb::Vec3d i = mLabels->transform().worldToIndex(volume::toVdb(world));
+        // Beyond the int range of a coordinate the point is far outside any volume.
+        constexpr double kFar = 1e9;
+        if (!(std::abs(i[0]) < kFar && std::abs(i[1]) < kFar && std::abs(i[2]) < kFar)) return nullptr;
+        const int label = mAccessor.getValue(openvdb::Coord::round(i));
+        if (static_cast<unsigned>(label) >= static_cast<unsigned>(kMaxLabels)) return nullptr;
+        return &mField.perLabel()[std::size_t(label)];
+    }
+
     static const detail::LabelGrid& checked(const detail::LabelGrid::ConstPtr& g)
     {
         if (!g) throw ValueError("needle bending: the material field has no tissue labels to read the foundation from");

@@ -45,6 +45,7 @@ void WinklerBeam::begin() noexcept
 {
     std::copy(mBase.begin(), mBase.end(), mBand.begin());
     mFactored = false;
+    mPinned = false;
     for (auto& r : mRhs) std::fill(r.begin(), r.end(), 0.0);
     mStartFoundation = Local{};
     mStartLoad = {};
@@ -82,6 +83,28 @@ void WinklerBeam::addEndForce(double f1, double f2) noexcept
     const auto w = std::size_t(2 * mElements - mOffset);
     mRhs[0][w] += f1;
     mRhs[1][w] += f2;
+}
+
+void WinklerBeam::pinEnd(double w1, double w2) noexcept
+{
+    // The end's deflection is unknown g; its couplings move to the right-hand side
+    // (rows g − B .. g + 1 of the symmetric band) and its row becomes w_g = value.
+    constexpr int W = kBand + 1;
+    const int g = 2 * mElements - mOffset;
+    const double value[2] = {w1, w2};
+    for (int j = 1; j <= kBand && g - j >= 0; ++j) {
+        double& a = mBand[std::size_t(g * W + j)]; // A(g, g − j)
+        for (std::size_t c = 0; c < 2; ++c) mRhs[c][std::size_t(g - j)] -= a * value[c];
+        a = 0.0;
+    }
+    if (g + 1 < mUnknowns) {
+        double& a = mBand[std::size_t((g + 1) * W + 1)]; // A(g + 1, g)
+        for (std::size_t c = 0; c < 2; ++c) mRhs[c][std::size_t(g + 1)] -= a * value[c];
+        a = 0.0;
+    }
+    mBand[std::size_t(g * W)] = 1.0;
+    for (std::size_t c = 0; c < 2; ++c) mRhs[c][std::size_t(g)] = value[c];
+    mPinned = true;
 }
 
 bool WinklerBeam::solve() noexcept
@@ -141,6 +164,7 @@ double WinklerBeam::startTranslationStiffness() noexcept
     std::fill(mScratch.begin(), mScratch.end(), 0.0);
     mScratch[0] = -k(2, 0);
     mScratch[1] = -k(3, 0);
+    if (mPinned && mElements == 1) mScratch[0] = 0.0; // the pinned end stays where it is held
     solveBand<kBand>(mBand.data(), mUnknowns, mScratch.data());
     const double stiffness = k(0, 0) + k(0, 2) * mScratch[0] + k(0, 3) * mScratch[1];
     return std::isfinite(stiffness) ? std::max(0.0, stiffness) : 0.0;

@@ -40,6 +40,10 @@ public:
     template <typename Sample> void addFoundation(double fromMm, Sample&& sample) noexcept;
     /// @brief Add a lateral force (f1, f2) [N] at the end x = L.
     void addEndForce(double f1, double f2) noexcept;
+    /// @brief Hold the end x = L at the lateral position (w1, w2) [mm], its slope free
+    /// (a pin: bone holding the tip, physics.md §9.5). After the foundation and the
+    /// loads of this load case, before solve(); exact (the unknown is eliminated).
+    void pinEnd(double w1, double w2) noexcept;
     /// @brief Factor and solve. @return false (deflections zero) if the matrix is
     /// not positive definite, as a free beam without foundation, or not finite.
     bool solve() noexcept;
@@ -75,6 +79,7 @@ private:
     std::array<std::vector<double>, 2> mRhs, mU; ///< per direction; mU over every node's (w, w')
     std::vector<double> mScratch;                ///< a third right-hand side (startTranslationStiffness)
     bool mFactored = false;                      ///< mBand holds this load case's factor
+    bool mPinned = false;                        ///< this load case holds the end (pinEnd)
     Local mStartFoundation{};                    ///< element 0's foundation, for the clamp's reaction
     std::array<std::array<double, 4>, 2> mStartLoad{};
 };

@@ -5,6 +5,7 @@
 #include "core/Errors.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace voxhap::haptic {
 
@@ -28,6 +29,9 @@ DeviceReading ReplayDevice::read(double t) noexcept
     const Vec3d d = a.direction + w * (b.direction - a.direction);
     r.direction = d.norm() > 0.0 ? Vec3d(d.normalized()) : a.direction;
     r.velocity = (b.tip - a.tip) / (b.timeS - a.timeS);
+    // The roll, where the session has one (a device that senses none recorded NaN).
+    r.rollRad =
+        std::isfinite(a.rollRad) && std::isfinite(b.rollRad) ? a.rollRad + w * (b.rollRad - a.rollRad) : a.rollRad;
     r.valid = true;
     return r;
 }

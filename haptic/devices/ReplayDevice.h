@@ -11,8 +11,8 @@
 
 namespace voxhap::haptic {
 
-/// @brief Plays a recorded session's poses in time (linear between records);
-/// readSessionPoses (haptic/servo/Session.h) reads them from a session.csv.
+/// @brief Plays a recorded session's poses and rolls in time (linear between
+/// records); readSessionPoses (haptic/servo/Session.h) reads them from a session.csv.
 class ReplayDevice final : public Device {
 public:
     /// @throw ValueError with fewer than two records

@@ -19,6 +19,7 @@ DeviceReading ScriptedDevice::read(double t) noexcept
     r.tip = mPath.origin + mScript.depthAt(t) * mPath.direction;
     r.direction = mPath.direction;
     r.velocity = mScript.speedAt(t) * mPath.direction;
+    r.rollRad = mScript.rollAt(t); // NaN for a script without a roll column
     r.valid = true;
     return r;
 }

@@ -322,6 +322,14 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
         lateral -= k * lateralOf(in.tip - mContactPoint, u);
         if (mTerms.bone.transient) f.transient = -mTerms.bone.params.forceN(t - mContactTimeS, mImpactMmPerS);
     }
+    // A bending needle's tip node is pinned where it met the bone (§9.5), from the
+    // next tick's solve (the beam is solved before the insertion state is known).
+    if (mBeam && onBone != mBeam->tipPinned()) {
+        if (onBone)
+            mBeam->pinTip(mContactPoint);
+        else
+            mBeam->releaseTip();
+    }
     // Lateral terms after skin entry: the Kelvin pivot correction (§1.4) at the hub,
     // toward the initial line; the trajectory lock ([S19], §6.2) at the tip.
     if (mTerms.pivot.on && mState.skinEntered()) {

@@ -98,6 +98,7 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     rec.force = f;
     rec.plungerN = out.plungerN;
     rec.plungerFraction = r.plungerFraction;
+    rec.rollRad = r.rollRad;
     rec.depthMm = out.tip.depthMm;
     rec.axialN = out.axialN;
     rec.layer = std::int16_t(out.tip.currentLayer());

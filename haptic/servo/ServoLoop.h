@@ -116,6 +116,7 @@ struct ServoRecord {
     Vec3d tip{0, 0, 0}, direction{0, 0, 1}, force{0, 0, 0};
     double plungerN = 0, depthMm = 0, axialN = 0;
     double plungerFraction = std::numeric_limits<double>::quiet_NaN(); ///< syringe emptied, 0..1 (DeviceReading)
+    double rollRad = std::numeric_limits<double>::quiet_NaN(); ///< the needle's roll (DeviceReading); NaN: none sensed
     std::int16_t layer = -1;
     LayerState state = LayerState::Intact;
     bool fault = false, critical = false;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace voxhap::haptic {
@@ -47,7 +48,7 @@ std::ostream& operator<<(std::ostream& o, TimeS t)
 
 constexpr const char* kSessionHeader =
     "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,axial_N,layer,state,"
-    "fault,critical,plunger_fraction\n";
+    "fault,critical,plunger_fraction,roll_deg\n";
 constexpr const char* kEventsHeader = "t_s,depth_mm,event,layer\n";
 
 /// A reference, not a copy: a recorder writes a row per tick and must not allocate for it.
@@ -64,7 +65,7 @@ void writeRecordRow(std::ostream& o, const ServoRecord& r, const std::vector<Lay
       << r.direction.y() << ',' << r.direction.z() << ',' << r.force.x() << ',' << r.force.y() << ',' << r.force.z()
       << ',' << r.plungerN << ',' << r.depthMm << ',' << r.axialN << ',' << layerNameOf(layers, r.layer) << ','
       << (r.layer >= 0 ? layerStateName(r.state) : "outside") << ',' << int(r.fault) << ',' << int(r.critical) << ','
-      << r.plungerFraction << '\n';
+      << r.plungerFraction << ',' << r.rollRad * (180.0 / kPi) << '\n';
 }
 
 void writeEventRow(std::ostream& o, const Event& e, const std::vector<Layer>& layers)
@@ -78,6 +79,41 @@ void writeSessionTrailer(std::ostream& o, long records, long dropped)
 {
     o << "# " << records << " records written, " << dropped
       << " dropped (the servo loop's record queue was full; the tick went on)\n";
+}
+
+/// The index of column @p name in the header @p header, or −1.
+int columnOf(const std::string& header, const std::string& name)
+{
+    std::istringstream h(header);
+    std::string column;
+    for (int i = 0; std::getline(h, column, ','); ++i) {
+        if (!column.empty() && column.back() == '\r') column.pop_back();
+        if (column == name) return i;
+    }
+    return -1;
+}
+
+/// Field @p i of the CSV line @p line (empty when the line is shorter).
+std::string field(const std::string& line, int i)
+{
+    std::istringstream l(line);
+    std::string f;
+    for (int k = 0; k <= i; ++k) {
+        if (!std::getline(l, f, ',')) return {};
+    }
+    if (!f.empty() && f.back() == '\r') f.pop_back();
+    return f;
+}
+
+/// A roll in degrees: a finite number, or nan or nothing (the device senses none).
+bool parseRollDeg(const std::string& text, double& deg)
+{
+    if (text.empty() || text == "nan" || text == "NaN" || text == "-nan") {
+        deg = std::numeric_limits<double>::quiet_NaN();
+        return true;
+    }
+    std::istringstream t(text);
+    return (t >> deg) && std::isfinite(deg) && (t >> std::ws).eof();
 }
 
 } // namespace
@@ -114,11 +150,17 @@ std::vector<ServoRecord> readSessionPoses(const fs::path& file)
     if (!std::getline(in, line) || line.rfind("t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z", 0) != 0) {
         throw ValueError(file.string() + ": line 1: not a voxhap session (header t_s,tip_x_mm,...)");
     }
+    // The roll, where the file has it (sessions written before it have no column):
+    // NaN, a device that senses none, or degrees.
+    const int rollColumn = columnOf(line, "roll_deg");
     std::vector<ServoRecord> out;
     int last = 1; // the last line read
     for (int n = 2; std::getline(in, line); ++n) {
         if (line.rfind('#', 0) == 0) continue; // a comment (the closing line states the counts)
         last = n;
+        double rollDeg = std::numeric_limits<double>::quiet_NaN();
+        if (rollColumn >= 0 && !parseRollDeg(field(line, rollColumn), rollDeg))
+            throw ValueError(file.string() + ": line " + std::to_string(n) + ": bad roll_deg (degrees, or nan)");
         std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream ls(line);
         ServoRecord r;
@@ -131,6 +173,7 @@ std::vector<ServoRecord> readSessionPoses(const fs::path& file)
         r.timeS = v[0];
         r.tip = Vec3d(v[1], v[2], v[3]);
         r.direction = Vec3d(v[4], v[5], v[6]);
+        r.rollRad = degToRad(rollDeg);
         if (!out.empty() && !(r.timeS > out.back().timeS)) {
             throw ValueError(file.string() + ": line " + std::to_string(n) + ": t_s must increase");
         }

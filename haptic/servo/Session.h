@@ -25,7 +25,8 @@ struct Session {
 };
 
 /// @brief session.csv: t_s, tip_x/y/z_mm, dir_x/y/z, fx/fy/fz_N, plunger_N, depth_mm,
-/// axial_N, layer, state, fault, critical, plunger_fraction; then events.csv: t_s, depth_mm, event,
+/// axial_N, layer, state, fault, critical, plunger_fraction, roll_deg (the device's roll, nan when it
+/// senses none); then events.csv: t_s, depth_mm, event,
 /// layer. Both written and flushed before either replaces an earlier session (OutputSet).
 void writeSession(const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
 
@@ -35,11 +36,13 @@ void writeSession(const Session& s, const std::vector<Layer>& layers, const std:
 void addSessionOutputs(
     OutputSet& out, const Session& s, const std::vector<Layer>& layers, const std::filesystem::path& dir);
 
-/// @brief Read the pose columns of a session.csv back (columns after dir_z are ignored).
+/// @brief Read the pose columns of a session.csv back, and the roll where the file has a
+/// roll_deg column (NaN otherwise, and for nan); the other columns are ignored.
 /// @throw IoError when the file cannot be opened; ValueError, one line naming the
 ///        file and the line, for a first line that is not the session header, a
-///        line whose first seven fields are not finite numbers, a t_s that does
-///        not increase, and a file of fewer than two records
+///        line whose first seven fields are not finite numbers, a roll_deg that is
+///        neither a finite number nor nan, a t_s that does not increase, and a file
+///        of fewer than two records
 std::vector<ServoRecord> readSessionPoses(const std::filesystem::path& file);
 
 TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers, const Vec3d& pathDirection,

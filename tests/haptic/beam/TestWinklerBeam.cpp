@@ -3,7 +3,8 @@
 /// @brief The bending needle's beam against closed forms (physics.md §9.2, §9.4,
 /// §7 R8): the band solve against Eigen's dense one, a cantilever under an end
 /// load (δ = FL³/3EI), a beam on a uniform Winkler foundation under an end load
-/// (Hetényi's semi-infinite form with λL ≥ 6, and the finite free–free form).
+/// (Hetényi's semi-infinite form with λL ≥ 6, and the finite free–free form), a
+/// propped cantilever (the end pinned).
 /// Each with a control where the rule it checks does not hold.
 
 #include "haptic/beam/BandedCholesky.h"
@@ -98,6 +99,43 @@ TEST(WinklerBeam, CantileverUnderAnEndLoadDeflectsFL3Over3EI)
     free.begin();
     free.addEndForce(f1, f2);
     EXPECT_FALSE(free.solve());
+}
+
+// A propped cantilever (physics.md §9.5, bone pinning the tip): the end held at δ
+// across the beam, its slope free. Closed form: w(x) = δ·x²·(3L − x)/(2L³), the
+// end's slope 3δ/(2L), the pin's force 3EI·δ/L³, which the clamp holds with a
+// moment of that force times L; a cubic, which Hermite elements reproduce exactly.
+TEST(WinklerBeam, PinnedEndIsAProppedCantilever)
+{
+    const double L = 60.0, d1 = 1.5, d2 = -0.4;
+    for (const int elements : {1, 6, 60}) {
+        WinklerBeam beam(elements, L, kEi, /*clampedStart=*/true);
+        beam.begin();
+        beam.addEndForce(0.7, 0.7); // a load at a pinned end goes into the pin
+        beam.pinEnd(d1, d2);
+        ASSERT_TRUE(beam.solve());
+        const double tol = kCantileverRelative * std::abs(d1);
+        EXPECT_NEAR(beam.deflection(elements, 0), d1, tol);
+        EXPECT_NEAR(beam.deflection(elements, 1), d2, tol);
+        EXPECT_NEAR(beam.slope(elements, 0), 1.5 * d1 / L, tol / L);
+        double w1 = 0.0, w2 = 0.0;
+        const double x = L / 3.0;
+        beam.deflectionAt(x, w1, w2);
+        EXPECT_NEAR(w1, d1 * x * x * (3.0 * L - x) / (2.0 * L * L * L), tol);
+        double r1 = 0.0, r2 = 0.0, m1 = 0.0, m2 = 0.0;
+        beam.startReaction(r1, r2, m1, m2);
+        const double pin = 3.0 * kEi * d1 / (L * L * L);
+        EXPECT_NEAR(r1, -pin, 1e-7 * std::abs(pin)) << elements;
+        EXPECT_NEAR(m1, -pin * L, 1e-7 * std::abs(pin) * L) << elements;
+        // The clamp moved sideways with the pinned end held: the same propped
+        // cantilever, 3EI/L³ per millimetre.
+        EXPECT_NEAR(beam.startTranslationStiffness(), 3.0 * kEi / (L * L * L), 1e-7 * kEi / (L * L * L)) << elements;
+    }
+    // Control: without the pin the unloaded beam stays on its axis.
+    WinklerBeam beam(6, L, kEi, /*clampedStart=*/true);
+    beam.begin();
+    ASSERT_TRUE(beam.solve());
+    EXPECT_EQ(beam.deflection(6, 0), 0.0);
 }
 
 /// Hetényi: a long beam on a Winkler foundation k under an end load P deflects

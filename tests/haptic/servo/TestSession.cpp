@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 
 /// The header writeSession writes (Session.h).
 const std::string kSessionHeader = "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,"
-                                   "axial_N,layer,state,fault,critical,plunger_fraction\n";
+                                   "axial_N,layer,state,fault,critical,plunger_fraction,roll_deg\n";
 
 class SessionFile : public test::TempDirTest {
 protected:
@@ -65,6 +65,27 @@ TEST_F(SessionFile, ReadsThePoseColumns)
     EXPECT_EQ(r[1].timeS, 0.001);
     EXPECT_EQ(r[1].tip, Vec3d(1.5, -2.5, 3.125));
     EXPECT_EQ(r[1].direction, Vec3d(0.0, -0.6, 0.8));
+}
+
+// A session written before the roll was recorded (no roll_deg column) reads as a
+// device without one; a roll that is not a number is refused with its line.
+TEST_F(SessionFile, TheRollColumnIsOptionalAndChecked)
+{
+    const std::string old = "t_s,tip_x_mm,tip_y_mm,tip_z_mm,dir_x,dir_y,dir_z,fx_N,fy_N,fz_N,plunger_N,depth_mm,"
+                            "axial_N,layer,state,fault,critical,plunger_fraction\n";
+    const std::vector<ServoRecord> r = readSessionPoses(write("old.csv", old + "0,0,0,0,0,0,1\n0.001,0,0,1,0,0,1\n"));
+    ASSERT_EQ(r.size(), 2u);
+    EXPECT_TRUE(std::isnan(r[0].rollRad) && std::isnan(r[1].rollRad));
+    const std::string rows = "0,0,0,0,0,0,1,0,0,0,0,0,0,,outside,0,0,nan,";
+    const std::vector<ServoRecord> turned = readSessionPoses(write("turned.csv",
+        kSessionHeader + rows +
+            "nan\n0.001,0,0,1,0,0,1,0,0,0,0,0,0,,outside,"
+            "0,0,nan,-90\n"));
+    EXPECT_TRUE(std::isnan(turned[0].rollRad));
+    EXPECT_EQ(turned[1].rollRad, degToRad(-90.0));
+    expectRefused("word.csv", kSessionHeader + rows + "nan\n0.001,0,0,1,0,0,1,0,0,0,0,0,0,,outside,0,0,nan,left\n",
+        "line 3: bad roll_deg");
+    expectRefused("inf.csv", kSessionHeader + rows + "1e999\n0.001,0,0,1,0,0,1\n", "line 2: bad roll_deg");
 }
 
 TEST_F(SessionFile, MissingFileIsRefusedNamingIt)
