@@ -22,8 +22,9 @@ namespace {
 /// the needle along it, the straight tip from depth @p from to @p to.
 class Push {
 public:
-    Push(const Vec3d& entry, const Vec3d& target, const DeflectionOptions& o)
-        : mEntry(entry), mTarget(target), mU((target - entry).normalized()), mDepth((target - entry).norm()), mO(o)
+    Push(const TrajectoryReport& path, const DeflectionOptions& o)
+        : mEntry(path.entry), mTarget(path.target), mU((path.target - path.entry).normalized()),
+          mDepth((path.target - path.entry).norm()), mO(o)
     {
     }
     double depth() const { return mDepth; }
@@ -35,16 +36,15 @@ public:
         needle.update(hub(needle, 0.0), mU);
         needle.enter(mEntry);
     }
-    /// Advance from @p from to @p to [mm]; returns where it stopped.
+    /// Advance from @p from to @p to [mm] in steps of at most stepMm; returns where it stopped.
     double advance(haptic::BentNeedle& needle, double from, double to) const
     {
-        double d = from;
-        while (d < to) {
-            d = std::min(to, d + (d < mO.fineDepthMm ? mO.fineStepMm : mO.stepMm));
-            needle.update(hub(needle, d), mU);
-        }
-        return d;
+        const int steps = int(std::ceil((to - from) / mO.stepMm - 1e-9));
+        for (int i = 1; i <= steps; ++i) needle.update(hub(needle, from + (to - from) * i / steps), mU);
+        return std::max(from, to);
     }
+    /// One solve with the hub held at depth @p d (after a turn: the tip's new heading).
+    void hold(haptic::BentNeedle& needle, double d) const { needle.update(hub(needle, d), mU); }
     BevelChoice result(const haptic::BentNeedle& needle, double orientationDeg, double turnMm) const
     {
         BevelChoice c;
@@ -70,15 +70,17 @@ std::optional<DeflectionPrediction> predictDeflection(
 {
     const haptic::Scene& scene = planner.scene();
     if (!scene.terms.bending.on) return std::nullopt;
-    const Push push(path.entry, path.target, o);
+    const Push push(path, o);
     DeflectionPrediction p;
     const double base = scene.needle.bevelOrientationDeg;
     std::vector<haptic::BentNeedle> ends; // each choice's needle at the target, in p.tried's order
     for (const double orientation : {base, base + 180.0}) {
         haptic::Needle n = scene.needle;
         n.bevelOrientationDeg = orientation;
-        haptic::BentNeedle needle(haptic::BeamParams::fromNeedle(n), haptic::makeLabelFoundation(planner.field()),
-            haptic::bevelReferenceAxis(path.target - path.entry));
+        haptic::BeamParams params = haptic::BeamParams::fromNeedle(n);
+        params.minNodeSpacingMm = std::max(params.minNodeSpacingMm, o.nodeSpacingMm);
+        haptic::BentNeedle needle(
+            params, haptic::makeLabelFoundation(planner.field()), haptic::bevelReferenceAxis(path.target - path.entry));
         push.start(needle);
         // One insertion without a turn; at each turn depth a copy branches off, is
         // turned half a turn and pushed on to the target (the prefix is shared).
@@ -89,6 +91,7 @@ std::optional<DeflectionPrediction> predictDeflection(
             d = push.advance(needle, d, turn);
             haptic::BentNeedle branch(needle);
             branch.setRoll(kPi);
+            push.hold(branch, d); // the turn is made in place, before the needle moves on
             (void)push.advance(branch, d, push.depth());
             turned.push_back(push.result(branch, orientation, turn));
             branches.push_back(std::move(branch));
@@ -113,7 +116,7 @@ std::optional<DeflectionPrediction> predictDeflection(
 void predictDeflections(const Planner& planner, std::vector<TrajectoryReport>& paths, const DeflectionOptions& o)
 {
     if (!planner.scene().terms.bending.on) return;
-    tbb::parallel_for(std::size_t(0), paths.size(),
+    tbb::parallel_for(std::size_t(0), std::min(paths.size(), o.maxPaths),
         [&](std::size_t i) { paths[i].deflection = predictDeflection(planner, paths[i], o); });
 }
 

@@ -14,16 +14,18 @@ namespace voxhap::planning {
 
 class Planner;
 
-/// @brief How finely the prediction runs.
+/// @brief How finely the prediction runs, and for how many paths (physics.md §9.6).
 struct DeflectionOptions {
-    /// Hub advance per solve [mm] over the first fineDepthMm, where the deflection is
-    /// made and the result depends on the step (physics.md §9.6) [chosen: within 1 %
-    /// of the servo's 0.01 mm ticks on the torso phantom]
-    double fineStepMm = 0.02;
-    double fineDepthMm = 15.0; ///< [mm]
-    double stepMm = 0.25;      ///< hub advance per solve beyond it [mm] [chosen: a quarter of the node spacing]
+    /// Hub advance per solve [mm] [chosen: the cut front's trapezoid rule keeps the
+    /// tip's path within 0.02 mm of its converged one at 1 mm steps, 80 mm into
+    /// muscle (physics.md §9.3)]
+    double stepMm = 1.0;
+    /// Needle per beam element [mm] [chosen: twice the servo's 1 mm, half its
+    /// solve; λh ≤ 0.15 in muscle for 18–22 G, where the elements' error goes as (λh)⁴]
+    double nodeSpacingMm = 2.0;
     double turnEveryMm = 5.0;  ///< depths of the half turn tried [mm] (every 5 mm)
     double turnFromMm = 5.0;   ///< the first of them [mm]
+    std::size_t maxPaths = 10; ///< only the first paths (a search's best ranked) are predicted
 };
 
 /// @brief Predict the deflection of @p path (entry → target) under the planner's
@@ -32,7 +34,8 @@ struct DeflectionOptions {
 std::optional<DeflectionPrediction> predictDeflection(
     const Planner& planner, const TrajectoryReport& path, const DeflectionOptions& options = {});
 
-/// @brief predictDeflection for each of @p paths, in parallel; fills their `deflection`.
+/// @brief predictDeflection for the first DeflectionOptions::maxPaths of @p paths, in
+/// parallel; fills their `deflection` (the others keep none).
 void predictDeflections(
     const Planner& planner, std::vector<TrajectoryReport>& paths, const DeflectionOptions& options = {});
 

@@ -78,7 +78,8 @@ BentNeedle::BentNeedle(const BentNeedle& o)
       mReference(o.mReference), mRoll(o.mRoll), mHub(o.mHub), mU(o.mU), mE1(o.mE1), mE2(o.mE2), mNodes(o.mNodes),
       mAxial(o.mAxial), mTipDirection(o.mTipDirection), mBevelForce(o.mBevelForce), mHubForce(o.mHubForce),
       mHubTorque(o.mHubTorque), mInserted(o.mInserted), mHubStiffness(o.mHubStiffness), mScale(o.mScale),
-      mBevelModulus(o.mBevelModulus), mPinned(o.mPinned), mPin(o.mPin), mLastHeading(o.mLastHeading)
+      mBevelModulus(o.mBevelModulus), mAheadModulus(o.mAheadModulus), mPinned(o.mPinned), mPin(o.mPin),
+      mLastHeading(o.mLastHeading)
 {
 }
 
@@ -93,7 +94,7 @@ void BentNeedle::enter(const Vec3d& entry) noexcept
 {
     if (!entry.allFinite()) return;
     mTrack.start(entry, mFoundation->modulusAt(entry), mU);
-    mBevelModulus = mFoundation->bevelModulusAt(entry);
+    mFoundation->tissueAt(entry, mAheadModulus, mBevelModulus);
     mLastHeading = mU;
 }
 
@@ -152,11 +153,18 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
 
     // The foundation over the inserted length; the shaft at x rests on the track at
     // arc length x − (L − inserted) below the skin (follow the leader, §9.3).
+    // The tissue where the tip now is, in the tissue's rest frame: past the front,
+    // on its uncut continuation. It holds the uncut stretch of the shaft and is what
+    // the bevel presses on (the tissue at the front lags the tip by a step, which
+    // made the path's error of the step's order where tissues change, §9.3).
+    const double uncut = inserted - mTrack.frontMm();
+    if (uncut > 0.0) mFoundation->tissueAt(mTrack.front() + uncut * mTrack.ahead(), mAheadModulus, mBevelModulus);
     mBeam.begin();
     const double from = length - inserted;
     mBeam.addFoundation(from, [&](double x, double& k, double& r1, double& r2) {
         Vec3d p;
         mTrack.sample(x - from, p, k);
+        if (x - from > mTrack.frontMm()) k = mAheadModulus;
         const Vec3d d = p - hub;
         r1 = d.dot(mE1);
         r2 = d.dot(mE2);
@@ -169,6 +177,10 @@ bool BentNeedle::update(const Vec3d& hub, const Vec3d& direction) noexcept
         const double b = mParams.bevelLengthMm;
         const double back = std::max(0.0, mTrack.frontMm() - inserted);
         const double contact = std::clamp((std::min(inserted, b) - back) / b, 0.0, 1.0);
+        // The tissue the bevel presses on is where the tip now is in the tissue's rest
+        // frame: past the front, along the uncut continuation (the tissue at the front
+        // itself lags a step behind the tip, which made the path's error of the step's
+        // order where tissues change).
         p = mBevelModulus * mParams.bevelFactorMm2 * contact;
     }
     const double phi = mParams.orientationRad + mRoll;
@@ -226,9 +238,7 @@ void BentNeedle::extendTrack(double tipTau) noexcept
         mLastHeading = mTipDirection;
         return;
     }
-    const bool cut =
-        mTrack.cut(tipTau, mLastHeading, mTipDirection, [&](const Vec3d& p) { return mFoundation->modulusAt(p); });
-    if (cut) mBevelModulus = mFoundation->bevelModulusAt(mTrack.front());
+    (void)mTrack.cut(tipTau, mLastHeading, mTipDirection, [&](const Vec3d& p) { return mFoundation->modulusAt(p); });
     mLastHeading = mTipDirection;
 }
 

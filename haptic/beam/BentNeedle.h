@@ -137,7 +137,8 @@ private:
     double mInserted = 0.0;
     double mHubStiffness = 0.0;
     double mScale = 1.0;        ///< this tick's solution, scaled to kMaxSlope when steeper
-    double mBevelModulus = 0.0; ///< k the bevel presses on: the tissue at the cut front (0 in bone)
+    double mBevelModulus = 0.0; ///< k the bevel presses on: the tissue at the tip (0 in bone)
+    double mAheadModulus = 0.0; ///< k of the uncut tissue at the tip
     bool mPinned = false;       ///< bone holds the tip at mPin
     Vec3d mPin{0, 0, 0};
     Vec3d mLastHeading{0, 0, 1}; ///< the tip's direction at the last solve: where the next cut's heading starts

@@ -27,10 +27,11 @@ public:
         const LabelMaterial* m = at(world);
         return m ? m->foundationNPerMm2 : 0.0;
     }
-    double bevelModulusAt(const Vec3d& world) noexcept override
+    void tissueAt(const Vec3d& world, double& k, double& bevelK) noexcept override
     {
         const LabelMaterial* m = at(world);
-        return m && !m->rigid ? m->foundationNPerMm2 : 0.0;
+        k = m ? m->foundationNPerMm2 : 0.0;
+        bevelK = m && !m->rigid ? k : 0.0;
     }
     std::unique_ptr<Foundation> clone() const override { return std::make_unique<LabelFoundation>(*this); }
 

@@ -18,10 +18,10 @@ public:
     /// @brief k [N/mm²] at @p world [mm, LPS]; 0 in air and outside the volume.
     /// Never throws or allocates.
     virtual double modulusAt(const Vec3d& world) noexcept = 0;
-    /// @brief k [N/mm²] of the tissue a bevel cutting at @p world presses on (§9.3):
-    /// modulusAt(), but 0 in rigid tissue (bone), which the needle meets as
-    /// contact, not by cutting (§1.3). Never throws or allocates.
-    virtual double bevelModulusAt(const Vec3d& world) noexcept { return modulusAt(world); }
+    /// @brief At @p world: @p k = modulusAt(), and @p bevelK, the modulus a bevel
+    /// cutting there presses on (§9.3): k, but 0 in rigid tissue (bone), which the
+    /// needle meets as contact, not by cutting (§1.3). Never throws or allocates.
+    virtual void tissueAt(const Vec3d& world, double& k, double& bevelK) noexcept { k = bevelK = modulusAt(world); }
     /// @brief An independent copy (its own grid accessors) for another model.
     virtual std::unique_ptr<Foundation> clone() const = 0;
 };
