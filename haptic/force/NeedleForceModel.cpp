@@ -323,10 +323,13 @@ void NeedleForceModel::needleTerms(const NeedleInput& in, double t, double dt, d
         if (mTerms.bone.transient) f.transient = -mTerms.bone.params.forceN(t - mContactTimeS, mImpactMmPerS);
     }
     // A bending needle's tip node is pinned where it met the bone (§9.5), from the
-    // next tick's solve (the beam is solved before the insertion state is known).
-    if (mBeam && onBone != mBeam->tipPinned()) {
-        if (onBone)
-            mBeam->pinTip(mContactPoint);
+    // next tick's solve (the beam is solved before the insertion state is known);
+    // the tip stops on bone whether its contact force is rendered (§1.3) or the bone
+    // is a layer of the force table the tip pushes on ([LP], §4).
+    const bool held = tipInBone(tip, layers);
+    if (mBeam && held != mBeam->tipPinned()) {
+        if (held)
+            mBeam->pinTip(in.tip);
         else
             mBeam->releaseTip();
     }
