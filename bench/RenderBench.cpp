@@ -4,19 +4,19 @@
 
 #include "bench/SamplerBench.h" // for machineDescription
 #include "bench/Stats.h"
-#include "render/Display.h"
-#include "render/OrbitCamera.h"
-#include "render/RenderVolume.h"
-#include "render/Viewer.h"
-#include "render/VolumeView3d.h"
 #include "core/Errors.h"
-#include "volume/phantoms/Phantoms.h"
+#include "render/viewer/OrbitCamera.h"
+#include "render/viewer/Viewer.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
+#include "render/volume3d/VolumeView3d.h"
 #include "volume/Volume.h"
 #include "volume/VolumeFile.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <iomanip>
 #include <optional>
 #include <sstream>

@@ -7,7 +7,7 @@
 #include "bench/BlockDdaPeer.h"
 #include "bench/DenseField.h"
 #include "bench/PlaneCrossingSum.h"
-#include "render/Gnuplot.h"
+#include "render/plots/Gnuplot.h"
 #include "bench/VtkProbe.h"
 #include "haptic/shaft/ShaftIntegration.h"
 #include "core/Errors.h"

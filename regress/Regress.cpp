@@ -5,7 +5,7 @@
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 #include "core/Format.h"
-#include "render/Gnuplot.h"
+#include "render/plots/Gnuplot.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>

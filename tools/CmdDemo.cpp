@@ -8,16 +8,16 @@
 #include "tools/Cli.h"
 #include "tools/SimulationOutputs.h"
 
-#include "haptic/scene/ScriptedInsertion.h"
+#include "core/Errors.h"
 #include "haptic/scene/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
-#include "render/PlanOutputs.h"
+#include "render/outputs/PlanOutputs.h"
 #include "segmentation/Segmentation.h"
-#include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/io/VdbFile.h"
+#include "volume/phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
 

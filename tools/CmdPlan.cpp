@@ -3,21 +3,21 @@
 /// @brief `voxhap plan <volume> --target x,y,z [--entry x,y,z | --entries paths.mrk.json] [--top N] [--out dir]`:
 /// analyse a given path, or search candidate entries, and write the report,
 /// 3D Slicer markups, slice views with the paths and the predicted force–depth plot.
-/// The outputs are render/PlanOutputs.h's, which `voxhap demo` writes too.
+/// The outputs are render/outputs/PlanOutputs.h's, which `voxhap demo` writes too.
 
 #include "core/Format.h"
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
+#include "core/Errors.h"
 #include "planning/Deflection.h"
 #include "planning/Markups.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
-#include "render/Display.h"
-#include "render/PlanOutputs.h"
+#include "render/outputs/PlanOutputs.h"
+#include "render/volume3d/Display.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
-#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

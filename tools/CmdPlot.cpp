@@ -6,8 +6,8 @@
 
 #include "tools/Cli.h"
 
-#include "render/ForcePlot.h"
 #include "core/Errors.h"
+#include "render/plots/ForcePlot.h"
 
 #include <nlohmann/json.hpp>
 

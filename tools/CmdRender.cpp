@@ -8,14 +8,14 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
-#include "registration/Resample.h"
-#include "render/Display.h"
-#include "render/FusionViews.h"
-#include "render/ImageFile.h"
-#include "planning/PlanFile.h"
-#include "render/RenderVolume.h"
-#include "render/Snapshot.h"
 #include "core/Errors.h"
+#include "planning/PlanFile.h"
+#include "registration/Resample.h"
+#include "render/outputs/Snapshot.h"
+#include "render/raster/ImageFile.h"
+#include "render/slices/FusionViews.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
 
 #include <nlohmann/json.hpp>
 

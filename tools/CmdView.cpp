@@ -7,13 +7,13 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
-#include "haptic/igtl/PoseStream.h"
-#include "render/Display.h"
-#include "planning/PlanFile.h"
-#include "render/Viewer.h"
-#include "render/ViewerScript.h"
-#include "render/ViewerWindow.h"
 #include "core/Errors.h"
+#include "haptic/igtl/PoseStream.h"
+#include "planning/PlanFile.h"
+#include "render/viewer/Viewer.h"
+#include "render/viewer/ViewerScript.h"
+#include "render/viewer/ViewerWindow.h"
+#include "render/volume3d/Display.h"
 #include "volume/Volume.h"
 
 #include <nlohmann/json.hpp>

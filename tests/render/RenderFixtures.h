@@ -6,7 +6,7 @@
 /// convention, computed from the volume's bounds without the code under test.
 #pragma once
 
-#include "render/Image.h"
+#include "render/raster/Image.h"
 #include "volume/phantoms/Phantoms.h"
 #include "volume/phantoms/Rasterize.h"
 
