@@ -5,6 +5,7 @@
 #include "bench/SamplerBench.h" // for machineDescription
 #include "bench/Stats.h"
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "render/viewer/OrbitCamera.h"
 #include "render/viewer/Viewer.h"
 #include "render/views/RenderVolume.h"
@@ -12,7 +13,6 @@
 #include "render/volume3d/VolumeView3d.h"
 #include "volume/Volume.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <chrono>
 #include <cmath>

@@ -17,7 +17,7 @@
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 #include "volume/mr/T1Normalisation.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 #include <openvdb/tools/ChangeBackground.h>

@@ -14,11 +14,11 @@
 /// its 10 ranked paths (physics.md §9.6): their time ratio (target ≤ 1.15).
 
 #include "haptic/scene/Scene.h"
+#include "phantoms/Phantoms.h"
 #include "planning/Deflection.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include "bench/SamplerBench.h" // machineDescription
 #include "bench/Stats.h"

@@ -12,9 +12,9 @@
 /// Without ../shared/data the torso phantom (1 mm voxels) stands in, and the
 /// report says so.
 
+#include "phantoms/Phantoms.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include "bench/ProcessFigures.h"
@@ -30,9 +30,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {

@@ -8,7 +8,7 @@
 
 #include "regress/CaseRunner.h"
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
 

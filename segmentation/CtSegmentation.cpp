@@ -7,9 +7,9 @@
 
 #include "segmentation/CtSegmentation.h"
 
-#include "segmentation/Components.h"
-#include "segmentation/DistanceTransform.h"
-#include "segmentation/Morphology.h"
+#include "segmentation/lattice/Components.h"
+#include "segmentation/lattice/DistanceTransform.h"
+#include "segmentation/lattice/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"

@@ -14,7 +14,7 @@
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/materials/MaterialField.h"
 #include "core/Math.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <map>

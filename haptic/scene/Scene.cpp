@@ -9,7 +9,7 @@
 #include "core/Errors.h"
 #include "core/Format.h"
 #include "core/JsonFields.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <nlohmann/json.hpp>

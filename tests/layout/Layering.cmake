@@ -4,7 +4,7 @@
 # (checked here too)
 # (python/, the Python module, binds the physics core and planning; nothing includes it;
 # regress/ plots its failing cases with render/; nothing below tools includes it)
-# and inside volume/, haptic/ and render/ down their own orders
+# and inside volume/, segmentation/, haptic/ and render/ down their own orders
 # (below). A source of one folder may include headers of its own folder and of
 # the folders before it, never of one after it; a detail/ folder is its
 # parent's alone. Fails listing every offending file:line, and fails when a
@@ -46,9 +46,13 @@ endforeach()
 # included header that matches none is an offence.
 #
 # volume/: the root's Volume, grids, metadata and tissue table (used by all) <-
-# detail <- io <- mr <- dicom (dicom/detail is dicom's alone) <- phantoms <- the root's
+# detail <- io <- mr <- dicom (dicom/detail is dicom's alone) <- the root's
 # format dispatch and description (VolumeFile, VolumeInfo), which may include them all.
-set(volume_order "[^/]+$" "detail/" "io/" "mr/" "dicom/" "phantoms/" "(VolumeFile|VolumeInfo)\\.")
+set(volume_order "[^/]+$" "detail/" "io/" "mr/" "dicom/" "(VolumeFile|VolumeInfo)\\.")
+# segmentation/: lattice/, the dense working arrays and what runs on them
+# (distance transform, morphology, components), with the loops of detail/ <-
+# the root's labelling, imports and distance fields.
+set(segmentation_order "(lattice|detail)/" "[^/]+$")
 # haptic/: the root's shared types (device limits, events, layers, the needle)
 # <- materials <- shaft <- beam <- papers <- force <- scene <- servo <- devices <- igtl
 # (devices/ holds the drivers and the device factory the servo loop runs;
@@ -59,7 +63,7 @@ set(haptic_order "[^/]+$" "materials/" "shaft/" "beam/" "papers/" "force/" "scen
 # <- slices <- volume3d <- viewer <- outputs; render/ keeps no file at its root.
 set(render_order "raster/" "plots/" "(views|detail)/" "slices/" "volume3d/" "viewer/" "outputs/")
 # Every source of these libraries lies in a step of its order.
-set(inner volume haptic render)
+set(inner volume segmentation haptic render)
 
 # Rank of @p path in the libraries' order, into @p out.
 function(library_rank path out)

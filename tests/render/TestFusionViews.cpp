@@ -5,9 +5,9 @@
 /// and its CT tiles the CT; the bone edges appear where the CT has bone and
 /// nowhere on a CT without it.
 
+#include "phantoms/Phantoms.h"
 #include "render/slices/FusionViews.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

@@ -9,7 +9,7 @@
 /// its reference path ("layers") and named points ("landmarks").
 #pragma once
 
-#include "volume/phantoms/Rasterize.h"
+#include "phantoms/Rasterize.h"
 
 #include <optional>
 #include <string>

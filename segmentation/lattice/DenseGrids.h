@@ -4,7 +4,7 @@
 /// openvdb::tools::copyToDense / copyFromDense (threaded, layout i-fastest).
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/Grids.h"
 
 #include <cstdint>

@@ -3,7 +3,7 @@
 /// @brief Spine-biopsy torso: the organs of the [K01] simulator (physics.md §1.1)
 /// around a lumbar vertebra with a lytic lesion.
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include "core/Errors.h"
 

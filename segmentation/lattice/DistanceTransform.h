@@ -10,7 +10,7 @@
 /// in parallel.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 
 #include <vector>
 

@@ -2,7 +2,7 @@
 /// @file DistanceTransform.cpp
 /// @brief Felzenszwalb–Huttenlocher lower envelope, one axis at a time.
 
-#include "segmentation/DistanceTransform.h"
+#include "segmentation/lattice/DistanceTransform.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -2,7 +2,7 @@
 /// @file Rasterize.cpp
 /// @brief Leaf-by-leaf parallel sampling of an analytic classifier into sparse grids.
 
-#include "volume/phantoms/Rasterize.h"
+#include "phantoms/Rasterize.h"
 
 #include "core/Errors.h"
 #include "volume/Grids.h"

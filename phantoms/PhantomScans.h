@@ -7,7 +7,7 @@
 /// docs/reference.md "CT and MR fusion").
 #pragma once
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <cstdint>
 #include <filesystem>

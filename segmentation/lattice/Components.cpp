@@ -3,7 +3,7 @@
 /// @brief Run-based union-find labelling in parallel slabs, and breadth-first
 /// region growing with parallel steps.
 
-#include "segmentation/Components.h"
+#include "segmentation/lattice/Components.h"
 
 #include "segmentation/detail/VoxelLoops.h"
 

@@ -2,7 +2,7 @@
 /// @file Lattice.cpp
 /// @brief Lattice of a volume's index box.
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 
 #include <cmath>
 

@@ -17,7 +17,7 @@
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/io/VdbFile.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
 

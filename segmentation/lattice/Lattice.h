@@ -9,7 +9,7 @@
 /// slices — and it visits every voxel of the box several times, where a flat
 /// array with strides is the fastest layout there is. The sparse grids are
 /// read once into these arrays and the labels written back once
-/// (segmentation/DenseGrids.h).
+/// (segmentation/lattice/DenseGrids.h).
 #pragma once
 
 #include "core/Math.h"

@@ -4,7 +4,7 @@
 /// the tissue table, optional BMI scaling (physics.md §2.3, §3.3), and two
 /// vertebrae (cortical shell, cancellous core) beside and below the path.
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include "core/Errors.h"
 

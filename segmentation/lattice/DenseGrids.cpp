@@ -2,7 +2,7 @@
 /// @file DenseGrids.cpp
 /// @brief copyToDense / copyFromDense over the segmentation lattice.
 
-#include "segmentation/DenseGrids.h"
+#include "segmentation/lattice/DenseGrids.h"
 
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Prune.h>

@@ -10,7 +10,7 @@
 /// of thresholding squaredDistance() over the whole lattice.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 
 #include <functional>
 #include <vector>

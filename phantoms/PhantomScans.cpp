@@ -3,7 +3,7 @@
 /// @brief The MR scan of a phantom: the analytic classifier sampled through
 /// the inverse of the body's move, averaged per voxel, with Rician noise.
 
-#include "volume/phantoms/PhantomScans.h"
+#include "phantoms/PhantomScans.h"
 
 #include "core/AtomicFile.h"
 #include "core/Errors.h"

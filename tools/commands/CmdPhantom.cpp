@@ -5,12 +5,12 @@
 #include "tools/Cli.h"
 #include "tools/InfoReport.h"
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "core/AtomicFile.h"
 #include "volume/io/NrrdFile.h"
 #include "volume/mr/MrWeighting.h"
 #include "volume/io/VdbFile.h"
-#include "volume/phantoms/PhantomScans.h"
+#include "phantoms/PhantomScans.h"
 
 #include <nlohmann/json.hpp>
 
@@ -50,7 +50,7 @@ struct PhantomOptions {
 };
 
 /// `--scan-pair DIR`: the phantom as a CT and an MR of it, each as a scanner
-/// would export it (volume/phantoms/PhantomScans.h), for trying `voxhap fuse`
+/// would export it (phantoms/PhantomScans.h), for trying `voxhap fuse`
 /// against a known answer: DIR/ct.nrrd (hu), DIR/mr.nrrd with its BIDS sidecar
 /// (a T1 map at --field), and DIR/truth.txt, the true MR-from-CT map as a 4×4
 /// LPS matrix.

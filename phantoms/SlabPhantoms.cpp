@@ -3,7 +3,7 @@
 /// @brief The analytic regression phantoms: layered slab stack (physics.md §7 R1)
 /// and sphere in slab (§7 R5).
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include "core/Errors.h"
 

@@ -7,8 +7,8 @@
 #include "common/Tolerances.h"
 
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 

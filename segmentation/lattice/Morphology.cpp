@@ -2,10 +2,10 @@
 /// @file Morphology.cpp
 /// @brief Erosion and dilation by thresholding exact distance transforms.
 
-#include "segmentation/Morphology.h"
+#include "segmentation/lattice/Morphology.h"
 
-#include "segmentation/DistanceTransform.h"
 #include "segmentation/detail/VoxelLoops.h"
+#include "segmentation/lattice/DistanceTransform.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

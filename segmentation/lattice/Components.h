@@ -11,7 +11,7 @@
 /// voxel in memory order, as a serial flood fill in that order would give.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -3,9 +3,9 @@
 /// @brief The exact EDT against brute force on anisotropic voxels; morphology
 /// against the Euclidean ball it must give; hole filling and components.
 
-#include "segmentation/Components.h"
-#include "segmentation/DistanceTransform.h"
-#include "segmentation/Morphology.h"
+#include "segmentation/lattice/Components.h"
+#include "segmentation/lattice/DistanceTransform.h"
+#include "segmentation/lattice/Morphology.h"
 
 #include <gtest/gtest.h>
 

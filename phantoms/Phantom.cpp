@@ -3,7 +3,7 @@
 /// @brief What every phantom shares: rasterising the model and recording its
 /// layer table and landmarks in the volume's metadata.
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 namespace voxhap::volume {
 
