@@ -21,6 +21,7 @@ for bad arguments. Python 3 standard library only.
 
 import argparse
 import re
+import signal
 import sys
 from collections import defaultdict
 from pathlib import Path, PurePosixPath
@@ -165,4 +166,5 @@ def main(argv):
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `| head` ends the listing quietly, as other tools do
     sys.exit(main(sys.argv[1:]))
