@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file bench_plan.cpp
-/// @brief Candidate search throughput (issue 9 item 2: ≥ 20 000 fully analysed
+/// @brief Candidate search throughput (the planning target: ≥ 20 000 fully analysed
 /// candidates per second on 2 cores), 1 and 2 threads interleaved in one run
 /// (docs/benchmarks.md), with the clearance error of the same configuration
 /// against brute force.

@@ -2,7 +2,7 @@
 /// @file CmdAssess.cpp
 /// @brief `voxhap assess`: sessions' metrics.json against reference ranges, pass or
 /// flag per metric; a logistic-regression classifier trained on labelled metrics
-/// with cross-validated accuracy; simulated cohorts to try it on (issue 23 item 3).
+/// with cross-validated accuracy; simulated cohorts to try it on.
 ///
 /// Exit codes: 0 every judged metric of every session passed (or only training or
 /// a simulated cohort was asked for), 3 at least one metric was flagged, 1 bad

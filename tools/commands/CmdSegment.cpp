@@ -80,7 +80,7 @@ int run(const SegmentCliOptions& o)
         segmentation::ImportedLabels il;
         std::string mapFile;
         if (o.labels == "totalsegmentator") {
-            // TotalSegmentator's multilabel file or its folder of per-class masks (issue 23 item 8).
+            // TotalSegmentator's multilabel file or its folder of per-class masks.
             if (o.labelMap.empty())
                 throw UsageError("--labels totalsegmentator needs --label-map: TotalSegmentator's multilabel .nii.gz "
                                  "or its folder of per-class masks");
