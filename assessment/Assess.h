@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Assess.h
-/// @brief A session's metrics against reference ranges: pass or flag per metric
-/// (issue 23 item 3). The ranges are the scene's ("assessment" block of a scene
+/// @brief A session's metrics against reference ranges: pass or flag per metric.
+/// The ranges are the scene's ("assessment" block of a scene
 /// file) over the defaults (Metrics.h), each with its source.
 #pragma once
 

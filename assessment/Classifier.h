@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Classifier.h
-/// @brief A documented, simple classifier of sessions (issue 23 item 3): L2-
+/// @brief A documented, simple classifier of sessions: L2-
 /// regularised logistic regression on standardised metrics, fitted by Newton's
 /// method, with k-fold cross-validated accuracy and its Wilson 95 % interval.
 ///

@@ -23,7 +23,7 @@ const std::vector<DefaultRange>& defaultRanges()
     static const std::vector<DefaultRange> c{
         {"success", 1.0, std::nullopt,
             "haptic/Procedure.h: dura_intact [S19], reach_csf ([LP], [C]), reach_target within the scene's radius "
-            "[chosen] (issue 23 item 5)"},
+            "[chosen]"},
         {"success_dura_intact", std::nullopt, std::nullopt,
             "reported: an intact dura is the epidural procedure's rule, not every procedure's (a lumbar puncture "
             "must cross it); the senac-* scenes judge it ([S19] Sec. IV-A, physics.md §2.3)"},

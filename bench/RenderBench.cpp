@@ -4,19 +4,19 @@
 
 #include "bench/SamplerBench.h" // for machineDescription
 #include "bench/Stats.h"
-#include "render/Display.h"
-#include "render/OrbitCamera.h"
-#include "render/RenderVolume.h"
-#include "render/Viewer.h"
-#include "render/VolumeView3d.h"
 #include "core/Errors.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
+#include "render/viewer/OrbitCamera.h"
+#include "render/viewer/Viewer.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
+#include "render/volume3d/VolumeView3d.h"
 #include "volume/Volume.h"
 #include "volume/VolumeFile.h"
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <iomanip>
 #include <optional>
 #include <sstream>
@@ -336,7 +336,7 @@ void printRenderReport(std::ostream& os, const RenderReport& r)
        << " moving frames; stop->full: the drag released at the end of the orbit to the full-quality frame\n"
           "(a wheel zoom adds the viewer's 0.3 s settle time); |dgrey|: mean grey difference, moving against full,\n"
           "at the home camera; cpu s/frame: process CPU time (all threads), which the machine's load does not\n"
-          "inflate. Targets (issue 28 item 7): fps >= 10 while moving, full quality <= 1.5 s after.\n";
+          "inflate. Targets: fps >= 10 while moving, full quality <= 1.5 s after.\n";
     for (const OrbitCase& c : r.orbits) {
         if (c.chosen && c.trianglesFull > 0) {
             os << "critical surfaces, " << c.volume << ": " << c.trianglesFull << " triangles at full quality, "

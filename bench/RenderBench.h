@@ -6,7 +6,7 @@
 /// pane redrawn) and the frame after a streamed needle pose, the 3D pane in the viewer's default colour mode (CPU ray
 /// caster, VolumeView3d's Auto), on the real CT and on a 256³ phantom.
 ///
-/// And the interactive 3D pane (issue 28 item 7): a scripted orbit of a 512 ×
+/// And the interactive 3D pane: a scripted orbit of a 512 ×
 /// 375 3D view (azimuth steps of 360°/N, OrbitCamera) drawn at
 /// RenderQuality::Moving by each candidate moving path, frames/s median and
 /// 10th percentile; the full-quality frame at the same camera; and the time

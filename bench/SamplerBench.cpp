@@ -7,7 +7,7 @@
 #include "bench/BlockDdaPeer.h"
 #include "bench/DenseField.h"
 #include "bench/PlaneCrossingSum.h"
-#include "render/Gnuplot.h"
+#include "render/plots/Gnuplot.h"
 #include "bench/VtkProbe.h"
 #include "haptic/shaft/ShaftIntegration.h"
 #include "core/Errors.h"
@@ -17,7 +17,7 @@
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 #include "volume/mr/T1Normalisation.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 #include <openvdb/tools/ChangeBackground.h>
@@ -312,6 +312,387 @@ std::string machineDescription()
     return model + " (" + std::to_string(std::thread::hardware_concurrency()) + " cores)";
 }
 
+namespace {
+
+/// The workload @p name, with the reference of its voxel reading.
+Workload buildWorkload(
+    const std::string& name, const SamplerBenchOptions& o, std::mt19937& rng, const Progress& progress)
+{
+    progress(-1.0, "building the " + name + " workload");
+    Workload w;
+    if (name == "slab") {
+        w = slabWorkload(o, rng);
+    } else if (name == "torso") {
+        w = torsoWorkload(o, rng);
+    } else if (name == "ct" || name == "mr") {
+        w = name == "ct" ? ctWorkload(o, rng, progress) : mrWorkload(o, rng, progress);
+        exactVoxelReference(w);
+    } else {
+        throw ValueError("bench sampler: unknown workload '" + name + "' (slab, torso, ct, mr)");
+    }
+    return w;
+}
+
+/// Per path, per shaft: the exact value of one reading.
+using PathValues = std::vector<std::vector<double>>;
+
+/// References per shaft of @p paths: the voxel reading (@p pcReference) and
+/// the trilinear reading (@p tri).
+void shaftReferences(const std::vector<std::vector<Segment>>& paths,
+    const std::function<double(const Segment&)>& pcReference, haptic::ShaftIntegrator& tri, PathValues& refPc,
+    PathValues& refTri)
+{
+    for (const auto& path : paths) {
+        std::vector<double> pc, tr;
+        for (const auto& s : path) {
+            ShaftIntegral r;
+            tri.integrate(s, r);
+            pc.push_back(pcReference(s));
+            tr.push_back(r.dampingIntegral);
+        }
+        refPc.push_back(std::move(pc));
+        refTri.push_back(std::move(tr));
+    }
+}
+
+/// The march steps timed, as fractions of a voxel.
+constexpr double kStepFractions[] = {1.0, 0.5, 0.25, 0.1};
+
+/// The integrators' configurations, built once; labels off: the damping force
+/// only. Each keeps one result struct, as the servo does (NeedleForceModel's):
+/// a fresh one per batch zeroes 1 KiB of label arrays, which is not the
+/// strategy's cost.
+void addIntegratorConfigs(std::vector<Config>& configs, const haptic::MaterialField& field, double h)
+{
+    const auto add = [&](std::string label, std::string reading, haptic::IntegratorOptions io) {
+        io.trackLabels = false;
+        std::shared_ptr<haptic::ShaftIntegrator> integ = haptic::makeIntegrator(field, io);
+        configs.push_back({std::move(label), std::move(reading),
+            [integ, r = std::make_shared<ShaftIntegral>()](const std::vector<Segment>& path, std::vector<double>& out) {
+                for (std::size_t i = 0; i < path.size(); ++i) {
+                    integ->integrate(path[i], *r);
+                    out[i] = r->dampingIntegral;
+                }
+            }});
+    };
+    add("exact-voxel", "voxel", {haptic::Strategy::ExactVoxel});
+    add("exact-trilinear", "trilinear", {haptic::Strategy::ExactTrilinear});
+    auto peer = std::make_shared<BlockDdaPeer>(field);
+    configs.push_back(
+        {"peer: vdb block DDA", "voxel", [peer](const std::vector<Segment>& path, std::vector<double>& out) {
+             for (std::size_t i = 0; i < path.size(); ++i) out[i] = peer->integrate(path[i]);
+         }});
+    for (double f : kStepFractions) {
+        add("vdb march-nearest " + fraction(f), "voxel", {haptic::Strategy::MarchNearest, f * h});
+        add("vdb march-trilinear " + fraction(f), "trilinear", {haptic::Strategy::MarchTrilinear, f * h});
+    }
+}
+
+/// The profile: locked to each path's line before its batch is timed (the
+/// servo locks once after skin puncture); the lock itself is a row of its own.
+void addProfileConfigs(std::vector<Config>& configs, const haptic::MaterialField& field)
+{
+    for (double tol : {0.01, 0.05}) {
+        auto profile = std::make_shared<haptic::TrajectoryProfile>(field, tol, 110.0, false);
+        std::ostringstream label;
+        label << "profile tol " << tol << " mm";
+        configs.push_back({label.str(), "voxel",
+            [profile, r = std::make_shared<ShaftIntegral>()](
+                const std::vector<Segment>& path, std::vector<double>& out) {
+                for (std::size_t i = 0; i < path.size(); ++i) {
+                    profile->integrate(path[i], *r);
+                    out[i] = r->dampingIntegral;
+                }
+            },
+            [profile](const std::vector<Segment>& path) {
+                profile->lock(path.front().entry, path.front().tip - path.front().entry);
+            }});
+    }
+    auto profile = std::make_shared<haptic::TrajectoryProfile>(field, 0.05, 110.0, false);
+    configs.push_back({"profile lock (per path)", "build",
+        [profile](const std::vector<Segment>& path, std::vector<double>& out) {
+            profile->lock(path.front().entry, path.front().tip - path.front().entry);
+            std::fill(out.begin(), out.end(), std::nan(""));
+        },
+        {}, true});
+}
+
+/// The textbook baselines on a dense copy of the field: its marches, and VTK's
+/// probe filter when asked for.
+void addDenseConfigs(std::vector<Config>& configs, const haptic::MaterialField& field, double h,
+    const SamplerBenchOptions& o, const std::string& name, const Progress& progress)
+{
+    progress(-1.0, "copying the " + name + " workload to a dense array");
+    auto dense = std::make_shared<DenseField>(field);
+    for (double f : kStepFractions) {
+        for (bool trilinear : {false, true}) {
+            configs.push_back({std::string("dense march-") + (trilinear ? "trilinear " : "nearest ") + fraction(f),
+                trilinear ? "trilinear" : "voxel",
+                [dense, f, h, trilinear](const std::vector<Segment>& path, std::vector<double>& out) {
+                    for (std::size_t i = 0; i < path.size(); ++i) out[i] = dense->march(path[i], f * h, trilinear);
+                }});
+        }
+    }
+    if (!o.vtk) return;
+    auto probe = std::make_shared<VtkProbe>(*dense);
+    for (double f : {1.0, 0.25}) {
+        configs.push_back({"vtkProbeFilter " + fraction(f), "trilinear",
+            [probe, f, h](const std::vector<Segment>& path, std::vector<double>& out) {
+                for (std::size_t i = 0; i < path.size(); ++i) out[i] = probe->integrate(path[i], f * h);
+            }});
+    }
+}
+
+/// What the interleaved rounds measured, per configuration.
+struct Timings {
+    std::vector<std::vector<double>> batchNs; ///< per batch (path) of every round [ns per evaluation]
+    std::vector<std::vector<double>> values;  ///< of the first round, path after path
+};
+
+/// Interleaved rounds: every configuration, every path, then again.
+Timings timeInterleaved(const std::vector<Config>& configs, const Workload& w, const SamplerBenchOptions& o,
+    std::mt19937& rng, const Progress& progress)
+{
+    Timings t;
+    t.batchNs.resize(configs.size());
+    t.values.resize(configs.size());
+    std::vector<double> out(std::size_t(o.depths));
+    // Path by path, every configuration in a fresh random order: each one
+    // meets the caches as the others left them as often as any other does
+    // (a fixed order favours whoever follows a configuration that walked
+    // the same grid, and penalises whoever follows a dense march).
+    std::vector<std::vector<double>> valueByPath(configs.size() * w.paths.size());
+    std::vector<std::size_t> order(configs.size());
+    for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+    for (int rep = 0; rep < o.repetitions; ++rep) {
+        progress(-1.0, w.name + ": round " + std::to_string(rep + 1) + " of " + std::to_string(o.repetitions));
+        for (std::size_t p = 0; p < w.paths.size(); ++p) {
+            std::shuffle(order.begin(), order.end(), rng);
+            for (const std::size_t c : order) {
+                if (configs[c].prepare) configs[c].prepare(w.paths[p]);
+                const auto t0 = Clock::now();
+                configs[c].run(w.paths[p], out);
+                const auto t1 = Clock::now();
+                const double per = configs[c].perPath ? 1.0 : double(out.size());
+                t.batchNs[c].push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / per);
+                if (rep == 0) valueByPath[c * w.paths.size() + p] = out;
+            }
+        }
+    }
+    for (std::size_t c = 0; c < configs.size(); ++c) {
+        for (std::size_t p = 0; p < w.paths.size(); ++p) {
+            const auto& v = valueByPath[c * w.paths.size() + p];
+            t.values[c].insert(t.values[c].end(), v.begin(), v.end());
+        }
+    }
+    return t;
+}
+
+/// One row per configuration: its times, and its force errors at @p v0
+/// against both references.
+void addRows(SamplerReport& report, const Workload& w, const std::vector<Config>& configs, const Timings& t,
+    const PathValues& refPc, const PathValues& refTri, double v0)
+{
+    for (std::size_t c = 0; c < configs.size(); ++c) {
+        SamplerRow row;
+        row.workload = w.name;
+        row.config = configs[c].name;
+        row.reading = configs[c].reading;
+        row.nsMedian = percentile(t.batchNs[c], 0.5);
+        row.nsP99 = percentile(t.batchNs[c], 0.99);
+        if (configs[c].perPath) { // a build cost: no error to report
+            row.evaluations = long(w.paths.size());
+            report.rows.push_back(row);
+            continue;
+        }
+        double sumPc = 0, sumTri = 0;
+        std::size_t k = 0;
+        for (std::size_t p = 0; p < w.paths.size(); ++p) {
+            for (std::size_t i = 0; i < w.paths[p].size(); ++i, ++k) {
+                const double ePc = v0 * std::abs(t.values[c][k] - refPc[p][i]);
+                const double eTri = v0 * std::abs(t.values[c][k] - refTri[p][i]);
+                row.errMaxN = std::max(row.errMaxN, ePc);
+                row.errTriMaxN = std::max(row.errTriMaxN, eTri);
+                sumPc += ePc * ePc;
+                sumTri += eTri * eTri;
+            }
+        }
+        row.evaluations = long(k);
+        row.errRmsN = std::sqrt(sumPc / double(std::max<std::size_t>(k, 1)));
+        row.errTriRmsN = std::sqrt(sumTri / double(std::max<std::size_t>(k, 1)));
+        report.rows.push_back(row);
+    }
+}
+
+/// The row of @p config on @p workload (the first row if there is none).
+const SamplerRow& findRow(const SamplerReport& report, const std::string& workload, const std::string& config)
+{
+    for (const auto& r : report.rows) {
+        if (r.workload == workload && r.config == config) return r;
+    }
+    return report.rows.front();
+}
+
+/// The textbook baseline: the dense trilinear march at 1/4 voxel.
+const char* const kBaseline = "dense march-trilinear 1/4";
+
+/// How many times faster than the baseline @p config ran (median times).
+double overBaseline(const SamplerReport& report, const std::string& workload, const std::string& config)
+{
+    return findRow(report, workload, kBaseline).nsMedian / findRow(report, workload, config).nsMedian;
+}
+
+/// The values of configuration @p config (the first one's if there is none).
+const std::vector<double>& valuesOf(const std::vector<Config>& configs, const Timings& t, const std::string& config)
+{
+    for (std::size_t c = 0; c < configs.size(); ++c) {
+        if (configs[c].name == config) return t.values[c];
+    }
+    return t.values[0];
+}
+
+/// The locked profile's largest deviation from exact-voxel on the timed
+/// paths, as a force at @p v0 [N].
+double profileDeviation(const std::vector<Config>& configs, const Timings& t, double v0)
+{
+    double dev = 0;
+    const auto& prof = valuesOf(configs, t, "profile tol 0.05 mm");
+    const auto& exactValues = valuesOf(configs, t, "exact-voxel");
+    for (std::size_t k = 0; k < prof.size(); ++k) dev = std::max(dev, v0 * std::abs(prof[k] - exactValues[k]));
+    return dev;
+}
+
+/// Ratios in this run against the textbook baseline (dense trilinear march at
+/// 1/4 voxel). @p deviation: the profile's largest deviation from exact-voxel [N].
+void addSpeedNotes(SamplerReport& report, const Workload& w, double deviation)
+{
+    const std::string& name = w.name;
+    const SamplerRow& base = findRow(report, name, kBaseline);
+    const auto ratio = [&](const std::string& config) { return overBaseline(report, name, config); };
+    std::ostringstream n;
+    n << std::fixed << std::setprecision(1);
+    n << name << ": exact-voxel is " << ratio("exact-voxel") << "x faster than the dense trilinear march at 1/4 voxel"
+      << " (target >= 10x), max error " << std::setprecision(3) << std::scientific
+      << findRow(report, name, "exact-voxel").errMaxN << " N vs " << base.errMaxN << " N (" << w.pcReferenceName << ")";
+    report.notes.push_back(n.str());
+    n.str("");
+    n << std::fixed << std::setprecision(1) << name << ": exact-trilinear is " << ratio("exact-trilinear")
+      << "x faster than that march; error against the trilinear reading " << std::scientific << std::setprecision(3)
+      << findRow(report, name, "exact-trilinear").errTriMaxN << " N vs " << base.errTriMaxN << " N";
+    report.notes.push_back(n.str());
+    n.str("");
+    n << std::fixed << std::setprecision(1) << name << ": profile (tol 0.05 mm) is " << ratio("profile tol 0.05 mm")
+      << "x faster than that march (target >= 300x); max deviation from exact-voxel on the locked paths "
+      << std::scientific << std::setprecision(3);
+    n << deviation << " N (target <= 1e-6 N)";
+    report.notes.push_back(n.str());
+}
+
+/// The peer: same grid, same segments; exact-voxel must take <= 0.8x its time
+/// and agree to 1e-12 relative (the sums differ only by round-off in the chords).
+/// Both are also held against the plane-crossing sum in long double of the same
+/// index-space segment (no walk): where the two differ, it says which one is
+/// off. Relative differences are largest on shafts that cross a sliver of tissue
+/// (a sum far below β_max·length, while each crossing time carries round-off of
+/// the index coordinates), so they are also given relative to β_max·length.
+WorkloadSummary peerSummary(
+    const SamplerReport& report, const Workload& w, const std::vector<Config>& configs, const Timings& t)
+{
+    const PlaneCrossingSum planes(*w.field);
+    const auto& peerValues = valuesOf(configs, t, "peer: vdb block DDA");
+    const auto& exactValues = valuesOf(configs, t, "exact-voxel");
+    WorkloadSummary sum;
+    sum.workload = w.name;
+    std::size_t k2 = 0;
+    for (const auto& path : w.paths) {
+        for (const auto& seg : path) {
+            const double ref = planes.integrate(seg), bound = planes.largestValue() * (seg.tip - seg.entry).norm();
+            const auto rel = [](double x, double y) {
+                return x == y ? 0.0 : std::abs(x - y) / std::max(std::abs(y), 1e-300);
+            };
+            sum.sumsRelativeDifference = std::max(sum.sumsRelativeDifference, rel(peerValues[k2], exactValues[k2]));
+            sum.exactRelativeError = std::max(sum.exactRelativeError, rel(exactValues[k2], ref));
+            sum.peerRelativeError = std::max(sum.peerRelativeError, rel(peerValues[k2], ref));
+            if (bound > 0.0) {
+                sum.exactScaledError = std::max(sum.exactScaledError, std::abs(exactValues[k2] - ref) / bound);
+                sum.peerScaledError = std::max(sum.peerScaledError, std::abs(peerValues[k2] - ref) / bound);
+            }
+            ++k2;
+        }
+    }
+    sum.exactOverPeer =
+        findRow(report, w.name, "exact-voxel").nsMedian / findRow(report, w.name, "peer: vdb block DDA").nsMedian;
+    sum.marchOverExact = overBaseline(report, w.name, "exact-voxel");
+    sum.marchOverProfile = overBaseline(report, w.name, "profile tol 0.05 mm");
+    return sum;
+}
+
+/// The note of the peer summary @p sum.
+std::string peerNote(const WorkloadSummary& sum)
+{
+    std::ostringstream n;
+    n << std::fixed << std::setprecision(2) << sum.workload << ": exact-voxel takes " << sum.exactOverPeer
+      << "x the time of the two-level OpenVDB block DDA peer (target <= 0.8x); largest relative difference of "
+         "their sums "
+      << std::scientific << std::setprecision(2) << sum.sumsRelativeDifference
+      << " (target <= 1e-12); against the plane-crossing sum in long double, exact-voxel " << sum.exactRelativeError
+      << ", peer " << sum.peerRelativeError << " relative (" << sum.exactScaledError << " and " << sum.peerScaledError
+      << " of beta_max x length)";
+    return n.str();
+}
+
+/// RMS, 99th percentile and maximum of @p e.
+void errorStats(const std::vector<double>& e, double& rms, double& p99, double& max)
+{
+    double sq = 0;
+    for (double x : e) sq += x * x;
+    rms = std::sqrt(sq / double(std::max<std::size_t>(e.size(), 1)));
+    p99 = percentile(e, 0.99);
+    max = e.empty() ? 0.0 : *std::max_element(e.begin(), e.end());
+}
+
+/// Path-based fidelity (in the manner of Mastmeyer et al. 2017): many more
+/// random paths, untimed, each strategy against the exact reference of its
+/// reading and against the exact trilinear reading.
+void addFidelityRows(SamplerReport& report, const Workload& w, const std::vector<Config>& configs,
+    haptic::ShaftIntegrator& tri, const SamplerBenchOptions& o, const Progress& progress)
+{
+    if (o.fidelityPaths <= 0 || !w.morePaths) return;
+    const double v0 = o.speedMmPerS;
+    progress(-1.0, w.name + ": fidelity on " + std::to_string(o.fidelityPaths) + " paths");
+    std::mt19937 fidelityRng(20261125);
+    const auto fpaths = w.morePaths(o.fidelityPaths, o.fidelityDepths, fidelityRng);
+    PathValues refVoxel, refTrilinear;
+    shaftReferences(fpaths, w.pcReference, tri, refVoxel, refTrilinear);
+    std::vector<double> got(std::size_t(o.fidelityDepths));
+    for (const Config& cfg : configs) {
+        if (cfg.perPath || cfg.name.rfind("dense", 0) == 0 || cfg.name.rfind("vtk", 0) == 0) continue;
+        std::vector<double> own, vsTri;
+        for (std::size_t p = 0; p < fpaths.size(); ++p) {
+            if (cfg.prepare) cfg.prepare(fpaths[p]);
+            got.resize(fpaths[p].size());
+            cfg.run(fpaths[p], got);
+            for (std::size_t i = 0; i < got.size(); ++i) {
+                const double ref = cfg.reading == "trilinear" ? refTrilinear[p][i] : refVoxel[p][i];
+                own.push_back(v0 * std::abs(got[i] - ref));
+                vsTri.push_back(v0 * std::abs(got[i] - refTrilinear[p][i]));
+            }
+        }
+        FidelityRow f;
+        f.workload = w.name;
+        f.config = cfg.name;
+        f.reading = cfg.reading;
+        f.paths = long(fpaths.size());
+        f.evaluations = long(own.size());
+        f.nsMedian = findRow(report, w.name, cfg.name).nsMedian;
+        errorStats(own, f.rmsN, f.p99N, f.maxN);
+        errorStats(vsTri, f.triRmsN, f.triP99N, f.triMaxN);
+        report.fidelity.push_back(f);
+    }
+}
+
+} // namespace
+
 SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& progress)
 {
     SamplerReport report;
@@ -319,312 +700,27 @@ SamplerReport runSamplerBench(const SamplerBenchOptions& o, const Progress& prog
     report.options = o;
     std::mt19937 rng(20261122);
     for (const std::string& name : o.workloads) {
-        progress(-1.0, "building the " + name + " workload");
-        Workload w;
-        if (name == "slab") {
-            w = slabWorkload(o, rng);
-        } else if (name == "torso") {
-            w = torsoWorkload(o, rng);
-        } else if (name == "ct" || name == "mr") {
-            w = name == "ct" ? ctWorkload(o, rng, progress) : mrWorkload(o, rng, progress);
-            exactVoxelReference(w);
-        } else {
-            throw ValueError("bench sampler: unknown workload '" + name + "' (slab, torso, ct, mr)");
-        }
+        const Workload w = buildWorkload(name, o, rng, progress);
         const double h = w.voxelMm, v0 = o.speedMmPerS;
         const haptic::MaterialField& field = *w.field;
-
-        // References per shaft: the voxel reading and the trilinear reading.
-        std::vector<std::vector<double>> refPc, refTri;
+        PathValues refPc, refTri;
         auto tri = haptic::makeIntegrator(field, {haptic::Strategy::ExactTrilinear, 0.1, false});
-        for (const auto& path : w.paths) {
-            std::vector<double> pc, tr;
-            for (const auto& s : path) {
-                ShaftIntegral r;
-                tri->integrate(s, r);
-                pc.push_back(w.pcReference(s));
-                tr.push_back(r.dampingIntegral);
-            }
-            refPc.push_back(std::move(pc));
-            refTri.push_back(std::move(tr));
-        }
+        shaftReferences(w.paths, w.pcReference, *tri, refPc, refTri);
 
-        // The configurations. Integrators are built once; labels off: the damping force only.
-        // Each keeps one result struct, as the servo does (NeedleForceModel's): a fresh one
-        // per batch zeroes 1 KiB of label arrays, which is not the strategy's cost.
         std::vector<Config> configs;
-        std::vector<std::shared_ptr<haptic::ShaftIntegrator>> keep;
-        const auto add = [&](std::string label, std::string reading, haptic::IntegratorOptions io) {
-            io.trackLabels = false;
-            std::shared_ptr<haptic::ShaftIntegrator> integ = haptic::makeIntegrator(field, io);
-            keep.push_back(integ);
-            configs.push_back({std::move(label), std::move(reading),
-                [integ, r = std::make_shared<ShaftIntegral>()](
-                    const std::vector<Segment>& path, std::vector<double>& out) {
-                    for (std::size_t i = 0; i < path.size(); ++i) {
-                        integ->integrate(path[i], *r);
-                        out[i] = r->dampingIntegral;
-                    }
-                }});
-        };
-        add("exact-voxel", "voxel", {haptic::Strategy::ExactVoxel});
-        add("exact-trilinear", "trilinear", {haptic::Strategy::ExactTrilinear});
-        {
-            auto peer = std::make_shared<BlockDdaPeer>(field);
-            configs.push_back(
-                {"peer: vdb block DDA", "voxel", [peer](const std::vector<Segment>& path, std::vector<double>& out) {
-                     for (std::size_t i = 0; i < path.size(); ++i) out[i] = peer->integrate(path[i]);
-                 }});
-        }
-        const double fractions[] = {1.0, 0.5, 0.25, 0.1};
-        for (double f : fractions) {
-            add("vdb march-nearest " + fraction(f), "voxel", {haptic::Strategy::MarchNearest, f * h});
-            add("vdb march-trilinear " + fraction(f), "trilinear", {haptic::Strategy::MarchTrilinear, f * h});
-        }
-        // The profile: locked to each path's line before its batch is timed (the
-        // servo locks once after skin puncture); the lock itself is a row of its own.
-        for (double tol : {0.01, 0.05}) {
-            auto profile = std::make_shared<haptic::TrajectoryProfile>(field, tol, 110.0, false);
-            keep.push_back(profile);
-            std::ostringstream label;
-            label << "profile tol " << tol << " mm";
-            configs.push_back({label.str(), "voxel",
-                [profile, r = std::make_shared<ShaftIntegral>()](
-                    const std::vector<Segment>& path, std::vector<double>& out) {
-                    for (std::size_t i = 0; i < path.size(); ++i) {
-                        profile->integrate(path[i], *r);
-                        out[i] = r->dampingIntegral;
-                    }
-                },
-                [profile](const std::vector<Segment>& path) {
-                    profile->lock(path.front().entry, path.front().tip - path.front().entry);
-                }});
-        }
-        {
-            auto profile = std::make_shared<haptic::TrajectoryProfile>(field, 0.05, 110.0, false);
-            keep.push_back(profile);
-            configs.push_back({"profile lock (per path)", "build",
-                [profile](const std::vector<Segment>& path, std::vector<double>& out) {
-                    profile->lock(path.front().entry, path.front().tip - path.front().entry);
-                    std::fill(out.begin(), out.end(), std::nan(""));
-                },
-                {}, true});
-        }
-        progress(-1.0, "copying the " + name + " workload to a dense array");
-        auto dense = std::make_shared<DenseField>(field);
-        for (double f : fractions) {
-            for (bool trilinear : {false, true}) {
-                configs.push_back({std::string("dense march-") + (trilinear ? "trilinear " : "nearest ") + fraction(f),
-                    trilinear ? "trilinear" : "voxel",
-                    [dense, f, h, trilinear](const std::vector<Segment>& path, std::vector<double>& out) {
-                        for (std::size_t i = 0; i < path.size(); ++i) out[i] = dense->march(path[i], f * h, trilinear);
-                    }});
-            }
-        }
-        std::shared_ptr<VtkProbe> probe;
-        if (o.vtk) {
-            probe = std::make_shared<VtkProbe>(*dense);
-            for (double f : {1.0, 0.25}) {
-                configs.push_back({"vtkProbeFilter " + fraction(f), "trilinear",
-                    [probe, f, h](const std::vector<Segment>& path, std::vector<double>& out) {
-                        for (std::size_t i = 0; i < path.size(); ++i) out[i] = probe->integrate(path[i], f * h);
-                    }});
-            }
-        }
+        addIntegratorConfigs(configs, field, h);
+        addProfileConfigs(configs, field);
+        addDenseConfigs(configs, field, h, o, name, progress);
+        const Timings timings = timeInterleaved(configs, w, o, rng, progress);
+        addRows(report, w, configs, timings, refPc, refTri, v0);
 
-        // Interleaved rounds: every configuration, every path, then again.
-        std::vector<std::vector<double>> batchNs(configs.size());
-        std::vector<std::vector<double>> values(configs.size());
-        std::vector<double> out(std::size_t(o.depths));
-        // Path by path, every configuration in a fresh random order: each one
-        // meets the caches as the others left them as often as any other does
-        // (a fixed order favours whoever follows a configuration that walked
-        // the same grid, and penalises whoever follows a dense march).
-        std::vector<std::vector<double>> valueByPath(configs.size() * w.paths.size());
-        std::vector<std::size_t> order(configs.size());
-        for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
-        for (int rep = 0; rep < o.repetitions; ++rep) {
-            progress(-1.0, name + ": round " + std::to_string(rep + 1) + " of " + std::to_string(o.repetitions));
-            for (std::size_t p = 0; p < w.paths.size(); ++p) {
-                std::shuffle(order.begin(), order.end(), rng);
-                for (const std::size_t c : order) {
-                    if (configs[c].prepare) configs[c].prepare(w.paths[p]);
-                    const auto t0 = Clock::now();
-                    configs[c].run(w.paths[p], out);
-                    const auto t1 = Clock::now();
-                    const double per = configs[c].perPath ? 1.0 : double(out.size());
-                    batchNs[c].push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / per);
-                    if (rep == 0) valueByPath[c * w.paths.size() + p] = out;
-                }
-            }
-        }
-        for (std::size_t c = 0; c < configs.size(); ++c) {
-            for (std::size_t p = 0; p < w.paths.size(); ++p) {
-                const auto& v = valueByPath[c * w.paths.size() + p];
-                values[c].insert(values[c].end(), v.begin(), v.end());
-            }
-        }
-        for (std::size_t c = 0; c < configs.size(); ++c) {
-            SamplerRow row;
-            row.workload = name;
-            row.config = configs[c].name;
-            row.reading = configs[c].reading;
-            row.nsMedian = percentile(batchNs[c], 0.5);
-            row.nsP99 = percentile(batchNs[c], 0.99);
-            if (configs[c].perPath) { // a build cost: no error to report
-                row.evaluations = long(w.paths.size());
-                report.rows.push_back(row);
-                continue;
-            }
-            double sumPc = 0, sumTri = 0;
-            std::size_t k = 0;
-            for (std::size_t p = 0; p < w.paths.size(); ++p) {
-                for (std::size_t i = 0; i < w.paths[p].size(); ++i, ++k) {
-                    const double ePc = v0 * std::abs(values[c][k] - refPc[p][i]);
-                    const double eTri = v0 * std::abs(values[c][k] - refTri[p][i]);
-                    row.errMaxN = std::max(row.errMaxN, ePc);
-                    row.errTriMaxN = std::max(row.errTriMaxN, eTri);
-                    sumPc += ePc * ePc;
-                    sumTri += eTri * eTri;
-                }
-            }
-            row.evaluations = long(k);
-            row.errRmsN = std::sqrt(sumPc / double(std::max<std::size_t>(k, 1)));
-            row.errTriRmsN = std::sqrt(sumTri / double(std::max<std::size_t>(k, 1)));
-            report.rows.push_back(row);
-        }
-
-        // Ratios in this run against the textbook baseline (dense trilinear march at 1/4 voxel).
-        const auto find = [&](const std::string& config) -> const SamplerRow& {
-            for (const auto& r : report.rows) {
-                if (r.workload == name && r.config == config) return r;
-            }
-            return report.rows.front();
-        };
-        const SamplerRow& base = find("dense march-trilinear 1/4");
-        const auto ratio = [&](const std::string& config) { return base.nsMedian / find(config).nsMedian; };
-        std::ostringstream n;
-        n << std::fixed << std::setprecision(1);
-        n << name << ": exact-voxel is " << ratio("exact-voxel")
-          << "x faster than the dense trilinear march at 1/4 voxel"
-          << " (target >= 10x), max error " << std::setprecision(3) << std::scientific << find("exact-voxel").errMaxN
-          << " N vs " << base.errMaxN << " N (" << w.pcReferenceName << ")";
-        report.notes.push_back(n.str());
-        n.str("");
-        n << std::fixed << std::setprecision(1) << name << ": exact-trilinear is " << ratio("exact-trilinear")
-          << "x faster than that march; error against the trilinear reading " << std::scientific << std::setprecision(3)
-          << find("exact-trilinear").errTriMaxN << " N vs " << base.errTriMaxN << " N";
-        report.notes.push_back(n.str());
-        n.str("");
-        n << std::fixed << std::setprecision(1) << name << ": profile (tol 0.05 mm) is " << ratio("profile tol 0.05 mm")
-          << "x faster than that march (target >= 300x); max deviation from exact-voxel on the locked paths "
-          << std::scientific << std::setprecision(3);
-        const auto indexOf = [&](const std::string& config) {
-            for (std::size_t c = 0; c < configs.size(); ++c) {
-                if (configs[c].name == config) return c;
-            }
-            return std::size_t(0);
-        };
-        double dev = 0;
-        const auto& prof = values[indexOf("profile tol 0.05 mm")];
-        const auto& exactValues = values[indexOf("exact-voxel")];
-        for (std::size_t k2 = 0; k2 < prof.size(); ++k2) dev = std::max(dev, v0 * std::abs(prof[k2] - exactValues[k2]));
-        n << dev << " N (target <= 1e-6 N)";
-        report.notes.push_back(n.str());
-        // The peer: same grid, same segments; exact-voxel must take <= 0.8x its time
-        // and agree to 1e-12 relative (the sums differ only by round-off in the chords).
-        // Both are also held against the plane-crossing sum in long double of the same
-        // index-space segment (no walk): where the two differ, it says which one is
-        // off. Relative differences are largest on shafts that cross a sliver of tissue
-        // (a sum far below β_max·length, while each crossing time carries round-off of
-        // the index coordinates), so they are also given relative to β_max·length.
-        const PlaneCrossingSum planes(field);
-        const auto& peerValues = values[indexOf("peer: vdb block DDA")];
-        WorkloadSummary sum;
-        sum.workload = name;
-        std::size_t k2 = 0;
-        for (const auto& path : w.paths) {
-            for (const auto& seg : path) {
-                const double ref = planes.integrate(seg), bound = planes.largestValue() * (seg.tip - seg.entry).norm();
-                const auto rel = [](double x, double y) {
-                    return x == y ? 0.0 : std::abs(x - y) / std::max(std::abs(y), 1e-300);
-                };
-                sum.sumsRelativeDifference = std::max(sum.sumsRelativeDifference, rel(peerValues[k2], exactValues[k2]));
-                sum.exactRelativeError = std::max(sum.exactRelativeError, rel(exactValues[k2], ref));
-                sum.peerRelativeError = std::max(sum.peerRelativeError, rel(peerValues[k2], ref));
-                if (bound > 0.0) {
-                    sum.exactScaledError = std::max(sum.exactScaledError, std::abs(exactValues[k2] - ref) / bound);
-                    sum.peerScaledError = std::max(sum.peerScaledError, std::abs(peerValues[k2] - ref) / bound);
-                }
-                ++k2;
-            }
-        }
-        sum.exactOverPeer = find("exact-voxel").nsMedian / find("peer: vdb block DDA").nsMedian;
-        sum.marchOverExact = ratio("exact-voxel");
-        sum.marchOverProfile = ratio("profile tol 0.05 mm");
-        sum.profileDeviationN = dev;
+        const double deviation = profileDeviation(configs, timings, v0);
+        addSpeedNotes(report, w, deviation);
+        WorkloadSummary sum = peerSummary(report, w, configs, timings);
+        sum.profileDeviationN = deviation;
         report.summary.push_back(sum);
-        n.str("");
-        n << std::fixed << std::setprecision(2) << name << ": exact-voxel takes " << sum.exactOverPeer
-          << "x the time of the two-level OpenVDB block DDA peer (target <= 0.8x); largest relative difference of "
-             "their sums "
-          << std::scientific << std::setprecision(2) << sum.sumsRelativeDifference
-          << " (target <= 1e-12); against the plane-crossing sum in long double, exact-voxel " << sum.exactRelativeError
-          << ", peer " << sum.peerRelativeError << " relative (" << sum.exactScaledError << " and "
-          << sum.peerScaledError << " of beta_max x length)";
-        report.notes.push_back(n.str());
-
-        // Path-based fidelity (in the manner of Mastmeyer et al. 2017): many more
-        // random paths, untimed, each strategy against the exact reference of its
-        // reading and against the exact trilinear reading.
-        if (o.fidelityPaths > 0 && w.morePaths) {
-            progress(-1.0, name + ": fidelity on " + std::to_string(o.fidelityPaths) + " paths");
-            std::mt19937 fidelityRng(20261125);
-            const auto fpaths = w.morePaths(o.fidelityPaths, o.fidelityDepths, fidelityRng);
-            std::vector<double> refVoxel, refTrilinear;
-            for (const auto& path : fpaths) {
-                for (const auto& seg : path) {
-                    ShaftIntegral r;
-                    tri->integrate(seg, r);
-                    refVoxel.push_back(w.pcReference(seg));
-                    refTrilinear.push_back(r.dampingIntegral);
-                }
-            }
-            std::vector<double> got(std::size_t(o.fidelityDepths));
-            for (std::size_t c = 0; c < configs.size(); ++c) {
-                const Config& cfg = configs[c];
-                if (cfg.perPath || cfg.name.rfind("dense", 0) == 0 || cfg.name.rfind("vtk", 0) == 0) continue;
-                std::vector<double> own, vsTri;
-                for (std::size_t p = 0; p < fpaths.size(); ++p) {
-                    if (cfg.prepare) cfg.prepare(fpaths[p]);
-                    got.resize(fpaths[p].size());
-                    cfg.run(fpaths[p], got);
-                    for (std::size_t i = 0; i < got.size(); ++i) {
-                        const std::size_t k = p * std::size_t(o.fidelityDepths) + i;
-                        const double ref = cfg.reading == "trilinear" ? refTrilinear[k] : refVoxel[k];
-                        own.push_back(v0 * std::abs(got[i] - ref));
-                        vsTri.push_back(v0 * std::abs(got[i] - refTrilinear[k]));
-                    }
-                }
-                FidelityRow f;
-                f.workload = name;
-                f.config = cfg.name;
-                f.reading = cfg.reading;
-                f.paths = long(fpaths.size());
-                f.evaluations = long(own.size());
-                f.nsMedian = find(cfg.name).nsMedian;
-                const auto stats = [](const std::vector<double>& e, double& rms, double& p99, double& max) {
-                    double sq = 0;
-                    for (double x : e) sq += x * x;
-                    rms = std::sqrt(sq / double(std::max<std::size_t>(e.size(), 1)));
-                    p99 = percentile(e, 0.99);
-                    max = e.empty() ? 0.0 : *std::max_element(e.begin(), e.end());
-                };
-                stats(own, f.rmsN, f.p99N, f.maxN);
-                stats(vsTri, f.triRmsN, f.triP99N, f.triMaxN);
-                report.fidelity.push_back(f);
-            }
-        }
+        report.notes.push_back(peerNote(sum));
+        addFidelityRows(report, w, configs, *tri, o, progress);
     }
     return report;
 }

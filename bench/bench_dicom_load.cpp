@@ -115,7 +115,7 @@ std::string cpuModel()
 int main(int argc, char** argv)
 {
     fs::path dir = fs::path(VOXHAP_SOURCE_DIR) / ".." / "shared" / "data" / "ct-abdomen-tcia" / "dicom";
-    int repeat = 7; // issue 28's figure: 7 interleaved repeats, medians
+    int repeat = 7; // 7 interleaved repeats, medians (docs/benchmarks.md)
     std::string json;
     for (int a = 1; a < argc; ++a) {
         const std::string arg = argv[a];
@@ -181,7 +181,7 @@ int main(int argc, char** argv)
             double(fileBytes) / 1e6 / load, load / serial);
         std::printf("  of which: header scan %.3f s, decode %.3f s, sparse conversion %.3f s\n", median(tScan),
             median(tDecode), median(tSparse));
-        // Issue 28 item 4: the load against the bare single-thread decode, same run.
+        // The load against the bare single-thread decode, same run.
         std::printf("load / bare decode, one thread: %.2f (target <= 1.2): %s\n", load / serial,
             load / serial <= 1.2 ? "met" : "not met");
         std::printf("load / bare decode with the same threads: %.2f\n", load / parallel);

@@ -23,6 +23,7 @@
 
 #include "bench/ProcessFigures.h"
 #include "bench/Stats.h"
+#include "phantoms/PhantomScans.h"
 #include "registration/Fusion.h"
 #include "registration/Registration.h"
 #include "registration/Resample.h"
@@ -30,7 +31,6 @@
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 #include "volume/io/NrrdFile.h"
-#include "volume/phantoms/PhantomScans.h"
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file bench_plan.cpp
-/// @brief Candidate search throughput (issue 9 item 2: ≥ 20 000 fully analysed
+/// @brief Candidate search throughput (the planning target: ≥ 20 000 fully analysed
 /// candidates per second on 2 cores), 1 and 2 threads interleaved in one run
 /// (docs/benchmarks.md), with the clearance error of the same configuration
 /// against brute force; and the bending needle's deflection prediction.
@@ -21,12 +21,12 @@
 /// prediction at a fine step (0.05 mm per solve, 1 mm elements).
 
 #include "haptic/scene/Scene.h"
+#include "phantoms/Phantoms.h"
 #include "planning/Deflection.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include "bench/SamplerBench.h" // machineDescription
 #include "bench/Stats.h"

@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file bench_segment.cpp
-/// @brief Segmentation time and memory on the real CT (issue 7 item 7, issue 28
-/// item 5), with 1 and 2 threads measured in the same run (docs/benchmarks.md:
+/// @brief Segmentation time and memory on the real CT, with 1 and 2 threads measured in the same run (docs/benchmarks.md:
 /// speed with its error, comparisons as ratios from one run); the peak memory
 /// against the dense float copy of the volume and against segmentation's own
-/// estimate (issue 20 item 5); the load average and the CPU time beside the
+/// estimate; the load average and the CPU time beside the
 /// wall time, because this machine is shared.
 ///
 ///     bench_segment [--repeats N] [--json]
@@ -12,9 +11,9 @@
 /// Without ../shared/data the torso phantom (1 mm voxels) stands in, and the
 /// report says so.
 
+#include "phantoms/Phantoms.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include "bench/ProcessFigures.h"
@@ -30,9 +29,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {

@@ -5,7 +5,7 @@
 /// Run: build/bin/bench_volume [--benchmark_repetitions=5]. Figures are
 /// reported per voxel of the dense extent, so that spacings compare.
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/io/VdbFile.h"
 
 #include <benchmark/benchmark.h>

@@ -5,4 +5,4 @@
 # checks every #include against it and checks that the chain shown in the
 # README's "Layout" and docs/architecture.md is this one.
 set(VOXHAP_LIBRARY_ORDER
-    core volume registration segmentation fusion haptic assessment planning batch render regress bench tools python)
+    core volume phantoms registration segmentation fusion haptic assessment planning batch render regress bench tools python)

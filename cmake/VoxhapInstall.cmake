@@ -8,7 +8,7 @@
 #   P/bin/voxhap                    the command-line program, when it is built
 # An embedding project writes find_package(voxhap REQUIRED [COMPONENTS ...]) and
 # links voxhap::haptic and the rest (examples/device-loop/). voxhap::core, volume,
-# segmentation, haptic, assessment, planning and batch are always there; render and igtl are
+# phantoms, segmentation, haptic, assessment, planning and batch are always there; render and igtl are
 # components, present when the build had VOXHAP_WITH_RENDER and VOXHAP_WITH_IGTL
 # and loaded (with VTK or OpenIGTLink) only when asked for.
 include(CMakePackageConfigHelpers)
@@ -53,12 +53,13 @@ function(voxhap_install_headers folder)
 endfunction()
 
 # The physics core: no VTK, X11 or OpenIGTLink.
-set(core_targets voxhap_core voxhap_volume voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning voxhap_batch)
+set(core_targets voxhap_core voxhap_volume voxhap_phantoms voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning voxhap_batch)
 install(TARGETS ${core_targets} EXPORT voxhapTargets ARCHIVE DESTINATION lib)
 install(EXPORT voxhapTargets NAMESPACE voxhap:: DESTINATION ${VOXHAP_INSTALL_CMAKEDIR})
 voxhap_install_headers(core)
 install(FILES ${PROJECT_BINARY_DIR}/core/include/core/Version.h DESTINATION ${VOXHAP_INSTALL_INCLUDEDIR}/core)
 voxhap_install_headers(volume)
+voxhap_install_headers(phantoms)
 voxhap_install_headers(segmentation)
 voxhap_install_headers(haptic EXCLUDE igtl devices/drivers) # drivers are built in the tree, not installed
 voxhap_install_headers(assessment)

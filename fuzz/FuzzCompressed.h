@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file FuzzCompressed.h
-/// @brief What the content-comparing targets for compressed voxel data share
-/// (issue 20 item 2): the header is held fixed and the fuzzer mutates only the
+/// @brief What the content-comparing targets for compressed voxel data share:
+/// the header is held fixed and the fuzzer mutates only the
 /// compressed stream and its trailer. A mutated file must be refused (with the
 /// one-line message) or load exactly the voxels of the unmutated file; loading
 /// anything else is a finding.

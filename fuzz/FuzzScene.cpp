@@ -149,7 +149,7 @@ void checkScene(const Json& doc, const Scene& s)
     if (!at(doc, {"tenting"}) && s.recipe.model == LayerModel::Kyung && !s.recipe.tenting.empty())
         finding("tenting: a kyung scene tents what it did not name");
 
-    // force_scale and success (issue 23 items 5, 6)
+    // force_scale and success
     number(doc, {"force_scale"}, s.terms.renderScale, Sign::Positive);
     onlyKnown(at(doc, {"success"}), "success", {"rule", "radius_mm", "source"});
     string(doc, {"success", "rule"}, voxhap::haptic::successRuleName(s.success.rule));

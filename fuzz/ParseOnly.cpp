@@ -13,8 +13,8 @@
 #include "haptic/materials/MaterialField.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/shaft/ShaftIntegration.h"
+#include "phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <cstdio>
 #include <cstdlib>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Procedure.h
-/// @brief What success is in each procedure (issue 23 item 5), as a scene's
+/// @brief What success is in each procedure, as a scene's
 /// "success" block states it, and the outcome of one insertion, followed tick by
 /// tick by `voxhap simulate` (runInsertion) and `voxhap serve` (the session's
 /// metrics).

@@ -252,7 +252,7 @@ TrajectoryReport Planner::finish(
                     fmt(mOptions.minClearanceMm) + " mm)"});
         }
     }
-    // The device renders the model's force times the scene's force_scale (issue 23 item 6):
+    // The device renders the model's force times the scene's force_scale:
     // its limit is the model's divided by the scale.
     const double scale = mScene.terms.renderScale;
     const double modelLimitN = mScene.device.maxForceN / scale;

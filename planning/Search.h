@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Search.h
-/// @brief Candidate entries for a target (issue 9, item 2): directions on a grid
+/// @brief Candidate entries for a target: directions on a grid
 /// around a reference direction, each traced outward from the target to the
 /// skin, analysed in parallel (TBB), filtered by the constraints and ranked by
 /// risk; plus the Pareto set over clearance, length and peak predicted force.

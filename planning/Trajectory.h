@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Trajectory.h
-/// @brief What one straight needle path meets (issue 9, item 1): the tissue
+/// @brief What one straight needle path meets: the tissue
 /// segments in order, the clearance to each critical structure, the bone it
 /// crosses, the force the scene's model predicts along it, warnings and a
 /// risk score (RiskScore.h). World space is LPS in mm.

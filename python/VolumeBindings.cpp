@@ -6,8 +6,8 @@
 #include "python/Bindings.h"
 
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 #include "volume/VolumeFile.h"
 

@@ -126,29 +126,45 @@ LevelImage blockAverage(const volume::Volume& v, Channel c, const Vec3i& factors
     // Each output slab gathers its blocks through its own accessor: a fixed
     // summing order (the same answer every run) and no per-thread copies of
     // the level, which at the finest level would cost more than the level.
+    // A source row is read a leaf at a time (a tile's value once), and each
+    // block still sums its voxels z, then y, then x first.
     Accumulator total(n);
+    using Leaf = FloatGrid::TreeType::LeafNodeType;
+    constexpr int kLeafDim = int(Leaf::DIM);
+    const int xEnd = last.x() + 1;
     tbb::parallel_for(tbb::blocked_range<int>(0, out.dims.z()), [&](const tbb::blocked_range<int>& ks) {
         auto acc = grid->getConstAccessor();
+        std::vector<double> rowSum(std::size_t(out.dims.x()));
+        std::vector<std::uint32_t> rowActive(std::size_t(out.dims.x()));
+        const auto add = [&](int x, double value) {
+            const auto cell = std::size_t((x - box.min.x()) / factors.x());
+            rowSum[cell] += value;
+            ++rowActive[cell];
+        };
         for (int k = ks.begin(); k != ks.end(); ++k) {
             for (int j = 0; j < out.dims.y(); ++j) {
-                for (int i = 0; i < out.dims.x(); ++i) {
-                    const auto cell = std::size_t(out.index(i, j, k));
-                    const Vec3i first = box.min + Vec3i(i, j, k).cwiseProduct(factors);
-                    double sum = 0.0;
-                    std::uint32_t active = 0;
-                    for (int c = 0; c < factors.z(); ++c)
-                        for (int b = 0; b < factors.y(); ++b)
-                            for (int a = 0; a < factors.x(); ++a) {
-                                float value;
-                                if (acc.probeValue(
-                                        openvdb::Coord(first.x() + a, first.y() + b, first.z() + c), value)) {
-                                    sum += double(value);
-                                    ++active;
+                std::fill(rowSum.begin(), rowSum.end(), 0.0);
+                std::fill(rowActive.begin(), rowActive.end(), 0u);
+                for (int c = 0; c < factors.z(); ++c) {
+                    for (int b = 0; b < factors.y(); ++b) {
+                        const int y = box.min.y() + j * factors.y() + b, z = box.min.z() + k * factors.z() + c;
+                        for (int x = box.min.x(); x < xEnd;) {
+                            const int segmentEnd = std::min(xEnd, (x & ~(kLeafDim - 1)) + kLeafDim);
+                            if (const Leaf* leaf = acc.probeConstLeaf(openvdb::Coord(x, y, z))) {
+                                for (int xx = x; xx < segmentEnd; ++xx) {
+                                    const auto offset = Leaf::coordToOffset(openvdb::Coord(xx, y, z));
+                                    if (leaf->isValueOn(offset)) add(xx, double(leaf->getValue(offset)));
                                 }
+                            } else if (float value; acc.probeValue(openvdb::Coord(x, y, z), value)) {
+                                for (int xx = x; xx < segmentEnd; ++xx) add(xx, double(value)); // an active tile
                             }
-                    total.sum[cell] = sum;
-                    total.active[cell] = active;
+                            x = segmentEnd;
+                        }
+                    }
                 }
+                const auto row = std::size_t(out.index(0, j, k));
+                std::copy(rowSum.begin(), rowSum.end(), total.sum.begin() + std::ptrdiff_t(row));
+                std::copy(rowActive.begin(), rowActive.end(), total.active.begin() + std::ptrdiff_t(row));
             }
         }
     });

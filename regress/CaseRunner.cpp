@@ -12,8 +12,8 @@
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/shaft/LabelTrace.h"
+#include "phantoms/Phantoms.h"
 #include "registration/Resample.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <Eigen/Geometry>

@@ -8,7 +8,7 @@
 
 #include "regress/CaseRunner.h"
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
 
@@ -276,6 +276,380 @@ ClosedFormCheck conciProfile(const Case& c, const Lookup& in, const std::vector<
     return cf;
 }
 
+/// What R4 reads of a run once the rule is known to apply.
+struct SenacRun {
+    double v = 0;      ///< insertion speed [mm/s]
+    double rate = 0;   ///< servo rate [Hz]
+    double needle = 0; ///< needle length [mm]
+    double kc = 0;     ///< coupling stiffness k_c [N/mm]
+    double tick = 0;   ///< travel per servo tick [mm]
+    double h = 0;      ///< the grid's spacing along the midline [mm]
+    bool tipOn = false, cuttingOn = false, frictionOn = false;
+};
+
+/// Where the rule applies: a constant-speed insertion down the midline of an
+/// unturned lumbar phantom, a Sénac scene without other axial terms (Kyung's
+/// damping §1.2, [LP]'s Coulomb C §4), forces at the gauge the table was measured with.
+/// Returns why R4 does not apply, or "" with @p run filled.
+std::string senacPreconditions(const Case& c, const Lookup& in, SenacRun& run)
+{
+    const auto currentText = [&](const std::string& key) {
+        auto it = in.current.find(key);
+        return it == in.current.end() ? std::string() : it->second.text;
+    };
+    const auto entry = vecOf(currentText("case.entry")), target = vecOf(currentText("case.target"));
+    const auto rotation = vecOf(in.text("phantom.rotation_deg"));
+    const auto spacing = vecOf(in.text("phantom.spacing_mm"));
+    const std::optional<double> speed = in.number("case.speed_mm_per_s");
+    if (!c.script.empty()) return kScripted;
+    if (in.text("scene.layers") != "labels") return "the senac model on a fixed table";
+    if (in.text("phantom.kind") != "lumbar")
+        return "the senac model on the " + in.text("phantom.kind") + " phantom (R4: lumbar)";
+    for (const char* term : {"damping", "karnopp"}) {
+        if (termOn(in, term)) return "term " + std::string(term) + " beside the senac model";
+    }
+    if (!entry || !target || !rotation || !spacing || !speed) return kNoSpeed;
+    if (entry->norm() != 0.0 || target->x() != 0.0 || target->z() != 0.0 || !(target->y() < 0.0))
+        return "a path off the lumbar phantom's midline";
+    if (rotation->norm() != 0.0) return "a rotated grid (R4: the phantom's own axes)";
+    const double v = *speed;
+    constexpr double kEpsilonMmPerS = 0.2; // §2.2 ε
+    if (!(v > kEpsilonMmPerS))             // below ε Eq. 3 is 0, the proxy holds: no closed form
+        return "speed at or below the senac model's ε (R4 holds above it)";
+    if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
+        return kGauge; // §3.3's d/d_ref scaling of every force: not part of R4
+    run.v = v;
+    run.rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
+    run.needle = in.number("scene.needle.length_mm").value_or(90.0); // §3.3: the default needle, 90 mm
+    run.kc = in.number("scene.terms.coupling_N_per_mm").value_or(0.0) > 0.0
+        ? *in.number("scene.terms.coupling_N_per_mm")
+        : in.number("device.max_stiffness_N_per_mm").value_or(0.0); // §6.2: k_c, else the device's maximum
+    if (!(run.kc > 0.0) || !(run.rate > 0.0)) return "no coupling stiffness or servo rate";
+    run.tick = v / run.rate; // travel per servo tick [mm]
+    run.h = spacing->y();
+    run.tipOn = termOn(in, "tip"), run.cuttingOn = termOn(in, "cutting"), run.frictionOn = termOn(in, "viscous");
+    return {};
+}
+
+/// The lumbar midline's tissues from the skin down (§7 lumbar phantom).
+const char* const kMidline[] = {"skin", "fat", "supraspinous_ligament", "interspinous_ligament", "ligamentum_flavum",
+    "epidural_space", "dura", "csf"};
+constexpr std::size_t kMidlineLayers = std::size(kMidline);
+
+/// The midline layers' thicknesses (§7 lumbar phantom, §2.3 Table I, §3.3).
+/// Returns why they are not known, or "".
+std::string midlineThicknesses(const Lookup& in, double (&thickness)[kMidlineLayers])
+{
+    struct TableI {
+        const char* preset;
+        double dermaMm, epiduralMm;
+    };
+    static const TableI kTableI[] = {{"average", 10.0, 6.0}, {"overweight", 30.0, 4.0}, {"calcified", 10.0, 4.0}};
+    const std::string preset = in.text("phantom.preset");
+    const TableI* row = nullptr;
+    for (const TableI& r : kTableI) {
+        if (preset == r.preset) row = &r;
+    }
+    if (!row) return "lumbar preset '" + preset + "' has no [S19] Table I row";
+    for (const int i : {0, 2, 3, 4, 6, 7}) {
+        const auto t = in.number(std::string(kMidline[i]) + ".thickness");
+        if (!t || !(*t > 0.0)) return std::string(kMidline[i]) + " has no thickness in the record";
+        thickness[i] = *t;
+    }
+    thickness[1] = row->dermaMm - thickness[0];
+    thickness[5] = row->epiduralMm;
+    if (!(thickness[1] > 0.0)) return "no fat under the skin (derma thinner than the skin)";
+    if (const auto bmi = recordedBmi(in)) {
+        const double above = thickness[0] + thickness[1] + thickness[2] + thickness[3] + thickness[4];
+        const double scale = 10.0 * (2.52 + 0.11 * *bmi) / above;
+        for (int i = 0; i < 5; ++i) thickness[i] *= scale;
+    }
+    return {};
+}
+
+struct SenacLayer {
+    std::string name;
+    double top, bottom; // voxelised [mm]
+    double cutN = 0, bNsPerMm2 = 0;
+    bool tents = false;
+    double a1 = 0, a2 = 0, zp = 0;
+    double contact = 0, entry = 0; // where the tip meets it; where it is entered (its pop, if it tents)
+    bool preloaded = false;        // its box is in a pop's preload: its own, or one that lands past its face
+};
+
+/// The layers on a grid of spacing @p h, with the scene's forces and tenting.
+/// Returns why they cannot be, or "".
+std::string senacLayers(
+    const Lookup& in, const double (&thickness)[kMidlineLayers], double h, std::vector<SenacLayer>& layers)
+{
+    const auto face = [h](double depth) {
+        const double x = depth / h - 0.5;
+        const double n =
+            std::abs(x - std::round(x)) < 1e-9 ? std::round(x) : std::ceil(x); // a centre on the plane: below
+        return h * n;
+    };
+    std::vector<std::string> tenting{"skin", "dura"}; // without a list: [S19] tents the derma and the dura (§2.1)
+    if (const std::string t = in.text("scene.tenting"); !t.empty()) {
+        const nlohmann::json j = nlohmann::json::parse(t, nullptr, false);
+        if (!j.is_array()) return "scene.tenting is not a list";
+        tenting.clear();
+        for (const auto& n : j) {
+            if (n.is_string()) tenting.push_back(n.get<std::string>());
+        }
+    }
+    double plane = 0;
+    for (std::size_t i = 0; i < kMidlineLayers; ++i) {
+        SenacLayer l;
+        l.name = kMidline[i];
+        l.top = face(plane);
+        plane += thickness[i];
+        l.bottom = face(plane);
+        if (!(l.bottom > l.top)) continue; // thinner than a voxel: not on the grid
+        const std::string t = l.name + ".", o = "scene.overrides." + l.name + ".";
+        l.cutN = in.number(o + "cutting_force_N").value_or(in.number(t + "cutting_force").value_or(0.0));
+        l.bNsPerMm2 = in.number(t + "friction_viscous").value_or(0.0);
+        const double fp = in.number(o + "puncture_force_N").value_or(in.number(t + "puncture_force").value_or(0.0));
+        const double k = in.number(o + "elasticity_N_per_mm").value_or(in.number(t + "elasticity").value_or(0.0));
+        if (std::find(tenting.begin(), tenting.end(), l.name) != tenting.end() && fp > 0.0) {
+            const auto zp = in.number(o + "tent_depth_mm");
+            if (!zp && !(k > 0.0)) return l.name + " tents without a tent depth or elasticity";
+            l.tents = true;
+            l.zp = zp ? *zp : fp / (2.0 * k);
+            l.a1 = fp / (2.0 * l.zp);
+            l.a2 = fp / (2.0 * l.zp * l.zp);
+        }
+        layers.push_back(l);
+    }
+    if (layers.empty()) return "no layer thicker than a voxel";
+    return {};
+}
+
+/// A box whose face lies within a tick of a pop: entered in the pop's tick or the next.
+struct SenacTie {
+    std::size_t layer, pop;
+};
+
+struct SenacEval {
+    double f = 0;
+    bool ramping = false;
+    double slackN = 0; // a contact's uncertainty carried into the force
+};
+
+/// R4 states the profile exactly: float rounding only (10⁻¹² relative, with a
+/// 10⁻¹² N floor for zero force).
+constexpr double kSenacRounding = 1e-12;
+
+/// The layers placed on the path, with the pops and the ticks rounding may
+/// move, and R4 evaluated on them.
+struct SenacModel {
+    SenacRun run;
+    std::vector<SenacLayer> layers;
+    std::vector<double> pops;
+    std::vector<SenacTie> ties;
+    std::vector<bool> contactUncertain; ///< per layer: its stage may move by up to a tick
+    double window = 0;                  ///< a tick's travel either side, as R2 and R3
+    double compareEnd = 0;              ///< §7 gives the phantom no further along the midline
+
+    SenacModel(const SenacRun& r, std::vector<SenacLayer> ls);
+    /// R4 at depth @p d; preloaded[t]: the tie t's box is in its pop's preload.
+    SenacEval evaluate(double d, const std::vector<bool>& preloaded) const;
+    double tolerance(double d, const SenacEval& e) const;
+
+private:
+    /// Cutting (Eq. 3) through §6.2's proxy, with each layer's box entered at
+    /// entered[i], in its pop's preload where inPreload[i]; @p ramping: below
+    /// the sum of the boxes entered (the proxy sticks).
+    double cuttingForce(
+        double d, const std::vector<double>& entered, const std::vector<bool>& inPreload, bool& ramping) const;
+};
+
+SenacModel::SenacModel(const SenacRun& r, std::vector<SenacLayer> ls)
+    : run(r), layers(std::move(ls)), contactUncertain(layers.size(), false), window(1.5 * r.tick),
+      compareEnd(layers.back().bottom)
+{
+    // Where the tip meets and enters each layer; the pops.
+    double lastPop = -std::numeric_limits<double>::infinity();
+    for (SenacLayer& l : layers) {
+        l.contact = std::max(l.top, lastPop);
+        l.preloaded = l.tents || l.top <= lastPop;
+        if (l.tents) {
+            lastPop = l.contact + l.zp;
+            pops.push_back(lastPop);
+            l.entry = lastPop;
+        } else {
+            l.entry = l.contact;
+        }
+    }
+    // Which tick a floating-point depth lands in is rounding: a box whose face lies
+    // within a tick of a pop may be entered in the pop's tick (in the preload) or
+    // the next (it ramps in). Both are R4 under §6.2; each segment between pops
+    // takes the reading nearer the run. kPopTie: the pop's own slack.
+    constexpr double kPopTie = 2e-9; // [mm] twice the state machine's 1e-9 mm "reached"
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        if (layers[i].tents) continue;
+        for (std::size_t k = 0; k < pops.size(); ++k) {
+            if (layers[i].top >= pops[k] - kPopTie && layers[i].top <= pops[k] + window) ties.push_back({i, k});
+        }
+    }
+    // A tenting layer met within a tick of an earlier pop starts where that tick
+    // lands: its stage moves by up to a tick.
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        for (const double p : pops) {
+            if (layers[i].tents && p < layers[i].entry && layers[i].top >= p - kPopTie && layers[i].top <= p + window)
+                contactUncertain[i] = true;
+        }
+    }
+}
+
+SenacEval SenacModel::evaluate(double d, const std::vector<bool>& preloaded) const
+{
+    SenacEval e;
+    // The box entry of each layer under this reading.
+    std::vector<double> entered(layers.size());
+    std::vector<bool> inPreload(layers.size(), false);
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        entered[i] = layers[i].entry;
+        inPreload[i] = layers[i].preloaded;
+    }
+    for (std::size_t t = 0; t < ties.size(); ++t) {
+        const SenacLayer& l = layers[ties[t].layer];
+        const double p = pops[ties[t].pop];
+        entered[ties[t].layer] = preloaded[t] ? p : std::max(l.top, p);
+        inPreload[ties[t].layer] = preloaded[t];
+    }
+    // Tenting stage and friction.
+    double lengthB = 0; // Σ b·l over the shaft [N·s/mm]
+    const double shaftStart = d - run.needle;
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        const SenacLayer& l = layers[i];
+        if (l.tents && d >= l.contact && d < l.entry) {
+            const double z = d - l.contact;
+            if (run.tipOn) e.f += l.a1 * z + l.a2 * z * z;
+            lengthB += l.bNsPerMm2 * (d - std::max(l.contact, shaftStart));
+            if (contactUncertain[i])
+                e.slackN += ((run.tipOn ? l.a1 + 2 * l.a2 * l.zp : 0.0) + run.v * l.bNsPerMm2) * run.tick;
+        } else if (d >= entered[i]) {
+            lengthB += l.bNsPerMm2 * overlap(shaftStart, d, l.top, l.bottom);
+        }
+    }
+    if (run.frictionOn) e.f += run.v * lengthB;
+    if (!run.cuttingOn) return e;
+    e.f += cuttingForce(d, entered, inPreload, e.ramping);
+    return e;
+}
+
+double SenacModel::cuttingForce(
+    double d, const std::vector<double>& entered, const std::vector<bool>& inPreload, bool& ramping) const
+{
+    // The proxy: preloaded at the last pop, then sticking and slipping.
+    double lastP = -std::numeric_limits<double>::infinity();
+    for (const double p : pops) {
+        if (p <= d) lastP = p;
+    }
+    const auto before = [&](std::size_t j) { // the sum just before box j is entered
+        double sum = 0;
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            if (entered[i] < entered[j] || (entered[i] == entered[j] && inPreload[i] && !inPreload[j]))
+                sum += layers[i].cutN;
+        }
+        return sum;
+    };
+    double total = 0, preload = 0;
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+        if (entered[i] <= d) total += layers[i].cutN;
+        if (entered[i] < lastP || (entered[i] == lastP && inPreload[i])) preload += layers[i].cutN;
+    }
+    double f = total;
+    if (std::isfinite(lastP)) f = std::min(f, preload + run.kc * (d - lastP));
+    for (std::size_t j = 0; j < layers.size(); ++j) {
+        if (entered[j] > d || entered[j] < lastP || (entered[j] == lastP && inPreload[j]) || layers[j].cutN == 0.0)
+            continue;
+        f = std::min(f, before(j) + run.kc * (d - entered[j]));
+    }
+    ramping = f < total;
+    return f;
+}
+
+double SenacModel::tolerance(double d, const SenacEval& e) const
+{
+    // Float rounding only (kSenacRounding). Within a ramp the sampled proxy starts
+    // sticking at the last tick before the box's face, up to one tick before the
+    // continuous form: k_c·v/rate more (0.004 N for 2 N/mm at 2 mm/s and 1 kHz).
+    const double rampTick = run.kc * run.tick;
+    if (d >= compareEnd) return std::numeric_limits<double>::infinity(); // beyond the phantom §7 describes
+    for (std::size_t k = 0; k < pops.size(); ++k) {
+        double w = window;
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            if (contactUncertain[i] && layers[i].entry == pops[k]) w += run.tick;
+        }
+        if (std::abs(d - pops[k]) <= w) return std::numeric_limits<double>::infinity(); // rounding picks the tick
+    }
+    return kSenacRounding * std::abs(e.f) + kSenacRounding + (e.ramping ? rampTick : 0.0) + e.slackN;
+}
+
+/// The readings of segment @p seg (between pops seg − 1 and seg) to choose
+/// from: @p reading with a prefix of the ties of the pop that opens it in the
+/// preload, the half-open reading (every tie in the preload) first.
+std::vector<std::vector<bool>> segmentReadings(const SenacModel& m, std::size_t seg, const std::vector<bool>& reading)
+{
+    std::vector<std::size_t> mine; // the ties of the pop that opens this segment
+    for (std::size_t t = 0; t < m.ties.size(); ++t) {
+        if (seg > 0 && m.ties[t].pop == seg - 1) mine.push_back(t);
+    }
+    // The ties are entered in depth order: in the preload, a prefix of them.
+    std::sort(mine.begin(), mine.end(),
+        [&](std::size_t a, std::size_t b) { return m.layers[m.ties[a].layer].top < m.layers[m.ties[b].layer].top; });
+    std::vector<std::vector<bool>> options;
+    for (std::size_t k = mine.size() + 1; k-- > 0;) {
+        std::vector<bool> r = reading;
+        for (std::size_t q = 0; q < mine.size(); ++q) r[mine[q]] = q < k;
+        options.push_back(r);
+    }
+    return options;
+}
+
+/// The readings differ only from the pop until the tied boxes' ramps end:
+/// judged there by the largest |ΔF| (not against the tolerance, which a ramp
+/// widens), on the samples in [lo, hi). The first of the best wins.
+std::size_t nearestReading(const SenacModel& m, const std::vector<std::vector<bool>>& options,
+    const std::vector<Sample>& samples, double lo, double hi)
+{
+    std::vector<double> worst(options.size(), 0.0);
+    for (const Sample& smp : samples) {
+        if (options.size() < 2 || smp.depthMm < lo || smp.depthMm >= hi) continue;
+        std::vector<SenacEval> e;
+        double fLo = std::numeric_limits<double>::infinity(), fHi = -fLo;
+        for (const auto& r : options) {
+            e.push_back(m.evaluate(smp.depthMm, r));
+            fLo = std::min(fLo, e.back().f), fHi = std::max(fHi, e.back().f);
+        }
+        if (!(fHi - fLo > kSenacRounding * (std::abs(fHi) + 1))) continue;
+        if (!std::isfinite(m.tolerance(smp.depthMm, e[0]))) continue;
+        for (std::size_t q = 0; q < options.size(); ++q) worst[q] = std::max(worst[q], std::abs(smp.modelN - e[q].f));
+    }
+    std::size_t best = 0;
+    for (std::size_t q = 1; q < options.size(); ++q) {
+        if (worst[q] < worst[best]) best = q;
+    }
+    return best;
+}
+
+/// R4's pops (the skin at 10 mm in the shipped scenes): the first tick at or
+/// past each, so within a tick's travel.
+void expectPops(ClosedForm& cf, const SenacModel& m, double lastDepth)
+{
+    cf.eventsUpToMm = std::min(m.compareEnd, lastDepth);
+    bool clear = true;
+    for (const double p : m.pops) clear = clear && std::abs(p - cf.eventsUpToMm) > m.window;
+    if (clear) {
+        for (const double p : m.pops) {
+            if (p < cf.eventsUpToMm) cf.events.push_back({"pop", p, m.window});
+        }
+    } else {
+        cf.eventsUpToMm = 0; // a pop within a tick of the end: rounding decides whether it happens
+    }
+}
+
 /// physics.md §7 R4: the Sénac model of §2.1 with the constants of §2.2, on the
 /// lumbar phantom's midline, rendered as §6.2 renders it. Derived here from the
 /// documents and the recorded values, not from the code's layer table:
@@ -299,249 +673,13 @@ ClosedFormCheck conciProfile(const Case& c, const Lookup& in, const std::vector<
 ///   entered, and a tenting layer's pushed span (the tip is inside its dimple).
 ClosedFormCheck senacProfile(const Case& c, const Lookup& in, const std::vector<Sample>& samples)
 {
-    // Where the rule applies: a constant-speed insertion down the midline of an
-    // unturned lumbar phantom, a Sénac scene without other axial terms (Kyung's
-    // damping §1.2, [LP]'s Coulomb C §4), forces at the gauge the table was measured with.
-    const auto currentText = [&](const std::string& key) {
-        auto it = in.current.find(key);
-        return it == in.current.end() ? std::string() : it->second.text;
-    };
-    const auto entry = vecOf(currentText("case.entry")), target = vecOf(currentText("case.target"));
-    const auto rotation = vecOf(in.text("phantom.rotation_deg"));
-    const auto spacing = vecOf(in.text("phantom.spacing_mm"));
-    const std::optional<double> speed = in.number("case.speed_mm_per_s");
-    if (!c.script.empty()) return ClosedFormCheck::none(kScripted);
-    if (in.text("scene.layers") != "labels") return ClosedFormCheck::none("the senac model on a fixed table");
-    if (in.text("phantom.kind") != "lumbar")
-        return ClosedFormCheck::none("the senac model on the " + in.text("phantom.kind") + " phantom (R4: lumbar)");
-    for (const char* term : {"damping", "karnopp"}) {
-        if (termOn(in, term)) return ClosedFormCheck::none("term " + std::string(term) + " beside the senac model");
-    }
-    if (!entry || !target || !rotation || !spacing || !speed) return ClosedFormCheck::none(kNoSpeed);
-    if (entry->norm() != 0.0 || target->x() != 0.0 || target->z() != 0.0 || !(target->y() < 0.0))
-        return ClosedFormCheck::none("a path off the lumbar phantom's midline");
-    if (rotation->norm() != 0.0) return ClosedFormCheck::none("a rotated grid (R4: the phantom's own axes)");
-    const double v = *speed;
-    constexpr double kEpsilonMmPerS = 0.2; // §2.2 ε
-    if (!(v > kEpsilonMmPerS))             // below ε Eq. 3 is 0, the proxy holds: no closed form
-        return ClosedFormCheck::none("speed at or below the senac model's ε (R4 holds above it)");
-    if (in.number("scene.needle.gauge").value_or(18.0) != in.number("scene.needle.reference_gauge").value_or(18.0))
-        return ClosedFormCheck::none(kGauge); // §3.3's d/d_ref scaling of every force: not part of R4
-    const double rate = in.number("scene.insertion.rate_Hz").value_or(1000.0);
-    const double needle = in.number("scene.needle.length_mm").value_or(90.0); // §3.3: the default needle, 90 mm
-    const double kc = in.number("scene.terms.coupling_N_per_mm").value_or(0.0) > 0.0
-        ? *in.number("scene.terms.coupling_N_per_mm")
-        : in.number("device.max_stiffness_N_per_mm").value_or(0.0); // §6.2: k_c, else the device's maximum
-    if (!(kc > 0.0) || !(rate > 0.0)) return ClosedFormCheck::none("no coupling stiffness or servo rate");
-    const double tick = v / rate; // travel per servo tick [mm]
-    const bool tipOn = termOn(in, "tip"), cuttingOn = termOn(in, "cutting"), frictionOn = termOn(in, "viscous");
-
-    // The midline layers (§7 lumbar phantom, §2.3 Table I, §3.3).
-    struct TableI {
-        const char* preset;
-        double dermaMm, epiduralMm;
-    };
-    static const TableI kTableI[] = {{"average", 10.0, 6.0}, {"overweight", 30.0, 4.0}, {"calcified", 10.0, 4.0}};
-    const std::string preset = in.text("phantom.preset");
-    const TableI* row = nullptr;
-    for (const TableI& r : kTableI) {
-        if (preset == r.preset) row = &r;
-    }
-    if (!row) return ClosedFormCheck::none("lumbar preset '" + preset + "' has no [S19] Table I row");
-    const char* const kNames[] = {"skin", "fat", "supraspinous_ligament", "interspinous_ligament", "ligamentum_flavum",
-        "epidural_space", "dura", "csf"};
-    double thickness[8];
-    for (const int i : {0, 2, 3, 4, 6, 7}) {
-        const auto t = in.number(std::string(kNames[i]) + ".thickness");
-        if (!t || !(*t > 0.0)) return ClosedFormCheck::none(std::string(kNames[i]) + " has no thickness in the record");
-        thickness[i] = *t;
-    }
-    thickness[1] = row->dermaMm - thickness[0];
-    thickness[5] = row->epiduralMm;
-    if (!(thickness[1] > 0.0)) return ClosedFormCheck::none("no fat under the skin (derma thinner than the skin)");
-    if (const auto bmi = recordedBmi(in)) {
-        const double above = thickness[0] + thickness[1] + thickness[2] + thickness[3] + thickness[4];
-        const double scale = 10.0 * (2.52 + 0.11 * *bmi) / above;
-        for (int i = 0; i < 5; ++i) thickness[i] *= scale;
-    }
-    const double h = spacing->y();
-    const auto face = [h](double depth) {
-        const double x = depth / h - 0.5;
-        const double n =
-            std::abs(x - std::round(x)) < 1e-9 ? std::round(x) : std::ceil(x); // a centre on the plane: below
-        return h * n;
-    };
-
-    struct Layer {
-        std::string name;
-        double top, bottom; // voxelised [mm]
-        double cutN = 0, bNsPerMm2 = 0;
-        bool tents = false;
-        double a1 = 0, a2 = 0, zp = 0;
-        double contact = 0, entry = 0; // where the tip meets it; where it is entered (its pop, if it tents)
-        bool preloaded = false;        // its box is in a pop's preload: its own, or one that lands past its face
-    };
-    std::vector<Layer> layers;
-    std::vector<std::string> tenting{"skin", "dura"}; // without a list: [S19] tents the derma and the dura (§2.1)
-    if (const std::string t = in.text("scene.tenting"); !t.empty()) {
-        const nlohmann::json j = nlohmann::json::parse(t, nullptr, false);
-        if (!j.is_array()) return ClosedFormCheck::none("scene.tenting is not a list");
-        tenting.clear();
-        for (const auto& n : j) {
-            if (n.is_string()) tenting.push_back(n.get<std::string>());
-        }
-    }
-    double plane = 0;
-    for (int i = 0; i < 8; ++i) {
-        Layer l;
-        l.name = kNames[i];
-        l.top = face(plane);
-        plane += thickness[i];
-        l.bottom = face(plane);
-        if (!(l.bottom > l.top)) continue; // thinner than a voxel: not on the grid
-        const std::string t = l.name + ".", o = "scene.overrides." + l.name + ".";
-        l.cutN = in.number(o + "cutting_force_N").value_or(in.number(t + "cutting_force").value_or(0.0));
-        l.bNsPerMm2 = in.number(t + "friction_viscous").value_or(0.0);
-        const double fp = in.number(o + "puncture_force_N").value_or(in.number(t + "puncture_force").value_or(0.0));
-        const double k = in.number(o + "elasticity_N_per_mm").value_or(in.number(t + "elasticity").value_or(0.0));
-        if (std::find(tenting.begin(), tenting.end(), l.name) != tenting.end() && fp > 0.0) {
-            const auto zp = in.number(o + "tent_depth_mm");
-            if (!zp && !(k > 0.0)) return ClosedFormCheck::none(l.name + " tents without a tent depth or elasticity");
-            l.tents = true;
-            l.zp = zp ? *zp : fp / (2.0 * k);
-            l.a1 = fp / (2.0 * l.zp);
-            l.a2 = fp / (2.0 * l.zp * l.zp);
-        }
-        layers.push_back(l);
-    }
-    if (layers.empty()) return ClosedFormCheck::none("no layer thicker than a voxel");
-    const double compareEnd = layers.back().bottom; // §7 gives the phantom no further along the midline
-
-    // Where the tip meets and enters each layer; the pops.
-    double lastPop = -std::numeric_limits<double>::infinity();
-    std::vector<double> pops;
-    for (Layer& l : layers) {
-        l.contact = std::max(l.top, lastPop);
-        l.preloaded = l.tents || l.top <= lastPop;
-        if (l.tents) {
-            lastPop = l.contact + l.zp;
-            pops.push_back(lastPop);
-            l.entry = lastPop;
-        } else {
-            l.entry = l.contact;
-        }
-    }
-    // Which tick a floating-point depth lands in is rounding: a box whose face lies
-    // within a tick of a pop may be entered in the pop's tick (in the preload) or
-    // the next (it ramps in). Both are R4 under §6.2; each segment between pops
-    // takes the reading nearer the run. kPopTie: the pop's own slack.
-    constexpr double kPopTie = 2e-9;  // [mm] twice the state machine's 1e-9 mm "reached"
-    const double window = 1.5 * tick; // a tick's travel either side, as R2 and R3
-    struct Tie {
-        std::size_t layer, pop;
-    };
-    std::vector<Tie> ties;
-    for (std::size_t i = 0; i < layers.size(); ++i) {
-        if (layers[i].tents) continue;
-        for (std::size_t k = 0; k < pops.size(); ++k) {
-            if (layers[i].top >= pops[k] - kPopTie && layers[i].top <= pops[k] + window) ties.push_back({i, k});
-        }
-    }
-    // A tenting layer met within a tick of an earlier pop starts where that tick
-    // lands: its stage moves by up to a tick.
-    std::vector<bool> contactUncertain(layers.size(), false);
-    for (std::size_t i = 0; i < layers.size(); ++i) {
-        for (const double p : pops) {
-            if (layers[i].tents && p < layers[i].entry && layers[i].top >= p - kPopTie && layers[i].top <= p + window)
-                contactUncertain[i] = true;
-        }
-    }
-
-    struct Eval {
-        double f = 0;
-        bool ramping = false;
-        double slackN = 0; // a contact's uncertainty carried into the force
-    };
-    // preloaded[t]: the tie t's box is in its pop's preload.
-    const auto evaluate = [&](double d, const std::vector<bool>& preloaded) {
-        Eval e;
-        // The box entry of each layer under this reading.
-        std::vector<double> entered(layers.size());
-        std::vector<bool> inPreload(layers.size(), false);
-        for (std::size_t i = 0; i < layers.size(); ++i) {
-            entered[i] = layers[i].entry;
-            inPreload[i] = layers[i].preloaded;
-        }
-        for (std::size_t t = 0; t < ties.size(); ++t) {
-            const Layer& l = layers[ties[t].layer];
-            const double p = pops[ties[t].pop];
-            entered[ties[t].layer] = preloaded[t] ? p : std::max(l.top, p);
-            inPreload[ties[t].layer] = preloaded[t];
-        }
-        // Tenting stage and friction.
-        double lengthB = 0; // Σ b·l over the shaft [N·s/mm]
-        const double shaftStart = d - needle;
-        for (std::size_t i = 0; i < layers.size(); ++i) {
-            const Layer& l = layers[i];
-            if (l.tents && d >= l.contact && d < l.entry) {
-                const double z = d - l.contact;
-                if (tipOn) e.f += l.a1 * z + l.a2 * z * z;
-                lengthB += l.bNsPerMm2 * (d - std::max(l.contact, shaftStart));
-                if (contactUncertain[i]) e.slackN += ((tipOn ? l.a1 + 2 * l.a2 * l.zp : 0.0) + v * l.bNsPerMm2) * tick;
-            } else if (d >= entered[i]) {
-                lengthB += l.bNsPerMm2 * overlap(shaftStart, d, l.top, l.bottom);
-            }
-        }
-        if (frictionOn) e.f += v * lengthB;
-        if (!cuttingOn) return e;
-        // The proxy: preloaded at the last pop, then sticking and slipping.
-        double lastP = -std::numeric_limits<double>::infinity();
-        for (const double p : pops) {
-            if (p <= d) lastP = p;
-        }
-        const auto before = [&](std::size_t j) { // the sum just before box j is entered
-            double sum = 0;
-            for (std::size_t i = 0; i < layers.size(); ++i) {
-                if (entered[i] < entered[j] || (entered[i] == entered[j] && inPreload[i] && !inPreload[j]))
-                    sum += layers[i].cutN;
-            }
-            return sum;
-        };
-        double total = 0, preload = 0;
-        for (std::size_t i = 0; i < layers.size(); ++i) {
-            if (entered[i] <= d) total += layers[i].cutN;
-            if (entered[i] < lastP || (entered[i] == lastP && inPreload[i])) preload += layers[i].cutN;
-        }
-        double f = total;
-        if (std::isfinite(lastP)) f = std::min(f, preload + kc * (d - lastP));
-        for (std::size_t j = 0; j < layers.size(); ++j) {
-            if (entered[j] > d || entered[j] < lastP || (entered[j] == lastP && inPreload[j]) || layers[j].cutN == 0.0)
-                continue;
-            f = std::min(f, before(j) + kc * (d - entered[j]));
-        }
-        e.ramping = f < total;
-        e.f += f;
-        return e;
-    };
-
-    // R4 states the profile exactly: float rounding only (10⁻¹² relative, with a
-    // 10⁻¹² N floor for zero force). Within a ramp the sampled proxy starts
-    // sticking at the last tick before the box's face, up to one tick before the
-    // continuous form: k_c·v/rate more (0.004 N for 2 N/mm at 2 mm/s and 1 kHz).
-    constexpr double kRounding = 1e-12;
-    const double rampTick = kc * tick;
-    const double lastDepth = samples.empty() ? 0.0 : samples.back().depthMm;
-    const auto toleranceAt = [&](double d, const Eval& e) {
-        if (d >= compareEnd) return std::numeric_limits<double>::infinity(); // beyond the phantom §7 describes
-        for (std::size_t k = 0; k < pops.size(); ++k) {
-            double w = window;
-            for (std::size_t i = 0; i < layers.size(); ++i) {
-                if (contactUncertain[i] && layers[i].entry == pops[k]) w += tick;
-            }
-            if (std::abs(d - pops[k]) <= w) return std::numeric_limits<double>::infinity(); // rounding picks the tick
-        }
-        return kRounding * std::abs(e.f) + kRounding + (e.ramping ? rampTick : 0.0) + e.slackN;
-    };
+    SenacRun run;
+    if (std::string why = senacPreconditions(c, in, run); !why.empty()) return ClosedFormCheck::none(why);
+    double thickness[kMidlineLayers];
+    if (std::string why = midlineThicknesses(in, thickness); !why.empty()) return ClosedFormCheck::none(why);
+    std::vector<SenacLayer> layers;
+    if (std::string why = senacLayers(in, thickness, run.h, layers); !why.empty()) return ClosedFormCheck::none(why);
+    const SenacModel m(run, std::move(layers));
 
     ClosedForm cf;
     cf.id = "R4";
@@ -549,65 +687,21 @@ ClosedFormCheck senacProfile(const Case& c, const Lookup& in, const std::vector<
     cf.modelN.assign(samples.size(), 0.0);
     cf.toleranceN.assign(samples.size(), 0.0);
     // Each segment between pops takes the reading of its ties nearer the run.
-    std::vector<bool> reading(ties.size(), true);
-    for (std::size_t seg = 0; seg <= pops.size(); ++seg) {
-        const double lo = seg == 0 ? -std::numeric_limits<double>::infinity() : pops[seg - 1];
-        const double hi = seg < pops.size() ? pops[seg] : std::numeric_limits<double>::infinity();
-        std::vector<std::size_t> mine; // the ties of the pop that opens this segment
-        for (std::size_t t = 0; t < ties.size(); ++t) {
-            if (seg > 0 && ties[t].pop == seg - 1) mine.push_back(t);
-        }
-        // The ties are entered in depth order: in the preload, a prefix of them.
-        std::sort(mine.begin(), mine.end(),
-            [&](std::size_t a, std::size_t b) { return layers[ties[a].layer].top < layers[ties[b].layer].top; });
-        // The readings differ only from the pop until the tied boxes' ramps end:
-        // judged there by the largest |ΔF| (not against the tolerance, which a
-        // ramp widens), the half-open reading (every tie in the preload) first.
-        std::vector<std::vector<bool>> options;
-        for (std::size_t m = mine.size() + 1; m-- > 0;) {
-            std::vector<bool> r = reading;
-            for (std::size_t q = 0; q < mine.size(); ++q) r[mine[q]] = q < m;
-            options.push_back(r);
-        }
-        std::vector<double> worst(options.size(), 0.0);
-        for (const Sample& smp : samples) {
-            if (options.size() < 2 || smp.depthMm < lo || smp.depthMm >= hi) continue;
-            std::vector<Eval> e;
-            double fLo = std::numeric_limits<double>::infinity(), fHi = -fLo;
-            for (const auto& r : options) {
-                e.push_back(evaluate(smp.depthMm, r));
-                fLo = std::min(fLo, e.back().f), fHi = std::max(fHi, e.back().f);
-            }
-            if (!(fHi - fLo > kRounding * (std::abs(fHi) + 1))) continue;
-            if (!std::isfinite(toleranceAt(smp.depthMm, e[0]))) continue;
-            for (std::size_t q = 0; q < options.size(); ++q)
-                worst[q] = std::max(worst[q], std::abs(smp.modelN - e[q].f));
-        }
-        std::size_t best = 0;
-        for (std::size_t q = 1; q < options.size(); ++q) {
-            if (worst[q] < worst[best]) best = q;
-        }
-        reading = options[best];
+    std::vector<bool> reading(m.ties.size(), true);
+    for (std::size_t seg = 0; seg <= m.pops.size(); ++seg) {
+        const double lo = seg == 0 ? -std::numeric_limits<double>::infinity() : m.pops[seg - 1];
+        const double hi = seg < m.pops.size() ? m.pops[seg] : std::numeric_limits<double>::infinity();
+        const std::vector<std::vector<bool>> options = segmentReadings(m, seg, reading);
+        reading = options[nearestReading(m, options, samples, lo, hi)];
         for (std::size_t i = 0; i < samples.size(); ++i) {
             const double d = samples[i].depthMm;
             if (d < lo || d >= hi) continue;
-            const Eval e = evaluate(d, reading);
+            const SenacEval e = m.evaluate(d, reading);
             cf.modelN[i] = e.f;
-            cf.toleranceN[i] = toleranceAt(d, e);
+            cf.toleranceN[i] = m.tolerance(d, e);
         }
     }
-    // R4's pops (the skin at 10 mm in the shipped scenes): the first tick at or past
-    // each, so within a tick's travel.
-    cf.eventsUpToMm = std::min(compareEnd, lastDepth);
-    bool clear = true;
-    for (const double p : pops) clear = clear && std::abs(p - cf.eventsUpToMm) > window;
-    if (clear) {
-        for (const double p : pops) {
-            if (p < cf.eventsUpToMm) cf.events.push_back({"pop", p, window});
-        }
-    } else {
-        cf.eventsUpToMm = 0; // a pop within a tick of the end: rounding decides whether it happens
-    }
+    expectPops(cf, m, samples.empty() ? 0.0 : samples.back().depthMm);
     return cf;
 }
 

@@ -5,7 +5,7 @@
 #include "core/AtomicFile.h"
 #include "core/Errors.h"
 #include "core/Format.h"
-#include "render/Gnuplot.h"
+#include "render/plots/Gnuplot.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>
@@ -62,7 +62,7 @@ std::string xmlEscape(const std::string& in)
 }
 
 /// The explanation of a failing case, one line each: where it first failed,
-/// in which tissue, and which recorded inputs changed (issue 29 item 5).
+/// in which tissue, and which recorded inputs changed.
 std::vector<std::string> explanation(const CaseReport& c)
 {
     std::vector<std::string> lines;

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Suite.h
-/// @brief Regression suites (`voxhap regress`, issue 29): a JSON file of cases,
+/// @brief Regression suites (`voxhap regress`): a JSON file of cases,
 /// each a volume (a phantom spec or a volume file), a scene, a tissue table,
 /// an insertion, a shaft-integration strategy and the tolerances its force
 /// profile is compared with. The schema is documented in data/regress/README.md;
@@ -18,7 +18,7 @@ namespace voxhap::regress {
 
 /// @brief What a case compares, and how closely.
 struct Tolerance {
-    // The runs are deterministic bit for bit (issue 29 item 7): the defaults only
+    // The runs are deterministic bit for bit: the defaults only
     // absorb a different compiler's rounding, and stay far below the smallest
     // effect of a few-percent edit (3 % of the skin's viscous friction moves the
     // Sénac profiles by 2.5e-7 N at 2 mm/s).

@@ -7,9 +7,9 @@
 
 #include "segmentation/CtSegmentation.h"
 
-#include "segmentation/Components.h"
-#include "segmentation/DistanceTransform.h"
-#include "segmentation/Morphology.h"
+#include "segmentation/lattice/Components.h"
+#include "segmentation/lattice/DistanceTransform.h"
+#include "segmentation/lattice/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
@@ -335,117 +335,141 @@ Lattice bodyBox(const Lattice& lat, const Mask& body, double marginMm)
     return crop;
 }
 
-} // namespace
+/// The tissue ids the CT rules write, and the thresholds they take from the table.
+struct CtTissues {
+    std::int32_t skin = 0, fat = 0, muscle = 0, lung = 0, kidney = 0, aorta = 0, cortical = 0, cancellous = 0, soft = 0,
+                 canal = 0;
+    float corticalHu = 0; // 700 HU
+    float fatMaxHu = 0;   // −30 HU
+    double skinMm = 0;
+};
 
-AutomaticLabels segmentCt(
-    const volume::Volume& v, const Lattice& full, const volume::FloatGrid& huGrid, const volume::TissueTable& table)
+CtTissues ctTissues(const volume::TissueTable& table)
 {
     const auto id = [&](const char* name) { return std::int32_t(table.at(name).id); };
-    const std::int32_t skin = id("skin"), fat = id("fat"), muscle = id("muscle"), lung = id("lung");
-    const std::int32_t kidney = id("kidney"), aorta = id("aorta"), cortical = id("cortical_bone");
-    const std::int32_t cancellous = id("cancellous_bone"), soft = id("soft_tissue"), canal = id("spinal_cord");
-    const float corticalHu = float(table.at("cortical_bone").huMin); // 700 HU
-    const float fatMaxHu = float(table.at("fat").huMax);             // −30 HU
-    const double skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
-    AutomaticLabels out;
+    CtTissues t;
+    t.skin = id("skin"), t.fat = id("fat"), t.muscle = id("muscle"), t.lung = id("lung");
+    t.kidney = id("kidney"), t.aorta = id("aorta"), t.cortical = id("cortical_bone");
+    t.cancellous = id("cancellous_bone"), t.soft = id("soft_tissue"), t.canal = id("spinal_cord");
+    t.corticalHu = float(table.at("cortical_bone").huMin);
+    t.fatMaxHu = float(table.at("fat").huMax);
+    t.skinMm = table.at("skin").thickness ? table.at("skin").thickness->value : 2.0;
+    return t;
+}
 
-    // Step 1 on the whole box: smoothing streams k planes from the sparse grid
-    // into one class byte per voxel; the body mask works slice by slice.
+/// Step 1 on the whole box: smoothing streams k planes from the sparse grid
+/// into one class byte per voxel (the kSmooth bits).
+std::vector<std::uint8_t> smoothedClasses(const Lattice& full, const volume::FloatGrid& huGrid, float fatMaxHu)
+{
     std::vector<std::uint8_t> smoothClass(full.size());
-    {
-        const std::size_t plane = std::size_t(full.dims.x()) * std::size_t(full.dims.y());
-        gaussianSmoothPlanes(
-            full, kSmoothingMm, [&](int k0, int k1, float* buf) { readPlanes(full, huGrid, k0, k1, buf); },
-            [&](int k, const float* s) {
-                std::uint8_t* c = smoothClass.data() + plane * std::size_t(k);
-                for (std::size_t n = 0; n < plane; ++n) {
-                    c[n] = std::uint8_t((s[n] >= kBodyHu ? kSmoothBody : 0) | (s[n] < kGasHu ? kSmoothGas : 0) |
-                        (s[n] < fatMaxHu ? kSmoothBelowFat : 0) | (s[n] >= kEnhancedHu ? kSmoothEnhanced : 0));
-                }
-            });
-    }
-    Mask body =
-        bodyMask(full, maskWhere(full.size(), [&](std::size_t i) { return (smoothClass[i] & kSmoothBody) != 0; }));
-    out.extent = torsoExtent(v, full, body);
+    const std::size_t plane = std::size_t(full.dims.x()) * std::size_t(full.dims.y());
+    gaussianSmoothPlanes(
+        full, kSmoothingMm, [&](int k0, int k1, float* buf) { readPlanes(full, huGrid, k0, k1, buf); },
+        [&](int k, const float* s) {
+            std::uint8_t* c = smoothClass.data() + plane * std::size_t(k);
+            for (std::size_t n = 0; n < plane; ++n) {
+                c[n] = std::uint8_t((s[n] >= kBodyHu ? kSmoothBody : 0) | (s[n] < kGasHu ? kSmoothGas : 0) |
+                    (s[n] < fatMaxHu ? kSmoothBelowFat : 0) | (s[n] >= kEnhancedHu ? kSmoothEnhanced : 0));
+            }
+        });
+    return smoothClass;
+}
 
-    // The rest on the body's box only (bodyBox says why the labels do not change).
-    const Lattice lat = bodyBox(full, body, kCanalClosingMm);
-    if (lat.dims != full.dims) {
-        body = cropArray(full, lat, body);
-        smoothClass = cropArray(full, lat, smoothClass);
-    }
-    const auto smoothAt = [&](std::size_t i, std::uint8_t bit) { return (smoothClass[i] & bit) != 0; };
+/// Is @p bit set in voxel @p i's class byte?
+bool smoothIs(const std::vector<std::uint8_t>& smoothClass, std::size_t i, std::uint8_t bit)
+{
+    return (smoothClass[i] & bit) != 0;
+}
+
+/// The unsmoothed HU of @p lat, dense.
+std::vector<float> denseHu(const Lattice& lat, const volume::FloatGrid& huGrid)
+{
     std::vector<float> hu(lat.size());
-    {
-        openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(latticeBox(lat), hu.data());
-        if (!hu.empty()) openvdb::tools::copyToDense(huGrid, dense, /*serial=*/false);
-    }
+    openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(latticeBox(lat), hu.data());
+    if (!hu.empty()) openvdb::tools::copyToDense(huGrid, dense, /*serial=*/false);
+    return hu;
+}
 
-    // Step 2: lung among the gas components.
-    Mask lungMask;
-    {
-        const Mask gas = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smoothAt(i, kSmoothGas); });
-        const ComponentRuns cc = componentRuns(lat, gas, Span::Volume);
-        std::vector<std::int64_t> pureAir(cc.list.size() + 1, 0);
-        const std::size_t nx = std::size_t(lat.dims.x());
-        for (std::size_t r = 0; r < cc.runs.size(); ++r) {
-            const std::size_t base = std::size_t(cc.runs[r].row) * nx;
-            for (int i = cc.runs[r].begin; i < cc.runs[r].end; ++i)
-                pureAir[std::size_t(cc.of[r])] += hu[base + std::size_t(i)] < kPureAirHu;
-        }
-        std::vector<std::uint8_t> isLung(cc.list.size() + 1, 0);
-        for (std::size_t c = 0; c < cc.list.size(); ++c) {
-            const double ml = double(cc.list[c].voxels) * lat.voxelMl();
-            const double air = double(pureAir[c + 1]) / double(cc.list[c].voxels);
-            isLung[c + 1] = ml >= kLungMinMl && air <= kLungMaxPureAirFraction;
-        }
-        lungMask = cc.mask(lat, isLung);
-        fillHolesPerSlice(lat, lungMask); // vessels and airways inside the lung are lung
-        lungMask = maskAnd(lungMask, body);
+/// Step 2: lung among the gas components.
+Mask lungAmongGas(
+    const Lattice& lat, const Mask& body, const std::vector<std::uint8_t>& smoothClass, const std::vector<float>& hu)
+{
+    const Mask gas =
+        maskWhere(lat.size(), [&](std::size_t i) { return body[i] && smoothIs(smoothClass, i, kSmoothGas); });
+    const ComponentRuns cc = componentRuns(lat, gas, Span::Volume);
+    std::vector<std::int64_t> pureAir(cc.list.size() + 1, 0);
+    const std::size_t nx = std::size_t(lat.dims.x());
+    for (std::size_t r = 0; r < cc.runs.size(); ++r) {
+        const std::size_t base = std::size_t(cc.runs[r].row) * nx;
+        for (int i = cc.runs[r].begin; i < cc.runs[r].end; ++i)
+            pureAir[std::size_t(cc.of[r])] += hu[base + std::size_t(i)] < kPureAirHu;
     }
-
-    // Step 3: enhanced structures, split by erosion, grown back, classified.
-    const Mask enhanced = maskWhere(lat.size(),
-        [&](std::size_t i) { return body[i] && !lungMask[i] && (smoothAt(i, kSmoothEnhanced) || hu[i] >= kBoneHu); });
-    // The region ids become the labels in place (step 3–4), so one 32-bit array serves both.
-    std::vector<std::int32_t> region(lat.size(), 0);
-    int regions = 0;
-    {
-        // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
-        // planes between organs, and the erosion would no longer split them.
-        const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
-        const ComponentRuns cores = componentRuns(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
-        cores.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
-            std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), c);
-        });
-        growRegions(lat, region, enhanced);
-        // Structures thinner than twice the erosion (ribs, laminae, small vessels) have no
-        // core: their bright voxels become regions of their own, classified like the rest.
-        const ComponentRuns thin = componentRuns(
-            lat, maskWhere(lat.size(), [&](std::size_t i) { return bright[i] && !region[i]; }), Span::Volume);
-        const auto offset = std::int32_t(cores.list.size());
-        thin.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
-            std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), offset + c);
-        });
-        growRegions(lat, region, enhanced);
-        regions = int(cores.list.size() + thin.list.size());
+    std::vector<std::uint8_t> isLung(cc.list.size() + 1, 0);
+    for (std::size_t c = 0; c < cc.list.size(); ++c) {
+        const double ml = double(cc.list[c].voxels) * lat.voxelMl();
+        const double air = double(pureAir[c + 1]) / double(cc.list[c].voxels);
+        isLung[c + 1] = ml >= kLungMinMl && air <= kLungMaxPureAirFraction;
     }
-    const std::vector<RegionStats> stats = regionStats(v, lat, region, regions, hu);
+    Mask lungMask = cc.mask(lat, isLung);
+    fillHolesPerSlice(lat, lungMask); // vessels and airways inside the lung are lung
+    return maskAnd(lungMask, body);
+}
 
-    enum class Kind : std::uint8_t {
-        None,
-        Bone,
-        Aorta,
-        Kidney,
-        Other
-    };
-    std::vector<Kind> kind(std::size_t(regions) + 1, Kind::None);
+/// Step 3's voxels: bright in the smoothed or the unsmoothed HU, in the body, not lung.
+Mask enhancedMask(const Lattice& lat, const Mask& body, const Mask& lungMask,
+    const std::vector<std::uint8_t>& smoothClass, const std::vector<float>& hu)
+{
+    return maskWhere(lat.size(), [&](std::size_t i) {
+        return body[i] && !lungMask[i] && (smoothIs(smoothClass, i, kSmoothEnhanced) || hu[i] >= kBoneHu);
+    });
+}
+
+/// Step 3: the enhanced structures split by erosion and grown back, one id
+/// per region in @p region. Returns the number of regions.
+int enhancedRegions(
+    const Lattice& lat, const Mask& enhanced, const std::vector<float>& hu, std::vector<std::int32_t>& region)
+{
+    // Cores from the unsmoothed bone threshold: smoothing bridges the thin fat
+    // planes between organs, and the erosion would no longer split them.
+    const Mask bright = maskWhere(lat.size(), [&](std::size_t i) { return enhanced[i] && hu[i] >= kBoneHu; });
+    const ComponentRuns cores = componentRuns(lat, erode(lat, bright, kCoreErosionMm, Span::Volume), Span::Volume);
+    cores.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+        std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), c);
+    });
+    growRegions(lat, region, enhanced);
+    // Structures thinner than twice the erosion (ribs, laminae, small vessels) have no
+    // core: their bright voxels become regions of their own, classified like the rest.
+    const ComponentRuns thin =
+        componentRuns(lat, maskWhere(lat.size(), [&](std::size_t i) { return bright[i] && !region[i]; }), Span::Volume);
+    const auto offset = std::int32_t(cores.list.size());
+    thin.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+        std::fill(region.begin() + std::ptrdiff_t(b), region.begin() + std::ptrdiff_t(e), offset + c);
+    });
+    growRegions(lat, region, enhanced);
+    return int(cores.list.size() + thin.list.size());
+}
+
+enum class RegionKind : std::uint8_t {
+    None,
+    Bone,
+    Aorta,
+    Kidney,
+    Other
+};
+
+/// Step 3's classification: bone by its dense fraction, then, placed from the
+/// spine (the largest bone), the aorta and the kidneys among the rest.
+std::vector<RegionKind> classifyRegions(const Lattice& lat, const std::vector<RegionStats>& stats, int regions)
+{
+    std::vector<RegionKind> kind(std::size_t(regions) + 1, RegionKind::None);
     int largestBone = 0;
     for (int r = 1; r <= regions; ++r) {
         const RegionStats& s = stats[std::size_t(r)];
         if (!s.voxels) continue;
-        kind[std::size_t(r)] = double(s.dense) >= kBoneDenseFraction * double(s.voxels) ? Kind::Bone : Kind::Other;
-        if (kind[std::size_t(r)] == Kind::Bone && (!largestBone || s.voxels > stats[std::size_t(largestBone)].voxels)) {
+        kind[std::size_t(r)] =
+            double(s.dense) >= kBoneDenseFraction * double(s.voxels) ? RegionKind::Bone : RegionKind::Other;
+        if (kind[std::size_t(r)] == RegionKind::Bone &&
+            (!largestBone || s.voxels > stats[std::size_t(largestBone)].voxels)) {
             largestBone = r;
         }
     }
@@ -453,7 +477,7 @@ AutomaticLabels segmentCt(
     const double spineY = largestBone ? stats[std::size_t(largestBone)].centreY : 0.0;
     int bestAorta = 0;
     for (int r = 1; r <= regions; ++r) {
-        if (kind[std::size_t(r)] != Kind::Other) continue;
+        if (kind[std::size_t(r)] != RegionKind::Other) continue;
         const RegionStats& s = stats[std::size_t(r)];
         const double lateral = std::abs(s.centreX - spineX), ml = s.ml(lat), median = s.medianHu();
         if (s.lengthMm(lat) >= kAortaMinLengthMm && s.meanAreaMm2(lat) >= kAortaMinAreaMm2 &&
@@ -464,107 +488,154 @@ AutomaticLabels segmentCt(
         } else if (ml >= kKidneyMinMl && ml <= kKidneyMaxMl && median >= kKidneyMinHu && median <= kKidneyMaxHu &&
             lateral >= kKidneyMinLateralMm && lateral <= kKidneyMaxLateralMm &&
             std::abs(s.centreY - spineY) <= kKidneyMaxAnteriorMm) {
-            kind[std::size_t(r)] = Kind::Kidney;
+            kind[std::size_t(r)] = RegionKind::Kidney;
         }
     }
-    if (bestAorta) kind[std::size_t(bestAorta)] = Kind::Aorta;
+    if (bestAorta) kind[std::size_t(bestAorta)] = RegionKind::Aorta;
+    return kind;
+}
 
-    // Steps 3–4: one label per body voxel, written over its region id.
-    std::vector<std::int32_t>& labels = region;
+/// Steps 3–4: one label per body voxel, written over its region id in @p labels.
+void labelVoxels(const Lattice& lat, const CtTissues& t, const std::vector<RegionKind>& kind, const Mask& body,
+    const Mask& lungMask, const std::vector<std::uint8_t>& smoothClass, const std::vector<float>& hu,
+    std::vector<std::int32_t>& labels)
+{
     forEachVoxel(lat.size(), [&](std::size_t i) {
-        const Kind k = kind[std::size_t(region[i])];
+        const RegionKind k = kind[std::size_t(labels[i])];
         if (!body[i]) {
             labels[i] = volume::kAirLabel;
             return;
         }
         const auto byHu = [&] {
-            if (smoothAt(i, kSmoothGas)) return volume::kAirLabel; // bowel gas: no resistance, like air
-            return smoothAt(i, kSmoothBelowFat) ? fat : muscle;
+            if (smoothIs(smoothClass, i, kSmoothGas)) return volume::kAirLabel; // bowel gas: no resistance, like air
+            return smoothIs(smoothClass, i, kSmoothBelowFat) ? t.fat : t.muscle;
         };
         if (lungMask[i]) {
-            labels[i] = lung;
+            labels[i] = t.lung;
             return;
         }
         switch (k) {
-        case Kind::Bone:
-            labels[i] = hu[i] >= kBoneHu ? (hu[i] >= corticalHu ? cortical : cancellous) : byHu();
+        case RegionKind::Bone:
+            labels[i] = hu[i] >= kBoneHu ? (hu[i] >= t.corticalHu ? t.cortical : t.cancellous) : byHu();
             break;
-        case Kind::Aorta:
-            labels[i] = aorta;
+        case RegionKind::Aorta:
+            labels[i] = t.aorta;
             break;
-        case Kind::Kidney:
-            labels[i] = kidney;
+        case RegionKind::Kidney:
+            labels[i] = t.kidney;
             break;
-        case Kind::Other:
-            labels[i] = soft;
+        case RegionKind::Other:
+            labels[i] = t.soft;
             break;
-        case Kind::None:
+        case RegionKind::None:
             labels[i] = byHu();
             break;
         }
     });
+}
+
+/// Label @p as the in-plane holes of labels @p a and @p b up to @p maxMm2.
+void fillSmallHoles(const Lattice& lat, std::vector<std::int32_t>& labels, std::int32_t a, std::int32_t b,
+    std::int32_t as, double maxMm2)
+{
+    const Mask m = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == a || labels[i] == b; });
+    Mask filled = m;
+    fillHolesPerSlice(lat, filled);
+    const Mask holes = filterSliceIslands(lat, maskAndNot(filled, m), 0.0, maxMm2);
+    forEachVoxel(lat.size(), [&](std::size_t i) {
+        if (holes[i]) labels[i] = as;
+    });
+}
+
+/// Step 6: the spinal canal. @p lungMask is taken to drop it early.
+void markSpinalCanal(
+    const Lattice& lat, const CtTissues& t, const Mask& body, Mask lungMask, std::vector<std::int32_t>& labels)
+{
+    // Each mask is dropped once read for the last time: this step holds the most at once.
+    Mask bone =
+        maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == t.cortical || labels[i] == t.cancellous; });
+    Mask hole;
+    {
+        const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
+        Mask filled = ring;
+        fillHolesPerSlice(lat, filled);
+        filled = maskAndNot(filled, ring);
+        hole = filterSliceIslands(lat, filled, kCanalMinAreaMm2, kCanalMaxAreaMm2);
+    }
+    const Mask soft3 = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && !bone[i] && !lungMask[i]; });
+    bone = {};
+    lungMask = {};
+    bridgeAlongSliceAxis(lat, hole, soft3, kCanalBridgeMm);
+    // The canal is the soft tissue of those holes, the closing's ring excluded: the
+    // ring's inner edge follows the bone except across the gaps it bridged.
+    hole = maskAnd(hole, soft3);
+    const ComponentRuns cc = componentRuns(lat, hole, Span::Volume);
+    std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
+    for (std::size_t c = 0; c < cc.list.size(); ++c) {
+        const Component& k = cc.list[c];
+        const double length = (k.max[lat.sliceAxis] - k.min[lat.sliceAxis] + 1) * lat.spacing[lat.sliceAxis];
+        keep[c + 1] = length >= kCanalMinLengthMm;
+    }
+    cc.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
+        if (keep[std::size_t(c)])
+            std::fill(labels.begin() + std::ptrdiff_t(b), labels.begin() + std::ptrdiff_t(e), t.canal);
+    });
+}
+
+/// Outside the torso range the trunk's rules do not hold: keep what CT numbers
+/// say anywhere (skin, fat, bone, gas, lung), the rest is soft tissue. The box
+/// keeps the whole slice axis, so its slice numbers are the volume's.
+void softenOutsideTorso(
+    const Lattice& lat, const CtTissues& t, const TorsoExtent& extent, std::vector<std::int32_t>& labels)
+{
+    if (extent.all()) return;
+    const std::size_t stride = lat.strides()[std::size_t(lat.sliceAxis)];
+    const auto slices = std::size_t(lat.dims[lat.sliceAxis]);
+    forEachVoxel(lat.size(), [&](std::size_t i) {
+        const std::int32_t l = labels[i];
+        const bool trunkClass = l == t.muscle || l == t.kidney || l == t.aorta || l == t.canal;
+        if (trunkClass && !extent.inTorso(int((i / stride) % slices))) labels[i] = t.soft;
+    });
+}
+
+} // namespace
+
+AutomaticLabels segmentCt(
+    const volume::Volume& v, const Lattice& full, const volume::FloatGrid& huGrid, const volume::TissueTable& table)
+{
+    const CtTissues t = ctTissues(table);
+    AutomaticLabels out;
+
+    // Step 1 on the whole box; the body mask works slice by slice.
+    std::vector<std::uint8_t> smoothClass = smoothedClasses(full, huGrid, t.fatMaxHu);
+    Mask body =
+        bodyMask(full, maskWhere(full.size(), [&](std::size_t i) { return smoothIs(smoothClass, i, kSmoothBody); }));
+    out.extent = torsoExtent(v, full, body);
+
+    // The rest on the body's box only (bodyBox says why the labels do not change).
+    const Lattice lat = bodyBox(full, body, kCanalClosingMm);
+    if (lat.dims != full.dims) {
+        body = cropArray(full, lat, body);
+        smoothClass = cropArray(full, lat, smoothClass);
+    }
+    std::vector<float> hu = denseHu(lat, huGrid);
+    Mask lungMask = lungAmongGas(lat, body, smoothClass, hu);
+
+    // The region ids become the labels in place (step 3–4), so one 32-bit array serves both.
+    std::vector<std::int32_t> region(lat.size(), 0);
+    const int regions = enhancedRegions(lat, enhancedMask(lat, body, lungMask, smoothClass, hu), hu, region);
+    const std::vector<RegionKind> kind = classifyRegions(lat, regionStats(v, lat, region, regions, hu), regions);
+    std::vector<std::int32_t>& labels = region;
+    labelVoxels(lat, t, kind, body, lungMask, smoothClass, hu, labels);
     hu = {};
     smoothClass = {};
 
     // Small holes in bone (marrow fat, noise) are bone; the kidney's sinus and
     // medulla (darker than the cortex in the arterial phase) are kidney.
-    const auto fillSmallHoles = [&](std::int32_t a, std::int32_t b, std::int32_t as, double maxMm2) {
-        const Mask m = maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == a || labels[i] == b; });
-        Mask filled = m;
-        fillHolesPerSlice(lat, filled);
-        const Mask holes = filterSliceIslands(lat, maskAndNot(filled, m), 0.0, maxMm2);
-        forEachVoxel(lat.size(), [&](std::size_t i) {
-            if (holes[i]) labels[i] = as;
-        });
-    };
-    fillSmallHoles(cortical, cancellous, cancellous, kBoneHoleMaxMm2);
-    fillSmallHoles(kidney, kidney, kidney, 1e300);
-
-    // Step 6: the spinal canal.
-    {
-        // Each mask is dropped once read for the last time: this step holds the most at once.
-        Mask bone =
-            maskWhere(lat.size(), [&](std::size_t i) { return labels[i] == cortical || labels[i] == cancellous; });
-        Mask hole;
-        {
-            const Mask ring = close(lat, bone, kCanalClosingMm, Span::Slice);
-            Mask filled = ring;
-            fillHolesPerSlice(lat, filled);
-            filled = maskAndNot(filled, ring);
-            hole = filterSliceIslands(lat, filled, kCanalMinAreaMm2, kCanalMaxAreaMm2);
-        }
-        const Mask soft3 = maskWhere(lat.size(), [&](std::size_t i) { return body[i] && !bone[i] && !lungMask[i]; });
-        bone = {};
-        lungMask = {};
-        bridgeAlongSliceAxis(lat, hole, soft3, kCanalBridgeMm);
-        // The canal is the soft tissue of those holes, the closing's ring excluded: the
-        // ring's inner edge follows the bone except across the gaps it bridged.
-        hole = maskAnd(hole, soft3);
-        const ComponentRuns cc = componentRuns(lat, hole, Span::Volume);
-        std::vector<std::uint8_t> keep(cc.list.size() + 1, 0);
-        for (std::size_t c = 0; c < cc.list.size(); ++c) {
-            const Component& k = cc.list[c];
-            const double length = (k.max[lat.sliceAxis] - k.min[lat.sliceAxis] + 1) * lat.spacing[lat.sliceAxis];
-            keep[c + 1] = length >= kCanalMinLengthMm;
-        }
-        cc.forEachRun(lat, [&](std::int32_t c, std::size_t b, std::size_t e) {
-            if (keep[std::size_t(c)])
-                std::fill(labels.begin() + std::ptrdiff_t(b), labels.begin() + std::ptrdiff_t(e), canal);
-        });
-    }
-
-    // Outside the torso range the trunk's rules do not hold: keep what CT numbers
-    // say anywhere (skin, fat, bone, gas, lung), the rest is soft tissue. The box
-    // keeps the whole slice axis, so its slice numbers are the volume's.
-    if (!out.extent.all()) {
-        const std::size_t stride = lat.strides()[std::size_t(lat.sliceAxis)];
-        const auto slices = std::size_t(lat.dims[lat.sliceAxis]);
-        forEachVoxel(lat.size(), [&](std::size_t i) {
-            const std::int32_t l = labels[i];
-            const bool trunkClass = l == muscle || l == kidney || l == aorta || l == canal;
-            if (trunkClass && !out.extent.inTorso(int((i / stride) % slices))) labels[i] = soft;
-        });
-    }
+    fillSmallHoles(lat, labels, t.cortical, t.cancellous, t.cancellous, kBoneHoleMaxMm2);
+    fillSmallHoles(lat, labels, t.kidney, t.kidney, t.kidney, 1e300);
+    markSpinalCanal(lat, t, body, std::move(lungMask), labels);
+    softenOutsideTorso(lat, t, out.extent, labels);
     if (std::string note = torsoNote(v, full, out.extent, "CT torso rules",
             "there muscle, kidney, aorta and spinal canal are not labelled (what those rules "
             "would call them is soft_tissue); skin, fat, bone, gas and lung are labelled from "
@@ -573,7 +644,7 @@ AutomaticLabels segmentCt(
         out.notes.push_back(std::move(note));
     }
 
-    markSkin(lat, body, skinMm, skin, labels);
+    markSkin(lat, body, t.skinMm, t.skin, labels);
     out.lattice = lat;
     out.labels = std::move(labels);
     return out;

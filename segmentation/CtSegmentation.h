@@ -28,7 +28,7 @@
 /// kidney, aorta or spinal canal is soft_tissue there, and a note says so.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 #include "segmentation/TorsoExtent.h"
 #include "volume/Grids.h"
 #include "volume/TissueTable.h"

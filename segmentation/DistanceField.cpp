@@ -6,8 +6,8 @@
 
 #include "volume/Grids.h"
 
-#include "segmentation/DenseGrids.h"
-#include "segmentation/DistanceTransform.h"
+#include "segmentation/lattice/DenseGrids.h"
+#include "segmentation/lattice/DistanceTransform.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>

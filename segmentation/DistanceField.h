@@ -11,7 +11,7 @@
 /// true surface along a grid axis.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/Volume.h"
 
 #include <cstdint>

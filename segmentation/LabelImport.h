@@ -16,7 +16,7 @@
 /// dropped silently.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 

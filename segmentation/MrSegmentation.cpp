@@ -5,9 +5,9 @@
 #include "segmentation/MrSegmentation.h"
 
 #include "segmentation/CtSegmentation.h"
-#include "segmentation/DistanceTransform.h"
-#include "segmentation/Morphology.h"
 #include "segmentation/detail/VoxelLoops.h"
+#include "segmentation/lattice/DistanceTransform.h"
+#include "segmentation/lattice/Morphology.h"
 
 #include <algorithm>
 #include <array>

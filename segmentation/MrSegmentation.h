@@ -24,8 +24,8 @@
 /// soft_tissue, without a skin shell or any other class, and a note says why.
 #pragma once
 
-#include "segmentation/Lattice.h"
 #include "segmentation/TorsoExtent.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 

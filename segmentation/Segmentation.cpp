@@ -4,11 +4,11 @@
 
 #include "segmentation/Segmentation.h"
 
+#include "core/Errors.h"
 #include "segmentation/CtSegmentation.h"
-#include "segmentation/DenseGrids.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/MrSegmentation.h"
-#include "core/Errors.h"
+#include "segmentation/lattice/DenseGrids.h"
 #include "volume/Grids.h"
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 
 #include "segmentation/TorsoExtent.h"
 
-#include "segmentation/Components.h"
+#include "segmentation/lattice/Components.h"
 
 #include <algorithm>
 #include <cmath>

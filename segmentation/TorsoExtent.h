@@ -41,9 +41,9 @@
 /// measurable.
 #pragma once
 
-#include "segmentation/Lattice.h"
-#include "volume/mr/BodyWidth.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/Volume.h"
+#include "volume/mr/BodyWidth.h"
 
 #include <cstdint>
 #include <string>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TotalSegmentator.h
-/// @brief TotalSegmentator's CT output as imported labels (issue 23 item 8):
+/// @brief TotalSegmentator's CT output as imported labels:
 /// a built-in mapping from the 117 classes of TotalSegmentator v2's `total`
 /// task to voxhap's tissues, and the two forms it writes: one multilabel NIfTI
 /// (`--ml`: voxel value = class id) or a folder of per-class masks

@@ -2,12 +2,12 @@
 /// @file InfoReport.cpp
 /// @brief Formatting of `voxhap info`.
 
-#include "core/Format.h"
 #include "tools/InfoReport.h"
+#include "core/Format.h"
 
 #include "tools/FusionReport.h"
 
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <cstdio>
 #include <iomanip>

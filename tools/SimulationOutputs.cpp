@@ -2,8 +2,8 @@
 /// @file SimulationOutputs.cpp
 #include "tools/SimulationOutputs.h"
 
-#include "render/ForcePlot.h"
 #include "core/AtomicFile.h"
+#include "render/plots/ForcePlot.h"
 
 #include <cmath>
 #include <filesystem>

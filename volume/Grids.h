@@ -5,7 +5,7 @@
 /// This is the one header that brings in <openvdb/openvdb.h> (15-20 s of
 /// compile time per translation unit): include it from .cpp files, and from
 /// the internal headers those share (haptic/materials/FieldGrids.h,
-/// haptic/shaft/detail/, segmentation/DenseGrids.h), never from a header of a
+/// haptic/shaft/detail/, segmentation/lattice/DenseGrids.h), never from a header of a
 /// library's API.
 #pragma once
 

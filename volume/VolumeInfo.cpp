@@ -5,7 +5,6 @@
 #include "volume/VolumeInfo.h"
 
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <cmath>
 #include <map>
@@ -65,7 +64,8 @@ VolumeInfo describe(const Volume& v, const TissueTable& table)
         info.activeVoxels = std::max(info.activeVoxels, c.activeVoxels);
         info.memoryBytes += c.memoryBytes;
     }
-    if (auto layers = phantomLayers(v)) info.layers = layers->layers;
+    // The typed metadata (VolumeMetadata::phantomLayers) holds the table; phantoms/ writes it.
+    if (const auto& layers = v.metadata().phantomLayers) info.layers = layers->layers;
     return info;
 }
 

@@ -4,7 +4,6 @@
 /// summaries and label census, for `voxhap info` and reports.
 #pragma once
 
-#include "volume/phantoms/Rasterize.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
 
@@ -44,7 +43,7 @@ struct VolumeInfo {
     std::vector<ChannelSummary> channels;
     std::vector<LabelCount> labels; ///< ascending id, non-zero counts only
     VolumeMetadata metadata;
-    std::optional<std::vector<LayerSpan>> layers; ///< a phantom's reference-path layers
+    std::optional<std::vector<LayerSpan>> layers; ///< a phantom's reference-path layers (VolumeMetadata.h)
 };
 
 /// @brief Describe a volume; label names come from @p table.

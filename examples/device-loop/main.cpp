@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file main.cpp
 /// @brief What a haptic-device application writes to put voxhap's needle force in
-/// its own servo loop (issue 22 item 2). The device SDK (SimulatedDevice.h, the
+/// its own servo loop. The device SDK (SimulatedDevice.h, the
 /// stand-in for the hardware) owns the 1 kHz thread and calls servoCallback() with
 /// the handle's pose; the callback asks voxhap for the force with one
 /// haptic::ServoStep::step(): no voxhap thread, no allocation, no lock, no

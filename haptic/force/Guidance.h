@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Guidance.h
-/// @brief Guidance for novice mode (issue 23 item 2): a virtual fixture that pulls
+/// @brief Guidance for novice mode: a virtual fixture that pulls
 /// the needle tip toward the planned line, before the skin toward the line's
 /// continuation through the planned entry (so the tip is led onto the entry), and
 /// once in toward the line itself.

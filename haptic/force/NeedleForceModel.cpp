@@ -187,7 +187,7 @@ void NeedleForceModel::step(const NeedleInput& in, NeedleOutput& out) noexcept
         mLastDirection = -1;
     ForceBreakdown& f = out.terms;
 
-    // Palpation (issue 23, Palpation.h): before the needle touches the skin the tip is
+    // Palpation: before the needle touches the skin the tip is
     // felt against the skin map; the needle's layer model takes over at the entry. The
     // mode changes only while neither is in contact (the tip outside the skin on the
     // map and before the first layer on the path), when neither stores any energy, so

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file Palpation.h
-/// @brief Palpation before insertion (issue 23 item 1): the patient's back as a
+/// @brief Palpation before insertion: the patient's back as a
 /// surface the device touches before the needle touches the skin, so that the
 /// spinous processes and the interspaces between them are felt and the entry can
 /// be found by touch ([LP] and [C-ui] name palpation as the first step).

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file LayerTables.h
-/// @brief The layers on a path, two ways (issue "force models", item 1):
+/// @brief The layers on a path, two ways:
 /// - patient-specific: the label runs the voxels put on the path, each layer
 ///   taking its parameters from the tissue table by label;
 /// - fixed table: the papers' own layer tables ([LP] Table I, Conci's fitted
@@ -14,7 +14,7 @@
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/materials/MaterialField.h"
 #include "core/Math.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <map>

@@ -9,7 +9,7 @@
 #include "core/Errors.h"
 #include "core/Format.h"
 #include "core/JsonFields.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <nlohmann/json.hpp>
@@ -332,7 +332,7 @@ Scene readScene(const std::string& text, const std::string& origin)
     if (s.recipe.model == LayerModel::Kyung && !top.has("tenting")) s.recipe.tenting.clear();
     parseOverrides(top, origin, s.recipe);
     parseTerms(top, s.terms);
-    // A uniform scale of the rendered tissue force (issue 23 item 6): contrasts survive,
+    // A uniform scale of the rendered tissue force: contrasts survive,
     // the device's I²t budget lasts. (0, 10]: a scale beyond 10 is a typo.
     s.terms.renderScale = top.within("force_scale", 1.0, 0.0, 10.0, "", true);
     s.success = parseSuccess(top, s.recipe.model);

@@ -3,7 +3,7 @@
 /// @brief Scene files (data/scenes/*.json): which volume or phantom, which force
 /// model and terms with their parameters, the needle, the device and the
 /// insertion. A term the scene does not name is off: it costs nothing per tick
-/// and its material grids are not built (issue "force models", item 3).
+/// and its material grids are not built.
 #pragma once
 
 #include "haptic/DeviceLimits.h"

@@ -85,7 +85,7 @@ struct ServoOptions {
     /// The clock of the real-time loop; null: monotonicServoClock(). Set before
     /// start(); it must outlive the loop.
     ServoClock* clock = nullptr;
-    /// Real-time thread (issue 20 item 8): SCHED_FIFO at realtimePriority and the
+    /// Real-time thread: SCHED_FIFO at realtimePriority and the
     /// process's memory locked (mlockall), when the process may (root,
     /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits); otherwise the
     /// loop runs at normal priority and realtimeStatus() says how to grant it.

@@ -50,7 +50,7 @@ TraineeMetrics traineeMetrics(const Session& s, const std::vector<Layer>& layers
 
 class ServoLoop;
 
-/// @brief A session written while it runs (issue 20 item 7): records and
+/// @brief A session written while it runs: records and
 /// events go to session.csv and events.csv as they are drained from the servo
 /// loop, and into the trainee metrics, so memory stays bounded at any rate and
 /// length. The files grow under temporary names and replace an earlier

@@ -245,7 +245,7 @@ public:
 } // namespace
 
 struct MetricPair::Impl {
-    LevelImage fixedLevel;
+    LevelImage fixedLattice; ///< the fixed level's geometry and dims (its voxels are in `fixed`)
     ImageF::Pointer fixed, moving;
     MaskObject::Pointer movingMask;
     std::vector<Vec3d> candidates; ///< index positions of the fixed body (dilated), for sampling
@@ -261,7 +261,7 @@ struct MetricPair::Impl {
         std::uniform_real_distribution<double> jitter(-0.5, 0.5);
         for (int n = 0; n < count; ++n) {
             const Vec3d ijk = candidates[pick(rng)] + Vec3d(jitter(rng), jitter(rng), jitter(rng));
-            const Vec3d w = fixedLevel.world(ijk);
+            const Vec3d w = fixedLattice.world(ijk);
             PointSet::PointType p;
             for (unsigned a = 0; a < 3; ++a) p[a] = w[int(a)];
             points->SetPoint(PointSet::PointIdentifier(n), p);
@@ -321,7 +321,8 @@ MetricPair::MetricPair(const LevelImage& fixed, const LevelImage& moving, double
     : mImpl(std::make_unique<Impl>())
 {
     Impl& p = *mImpl;
-    p.fixedLevel = fixed;
+    p.fixedLattice.geometry = fixed.geometry;
+    p.fixedLattice.dims = fixed.dims;
     p.fixed = toItk(fixed);
     p.moving = toItk(moving);
     auto voxels = [&](const LevelImage& l) {

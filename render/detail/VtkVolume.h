@@ -4,7 +4,7 @@
 /// VTK translation units (RenderVolume.cpp, VolumeView3d.cpp, Viewer.cpp).
 #pragma once
 
-#include "render/RenderVolume.h"
+#include "render/views/RenderVolume.h"
 
 #include <vtkImageData.h>
 #include <vtkMatrix4x4.h>

@@ -3,7 +3,7 @@
 /// @brief Parallel loops over every voxel of a lattice, for the segmentation sources.
 #pragma once
 
-#include "segmentation/Lattice.h"
+#include "segmentation/lattice/Lattice.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

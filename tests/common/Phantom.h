@@ -5,8 +5,8 @@
 #pragma once
 
 #include "haptic/materials/MaterialField.h"
+#include "phantoms/Phantoms.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <map>
 #include <memory>

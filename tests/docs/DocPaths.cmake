@@ -6,11 +6,19 @@ cmake_minimum_required(VERSION 3.25)
 if(NOT SOURCE)
   message(FATAL_ERROR "DocPaths.cmake: give -DSOURCE=")
 endif()
+# The libraries of cmake/LibraryOrder.cmake and the folders beside them.
+include(${SOURCE}/cmake/LibraryOrder.cmake)
+list(JOIN VOXHAP_LIBRARY_ORDER "|" libraries)
 set(missing "")
 set(count 0)
 foreach(doc README.md docs/physics.md docs/architecture.md docs/scenes.md docs/reference.md docs/guide.md)
   file(READ ${SOURCE}/${doc} text)
-  string(REGEX MATCHALL "(core|volume|segmentation|haptic|assessment|planning|render|bench|tools|tests|fuzz|data|docs)/[A-Za-z0-9_./-]+\\.(h|cpp|json|md|sh|cmake|in)" paths "${text}")
+  # A path starts the text or follows a character no path holds (my-regress/suite.json is not
+  # regress/'s): every other character becomes a space, and a path must follow one.
+  string(REGEX REPLACE "[^A-Za-z0-9_./-]+" " " words " ${text}")
+  string(REGEX MATCHALL " (${libraries}|examples|tests|fuzz|data|docs)/[A-Za-z0-9_./-]+\\.(h|cpp|json|md|sh|cmake|in)"
+         paths "${words}")
+  list(TRANSFORM paths STRIP)
   list(REMOVE_DUPLICATES paths)
   foreach(path IN LISTS paths)
     math(EXPR count "${count} + 1")

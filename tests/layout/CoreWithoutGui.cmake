@@ -27,7 +27,7 @@ foreach(pattern "libvtk" "vtk-9" "libX11" "OpenIGTLink" "OpenImageIO")
   endif()
 endforeach()
 # The targets an embedding user needs must be there.
-foreach(target voxhap_volume voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning test_haptic)
+foreach(target voxhap_volume voxhap_phantoms voxhap_segmentation voxhap_haptic voxhap_assessment voxhap_planning test_haptic)
   string(FIND "${ninja}" "build ${target}:" t1)
   string(FIND "${ninja}" "lib${target}.a" t2)
   string(FIND "${ninja}" "bin/${target}" t3)

@@ -4,10 +4,12 @@
 # (checked here too)
 # (python/, the Python module, binds the physics core and planning; nothing includes it;
 # regress/ plots its failing cases with render/; nothing below tools includes it)
-# and inside volume/ and haptic/ down their own orders (below). A source of
-# one folder may include headers of its own folder and of the folders before
-# it, never of one after it; a detail/ folder is its parent's alone. Fails
-# listing every offending file:line. Run by CTest:
+# and inside volume/, segmentation/, haptic/ and render/ down their own orders
+# (below). A source of one folder may include headers of its own folder and of
+# the folders before it, never of one after it; a detail/ folder is its
+# parent's alone. Fails listing every offending file:line, and fails when a
+# folder or a step of an order has no sources or no includes to check, since
+# that is a wrong name, not a pass (LayeringControls.cmake shows both). Run by CTest:
 #   cmake -DSOURCE=<root> -P Layering.cmake
 cmake_minimum_required(VERSION 3.25)
 if(NOT SOURCE)
@@ -37,39 +39,46 @@ foreach(doc README.md docs/architecture.md)
     message(FATAL_ERROR "${doc} does not show the libraries' order of cmake/LibraryOrder.cmake: ${chain}")
   endif()
 endforeach()
-function(library_rank path out)
-  string(REGEX MATCH "^([a-z_]+)/" m "${path}")
-  list(FIND order "${CMAKE_MATCH_1}" r)
-  set(${out} ${r} PARENT_SCOPE)
-endfunction()
 
-# volume/: the root's Volume, grids and tissue table (used by all) <- detail <-
-# io <- mr <- dicom (dicom/detail is dicom's alone) <- phantoms <- the root's
+# The orders inside libraries: regular expressions on a path below the
+# library's folder, lowest first; a path's rank is the index of the last one
+# it matches ("[^/]+$" is the library's root files), and a source or an
+# included header that matches none is an offence.
+#
+# volume/: the root's Volume, grids, metadata and tissue table (used by all) <-
+# detail <- io <- mr <- dicom (dicom/detail is dicom's alone) <- the root's
 # format dispatch and description (VolumeFile, VolumeInfo), which may include them all.
-function(volume_rank path out)
-  set(r 0)
-  set(i 1)
-  foreach(sub detail io mr dicom phantoms)
-    if(path MATCHES "^volume/${sub}/")
-      set(r ${i})
-    endif()
-    math(EXPR i "${i} + 1")
-  endforeach()
-  if(path MATCHES "^volume/(VolumeFile|VolumeInfo)\\.")
-    set(r 6)
-  endif()
-  set(${out} ${r} PARENT_SCOPE)
-endfunction()
-
+set(volume_order "[^/]+$" "detail/" "io/" "mr/" "dicom/" "(VolumeFile|VolumeInfo)\\.")
+# segmentation/: lattice/, the dense working arrays and what runs on them
+# (distance transform, morphology, components), with the loops of detail/ <-
+# the root's labelling, imports and distance fields.
+set(segmentation_order "(lattice|detail)/" "[^/]+$")
 # haptic/: the root's shared types (device limits, events, layers, the needle)
 # <- materials <- shaft <- beam <- papers <- force <- scene <- servo <- devices <- igtl
 # (devices/ holds the drivers and the device factory the servo loop runs;
 # igtl/ registers its kind there).
-function(haptic_rank path out)
-  set(r 0)
-  set(i 1)
-  foreach(sub materials shaft beam papers force scene servo devices igtl)
-    if(path MATCHES "^haptic/${sub}/")
+set(haptic_order "[^/]+$" "materials/" "shaft/" "beam/" "papers/" "force/" "scene/" "servo/" "devices/" "igtl/")
+# render/: raster (images, drawing, PNG) <- plots <- views (a view's kind and
+# frame, the volume handed to VTK, with detail/ its VTK arrays, the overlays)
+# <- slices <- volume3d <- viewer <- outputs; render/ keeps no file at its root.
+set(render_order "raster/" "plots/" "(views|detail)/" "slices/" "volume3d/" "viewer/" "outputs/")
+# Every source of these libraries lies in a step of its order.
+set(inner volume segmentation haptic render)
+
+# Rank of @p path in the libraries' order, into @p out.
+function(library_rank path out)
+  string(REGEX MATCH "^([a-z_0-9]+)/" m "${path}")
+  list(FIND order "${CMAKE_MATCH_1}" r)
+  set(${out} ${r} PARENT_SCOPE)
+endfunction()
+
+# Rank of @p path inside the library named by `lib` (set by the caller), into
+# @p out; -1 when no step of its order matches.
+function(inner_rank path out)
+  set(r -1)
+  set(i 0)
+  foreach(pattern IN LISTS ${lib}_order)
+    if(path MATCHES "^${lib}/(${pattern})")
       set(r ${i})
     endif()
     math(EXPR i "${i} + 1")
@@ -87,19 +96,24 @@ function(check root prefix rank what)
   set(n ${checked})
   foreach(source IN LISTS sources)
     cmake_language(CALL ${rank} ${source} sourceRank)
-    file(STRINGS ${SOURCE}/${source} lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"${prefix}")
     file(READ ${SOURCE}/${source} text)
+    if(sourceRank LESS 0)
+      list(APPEND found "${source}: lies in no step of ${what}")
+    endif()
+    file(STRINGS ${SOURCE}/${source} lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"${prefix}")
     foreach(line IN LISTS lines)
       math(EXPR n "${n} + 1")
       string(REGEX MATCH "\"([^\"]+)\"" m "${line}")
       set(target ${CMAKE_MATCH_1})
       cmake_language(CALL ${rank} ${target} targetRank)
       set(why "")
-      if(targetRank GREATER sourceRank)
+      if(targetRank LESS 0)
+        set(why "lies in no step of ${what}")
+      elseif(targetRank GREATER sourceRank)
         set(why "lies above it in ${what}")
       endif()
       # A detail/ folder is its parent's alone (checked once, with the libraries).
-      if(what STREQUAL "the libraries' order" AND target MATCHES "^(([a-z]+/)*[a-z]+)/detail/")
+      if(what STREQUAL "the libraries' order" AND target MATCHES "^(([a-z0-9]+/)*[a-z0-9]+)/detail/")
         set(parent ${CMAKE_MATCH_1}) # read before another MATCHES replaces it
         if(NOT source MATCHES "^${parent}/")
           set(why "is ${parent}/'s own detail")
@@ -120,13 +134,24 @@ function(check root prefix rank what)
 endfunction()
 
 foreach(folder IN LISTS order)
-  check(${folder} "[a-z_]+/" library_rank "the libraries' order")
+  check(${folder} "[a-z_0-9]+/" library_rank "the libraries' order")
 endforeach()
-check(volume "volume/" volume_rank "volume/'s order")
-check(haptic "haptic/" haptic_rank "haptic/'s order")
+foreach(lib IN LISTS inner)
+  # Each step of the order names sources: a step that matches none is a wrong name.
+  file(GLOB_RECURSE sources RELATIVE ${SOURCE} ${SOURCE}/${lib}/*.h ${SOURCE}/${lib}/*.cpp)
+  foreach(pattern IN LISTS ${lib}_order)
+    set(matched ${sources})
+    list(FILTER matched INCLUDE REGEX "^${lib}/(${pattern})")
+    if(NOT matched)
+      message(FATAL_ERROR "${lib}/: the step '${pattern}' of its order matches no source")
+    endif()
+  endforeach()
+  check(${lib} "${lib}/" inner_rank "${lib}/'s order")
+endforeach()
 
 if(bad)
   list(JOIN bad "\n  " text)
   message(FATAL_ERROR "includes against the layering:\n  ${text}")
 endif()
-message(STATUS "${checked} includes checked; every one points down the order ${order} and volume's and haptic's own")
+list(JOIN inner ", " innerText)
+message(STATUS "${checked} includes checked; every one points down the order ${order} and the own orders of ${innerText}")

@@ -7,10 +7,10 @@
 
 #include "common/BuiltinTable.h"
 #include "haptic/scene/Scene.h"
+#include "phantoms/Phantoms.h"
 #include "planning/Planner.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <cmath>
 #include <memory>

@@ -9,7 +9,7 @@ import pytest
 
 import voxhap
 
-# Layer boundaries are located by bisection to 1e-9 mm (volume/phantoms/Rasterize.h);
+# Layer boundaries are located by bisection to 1e-9 mm (phantoms/Rasterize.h);
 # the sums of thicknesses carry double round-off (2.000000000000001).
 LAYER_TOL_MM = 1e-9
 # An affine rebuilt from spacing and unit direction columns: a few ulps of 1 mm.

@@ -5,6 +5,7 @@
 
 #include "common/TempDirTest.h"
 #include "core/Errors.h"
+#include "phantoms/PhantomScans.h"
 #include "registration/Fusion.h"
 #include "registration/LevelImage.h"
 #include "registration/RegistrationFixtures.h"
@@ -12,7 +13,6 @@
 #include "registration/detail/SurfaceCheck.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/PhantomScans.h"
 
 #include <gtest/gtest.h>
 

@@ -8,11 +8,11 @@
 /// the lumbar phantom's lie on its symmetry axis and cannot see a flip.
 
 #include "common/TempDirTest.h"
-#include "registration/RegistrationFixtures.h"
+#include "phantoms/PhantomScans.h"
 #include "registration/Registration.h"
+#include "registration/RegistrationFixtures.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/PhantomScans.h"
 
 #include <gtest/gtest.h>
 

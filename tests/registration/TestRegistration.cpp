@@ -7,16 +7,16 @@
 
 #include "common/TempDirTest.h"
 #include "core/Errors.h"
-#include "registration/RegistrationFixtures.h"
+#include "phantoms/PhantomScans.h"
 #include "registration/AffineMap.h"
 #include "registration/LevelImage.h"
 #include "registration/Registration.h"
+#include "registration/RegistrationFixtures.h"
 #include "registration/Resample.h"
 #include "registration/TransformFile.h"
 #include "registration/detail/SurfaceCheck.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
-#include "volume/phantoms/PhantomScans.h"
 
 #include <gtest/gtest.h>
 

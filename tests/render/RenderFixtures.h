@@ -6,9 +6,9 @@
 /// convention, computed from the volume's bounds without the code under test.
 #pragma once
 
-#include "render/Image.h"
-#include "volume/phantoms/Phantoms.h"
-#include "volume/phantoms/Rasterize.h"
+#include "phantoms/Phantoms.h"
+#include "phantoms/Rasterize.h"
+#include "render/raster/Image.h"
 
 #include <gtest/gtest.h>
 

@@ -8,10 +8,10 @@
 
 #include "common/Prerequisites.h"
 
-#include "render/Display.h"
-#include "render/RenderVolume.h"
-#include "render/VolumeView3d.h"
 #include "core/Errors.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
+#include "render/volume3d/VolumeView3d.h"
 
 #include <chrono>
 #include <cmath>

@@ -6,8 +6,8 @@
 
 #include "common/TempDirTest.h"
 
-#include "render/ForceTrace.h"
 #include "core/Errors.h"
+#include "render/plots/ForceTrace.h"
 
 #include <fstream>
 

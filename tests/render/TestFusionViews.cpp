@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file TestFusionViews.cpp
-/// @brief The views that check a registration (render/FusionViews.h), each
+/// @brief The views that check a registration (render/slices/FusionViews.h), each
 /// against a property of its inputs: the checkerboard's MR tiles show the MR
 /// and its CT tiles the CT; the bone edges appear where the CT has bone and
 /// nowhere on a CT without it.
 
-#include "render/FusionViews.h"
+#include "phantoms/Phantoms.h"
+#include "render/slices/FusionViews.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

@@ -12,13 +12,13 @@
 #include "common/BuiltinTable.h"
 #include "common/Prerequisites.h"
 #include "common/Tolerances.h"
-#include "render/Display.h"
-#include "render/OrbitCamera.h"
-#include "render/RenderVolume.h"
-#include "render/Viewer.h"
-#include "render/ViewerScript.h"
-#include "render/VolumeView3d.h"
 #include "core/Errors.h"
+#include "render/viewer/OrbitCamera.h"
+#include "render/viewer/Viewer.h"
+#include "render/viewer/ViewerScript.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
+#include "render/volume3d/VolumeView3d.h"
 
 #include <chrono>
 #include <cmath>

@@ -10,11 +10,11 @@
 
 #include "common/BuiltinTable.h"
 
-#include "render/Display.h"
-#include "render/Draw.h"
-#include "render/RenderVolume.h"
-#include "render/Snapshot.h"
-#include "render/Viewer.h"
+#include "render/outputs/Snapshot.h"
+#include "render/raster/Draw.h"
+#include "render/viewer/Viewer.h"
+#include "render/views/RenderVolume.h"
+#include "render/volume3d/Display.h"
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>

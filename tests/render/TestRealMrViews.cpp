@@ -9,8 +9,8 @@
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
 
-#include "render/RenderVolume.h"
-#include "render/Snapshot.h"
+#include "render/outputs/Snapshot.h"
+#include "render/views/RenderVolume.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 

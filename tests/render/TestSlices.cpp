@@ -10,14 +10,14 @@
 #include "common/BuiltinTable.h"
 #include "common/TempDirTest.h"
 
-#include "render/BitmapFont.h"
-#include "render/Draw.h"
-#include "render/ImageFile.h"
-#include "render/Overlays.h"
-#include "render/RenderVolume.h"
-#include "render/SliceView.h"
-#include "render/Snapshot.h"
 #include "core/Errors.h"
+#include "render/outputs/Snapshot.h"
+#include "render/raster/BitmapFont.h"
+#include "render/raster/Draw.h"
+#include "render/raster/ImageFile.h"
+#include "render/slices/SliceView.h"
+#include "render/views/Overlays.h"
+#include "render/views/RenderVolume.h"
 
 #include <Eigen/Geometry>
 

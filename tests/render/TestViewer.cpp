@@ -11,13 +11,13 @@
 #include "common/BuiltinTable.h"
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
-#include "render/Display.h"
-#include "render/Measurement.h"
-#include "render/PlanEditor.h"
-#include "render/Viewer.h"
-#include "render/ViewerLayout.h"
-#include "render/ViewerScript.h"
 #include "core/Errors.h"
+#include "render/viewer/Measurement.h"
+#include "render/viewer/PlanEditor.h"
+#include "render/viewer/Viewer.h"
+#include "render/viewer/ViewerLayout.h"
+#include "render/viewer/ViewerScript.h"
+#include "render/volume3d/Display.h"
 
 #include <chrono>
 #include <cmath>

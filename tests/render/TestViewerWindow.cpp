@@ -6,8 +6,8 @@
 /// server come back as the viewer's inputs.
 /// Built outside the unity batches: Xlib's macros must not reach other tests.
 
-#include "render/Display.h"
-#include "render/ViewerWindow.h"
+#include "render/viewer/ViewerWindow.h"
+#include "render/volume3d/Display.h"
 
 // gtest before Xlib: Xlib.h defines None, which gtest declares as a struct.
 #include <gtest/gtest.h>

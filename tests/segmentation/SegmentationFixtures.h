@@ -4,8 +4,8 @@
 /// and the label at a world point.
 #pragma once
 
+#include "phantoms/Phantoms.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 
 #include <nlohmann/json.hpp>

@@ -10,7 +10,7 @@
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

@@ -4,9 +4,9 @@
 /// bone from the CT whatever T1 says, and the MR's T1 deciding fat against
 /// muscle in the CT's soft tissue where it exists.
 
+#include "phantoms/Phantoms.h"
 #include "segmentation/FusedLabels.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

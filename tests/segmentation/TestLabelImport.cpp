@@ -5,11 +5,11 @@
 
 #include "common/BuiltinTable.h"
 #include "common/TempDirTest.h"
+#include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "segmentation/LabelImport.h"
 #include "segmentation/Segmentation.h"
-#include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <gtest/gtest.h>

@@ -6,10 +6,10 @@
 #include "SegmentationFixtures.h"
 
 #include "common/BuiltinTable.h"
+#include "phantoms/Phantoms.h"
 #include "segmentation/MrSegmentation.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

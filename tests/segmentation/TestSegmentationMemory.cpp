@@ -7,14 +7,14 @@
 
 #include "common/CliRunner.h"
 #include "common/Prerequisites.h"
-#include "segmentation/Components.h"
-#include "segmentation/DistanceField.h"
-#include "segmentation/DistanceTransform.h"
-#include "segmentation/Morphology.h"
-#include "segmentation/Segmentation.h"
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
+#include "segmentation/DistanceField.h"
+#include "segmentation/Segmentation.h"
+#include "segmentation/lattice/Components.h"
+#include "segmentation/lattice/DistanceTransform.h"
+#include "segmentation/lattice/Morphology.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <gtest/gtest.h>

@@ -8,10 +8,10 @@
 
 #include "common/TempDirTest.h"
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "segmentation/Segmentation.h"
 #include "segmentation/TotalSegmentator.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 #include <nifti2_io.h>

@@ -9,10 +9,10 @@
 #include "common/DicomWriter.h"
 #include "common/SharedData.h"
 
+#include "phantoms/PhantomScans.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 #include "volume/io/NrrdFile.h"
-#include "volume/phantoms/PhantomScans.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 /// markups read back as input, one-line errors and no partial outputs.
 
 #include "common/CliRunner.h"
-#include "render/ImageFile.h"
+#include "render/raster/ImageFile.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -10,9 +10,9 @@
 #include "common/Tolerances.h"
 
 #include "haptic/igtl/PoseStream.h"
-#include "render/ImageFile.h"
-#include "render/Overlays.h"
 #include "planning/PlanFile.h"
+#include "render/raster/ImageFile.h"
+#include "render/views/Overlays.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -593,6 +593,14 @@ Study study(const std::vector<fs::path>& inputs, const DicomOptions& o)
     return st;
 }
 
+/// The inputs as one line, for the messages that name them all.
+std::string inputsLine(const std::vector<fs::path>& inputs)
+{
+    std::string what;
+    for (const auto& in : inputs) what += (what.empty() ? "" : ", ") + in.string();
+    return what;
+}
+
 std::string skippedSummary(const std::vector<DicomSkippedFile>& skipped)
 {
     std::map<std::string, int> counts;
@@ -630,24 +638,24 @@ std::vector<DicomSeriesInfo> listDicomSeries(const std::vector<fs::path>& inputs
 {
     DicomCatalog c = catalogDicom(inputs);
     if (c.series.empty()) {
-        std::string what;
-        for (const auto& in : inputs) what += (what.empty() ? "" : ", ") + in.string();
-        throw IoError(what + ": no DICOM image found" +
+        throw IoError(inputsLine(inputs) + ": no DICOM image found" +
             (c.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(c.skipped) + ")"));
     }
     return c.series;
 }
 
-Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& options, DicomLoadReport* report)
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// The series to load: the one --series names, else the default rule's.
+/// @param because set to why this one
+/// @throw IoError when there is none to load, or the named one does not load
+const DicomSeriesInfo& chooseSeries(
+    const DicomCatalog& catalog, const std::string& what, const DicomOptions& options, std::string& because)
 {
-    const auto start = std::chrono::steady_clock::now();
-    const auto since = [](std::chrono::steady_clock::time_point t) {
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-    };
-    Study st = study(inputs, options);
-    DicomCatalog& catalog = st.catalog;
-    std::string what;
-    for (const auto& in : inputs) what += (what.empty() ? "" : ", ") + in.string();
     if (catalog.series.empty()) {
         // One damaged file given alone: its own refusal says the most.
         if (catalog.skipped.size() == 1 && catalog.skipped.front().category == "damaged") {
@@ -656,290 +664,405 @@ Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& option
         throw IoError(what + ": no DICOM image found" +
             (catalog.skipped.empty() ? std::string() : " (set aside: " + skippedSummary(catalog.skipped) + ")"));
     }
-    const DicomSeriesInfo* chosen = nullptr;
-    std::string because;
-    if (options.series.empty()) {
-        chosen = chooseDefaultSeries(catalog);
-        if (!chosen) {
-            if (catalog.series.size() == 1) throw IoError(catalog.series.front().problem);
-            std::string list;
-            for (const auto& s : catalog.series) {
-                list += (list.empty() ? "" : " | ") + std::string("#") + std::to_string(s.index) + " " + s.modality +
-                    ": " + s.problem;
-            }
-            throw IoError(what + ": no series loads as one 3D volume: " + list);
-        }
-        because = "the default: the largest series that loads as one 3D volume, CT first, then T1 maps and "
-                  "T1-weighted MR, then other MR";
-    } else {
-        chosen = &findSeries(catalog.series, options.series);
+    if (!options.series.empty()) {
+        const DicomSeriesInfo& chosen = findSeries(catalog.series, options.series);
         because = "--series " + options.series;
-        if (!chosen->problem.empty()) throw IoError(chosen->problem);
+        if (!chosen.problem.empty()) throw IoError(chosen.problem);
+        return chosen;
     }
-    SeriesWork& work = st.work[std::size_t(chosen->index - 1)];
-    const double scanSeconds = since(start);
-    double decodeSeconds = 0, sparseSeconds = 0;
-    std::vector<DicomSkippedFile> skippedBad = work.bad;
+    const DicomSeriesInfo* chosen = chooseDefaultSeries(catalog);
+    if (!chosen) {
+        if (catalog.series.size() == 1) throw IoError(catalog.series.front().problem);
+        std::string list;
+        for (const auto& s : catalog.series) {
+            list += (list.empty() ? "" : " | ") + std::string("#") + std::to_string(s.index) + " " + s.modality + ": " +
+                s.problem;
+        }
+        throw IoError(what + ": no series loads as one 3D volume: " + list);
+    }
+    because = "the default: the largest series that loads as one 3D volume, CT first, then T1 maps and "
+              "T1-weighted MR, then other MR";
+    return *chosen;
+}
 
+/// One loadDicom call: what its steps read, and the files left out so far.
+struct DicomLoad {
+    const DicomCatalog& catalog;
+    const DicomSeriesInfo& chosen;
+    const DicomOptions& options;
+    std::string because;
+    Clock::time_point start;
+    double scanSeconds = 0;
+    std::vector<DicomSkippedFile> skippedBad;
+};
+
+/// The grid a plan loads onto: the slices' own, or the grid covering an
+/// irregular stack that is resampled.
+struct PlannedGrid {
+    Geometry geo;
+    ResampleGrid rg;
+    bool resample = false;
+    int nx = 0, ny = 0; ///< the stored slices' columns and rows
+};
+
+PlannedGrid plannedGrid(const Plan& plan, const DicomHeader& first)
+{
+    PlannedGrid g;
+    g.resample = !plan.stack.problem.empty();
+    g.nx = first.columns, g.ny = first.rows;
+    Geometry& geo = g.geo;
+    geo.spacing = Vec3d(first.pixelSpacing[1], first.pixelSpacing[0], 1.0);
+    if (plan.slices.size() > 1)
+        geo.spacing[2] = plan.stack.step;
+    else if (first.sliceThickness > 0)
+        geo.spacing[2] = first.sliceThickness; // one slice: nothing else to go by
+    else if (first.spacingBetweenSlices)
+        geo.spacing[2] = *first.spacingBetweenSlices;
+    geo.direction.col(0) = plan.row;
+    geo.direction.col(1) = plan.col;
+    geo.direction.col(2) = plan.normal;
+    geo.origin = plan.stack.slices.front().position;
+
+    g.rg.nx = g.nx, g.rg.ny = g.ny, g.rg.nz = int(plan.slices.size());
+    if (g.resample) {
+        g.rg = coveringGrid(plan, g.nx, g.ny, geo.spacing[0], geo.spacing[1]);
+        geo.origin += double(g.rg.i0) * geo.spacing[0] * plan.row + double(g.rg.j0) * geo.spacing[1] * plan.col;
+    }
+    return g;
+}
+
+/// @throw IoError when loading @p g may need more than the memory cap
+void checkMemoryCap(const Plan& plan, const DicomHeader& first, const PlannedGrid& g, std::uint64_t capBytes)
+{
+    const ResampleGrid& rg = g.rg;
+    const std::size_t inPlane = std::size_t(g.nx) * std::size_t(g.ny);
+    const std::size_t outPlane = std::size_t(rg.nx) * std::size_t(rg.ny);
+    // Worst case: every voxel active in the float grid (leaf overhead is ~1%),
+    // plus one slab, plus the whole input stack when resampling.
+    const std::uint64_t need = std::uint64_t(outPlane) * std::uint64_t(rg.nz) * sizeof(float) +
+        std::uint64_t(outPlane) * SparseSlabs::kSlabSlices * sizeof(float) +
+        (g.resample ? std::uint64_t(inPlane) * plan.slices.size() * sizeof(float) : 0);
+    if (need > capBytes) {
+        throw IoError(first.file.parent_path().string() + ": (0028,0010) Rows × (0028,0011) Columns × slices = " +
+            std::to_string(rg.nx) + "×" + std::to_string(rg.ny) + "×" + std::to_string(rg.nz) + " voxels may need " +
+            mib(need) + ", over the memory cap of " + mib(capBytes));
+    }
+}
+
+/// What the three ways of filling the sparse grid share.
+struct GridFill {
+    const Plan& plan;
+    const std::vector<DicomHeader>& headers;
+    const PlannedGrid& grid;
+    const DicomOptions& options;
+    float background;
+    FrameSource& source;
+    SparseSlabs& sparse;
+    double decodeSeconds = 0, sparseSeconds = 0;
+
+    const Slice& slice(int k) const { return plan.slices[plan.stack.slices[std::size_t(k)].source]; }
+    void progress(int done) const
+    {
+        if (options.progress) options.progress(double(done) / grid.rg.nz, {});
+    }
+};
+
+/// Can every slice be read straight from its file (single frame, uncompressed
+/// little-endian, the plan's size)? Fills @p layouts for those files.
+bool directLayouts(GridFill& fill, std::vector<DicomFrames>& layouts)
+{
+    bool direct = true;
+    for (std::size_t n = 0; direct && n < fill.plan.slices.size(); ++n) {
+        const Slice& s = fill.plan.slices[n];
+        const DicomHeader& h = fill.headers[s.file];
+        try {
+            direct = h.storedFrames == 1 && h.mosaicImages == 0 && h.storedColumns == fill.grid.nx &&
+                h.storedRows == fill.grid.ny && nativeFrameLayout(h, layouts[s.file]);
+        } catch (const IoError&) {
+            fill.source.fail(s.file);
+            throw;
+        }
+    }
+    return direct;
+}
+
+/// Single-frame uncompressed little-endian files (the shared CT, most
+/// exports) are read a row of leaves at a time: each task reads the 8
+/// image rows of each slice it converts straight from the files and
+/// converts them while they are in its cache, so reading overlaps
+/// conversion on every core and the slab's samples never exist whole.
+void readDirect(GridFill& fill, const std::vector<DicomFrames>& layouts)
+{
+    const int nx = fill.grid.nx, ny = fill.grid.ny, nz = fill.grid.rg.nz;
+    // Eight slabs (64 slices, as many files open) per parallel loop:
+    // few joins of the two cores, a bounded number of open files,
+    // and progress reported between batches.
+    constexpr int kBatch = 8 * SparseSlabs::kSlabSlices;
+    for (int k0 = 0; k0 < nz; k0 += kBatch) {
+        const int n = std::min(kBatch, nz - k0);
+        const auto t = Clock::now();
+        std::vector<PixelFile> files;
+        files.reserve(std::size_t(n));
+        for (int k = 0; k < n; ++k) {
+            const Slice& s = fill.slice(k0 + k);
+            files.emplace_back(fill.headers[s.file], layouts[s.file], s.file);
+            if (!files.back().open()) {
+                fill.source.fail(s.file);
+                throw IoError(fill.headers[s.file].file.string() + ": cannot open");
+            }
+        }
+        fill.sparse.addSlabBlocks(
+            [&](int z, int y0, int y1, float* out) {
+                const Slice& s = fill.slice(k0 + z);
+                PixelFile& f = files[std::size_t(z)];
+                thread_local std::vector<char> raw; // one per converting thread, reused
+                try {
+                    f.readRows(y0, y1, raw);
+                } catch (const IoError&) {
+                    fill.source.fail(f.index);
+                    throw;
+                }
+                const std::size_t rowBytes = std::size_t(nx) * sampleBytes(f.layout.type);
+                for (int y = y0; y < y1; ++y) {
+                    rawSamplesToFloat(f.layout, raw.data() + std::size_t(y - y0) * rowBytes, std::size_t(nx), s.slope,
+                        s.intercept, f.header.padding, fill.background, out + std::size_t(y - y0) * std::size_t(nx));
+                }
+            },
+            nx, ny, k0, n, integerSamples(fill.plan, fill.plan.stack.slices, layouts, k0, n));
+        fill.sparseSeconds += secondsSince(t);
+        fill.progress(k0 + n);
+    }
+}
+
+/// The slab's stored samples are decoded, then converted to floats row by
+/// row straight into the grid's leaves: the slab never exists as floats.
+void decodeSlabs(GridFill& fill)
+{
+    const int nx = fill.grid.nx, ny = fill.grid.ny, nz = fill.grid.rg.nz;
+    std::vector<DicomFrames> decoded(SparseSlabs::kSlabSlices);
+    std::vector<const DicomFrames*> frames(SparseSlabs::kSlabSlices, nullptr);
+    for (int k0 = 0; k0 < nz; k0 += SparseSlabs::kSlabSlices) {
+        const int n = std::min(SparseSlabs::kSlabSlices, nz - k0);
+        auto t = Clock::now();
+        tbb::parallel_for(0, n,
+            [&](int k) { frames[std::size_t(k)] = &fill.source.frames(fill.slice(k0 + k), decoded[std::size_t(k)]); });
+        fill.decodeSeconds += secondsSince(t);
+        t = Clock::now();
+        // Integer samples (at most 32 bits) under a rescale below 1e28 stay
+        // far inside float's range (2^32 · 1e28 < 3.4e38): no NaN or inf to look for.
+        constexpr double kFiniteRescale = 1e28;
+        bool finite = true;
+        for (int k = 0; k < n; ++k) {
+            const Slice& s = fill.slice(k0 + k);
+            const SampleType type = frames[std::size_t(k)]->type;
+            finite = finite && type != SampleType::Float32 && type != SampleType::Float64 &&
+                std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
+        }
+        fill.sparse.addSlabRows(
+            [&](int z, int y, float* scratch) {
+                const Slice& s = fill.slice(k0 + z);
+                const DicomFrames& f = *frames[std::size_t(z)];
+                samplesToFloat(f, s.frame, std::size_t(s.row0 + y) * std::size_t(f.columns) + std::size_t(s.col0),
+                    std::size_t(nx), s.slope, s.intercept, fill.source.header(s).padding, fill.background, scratch);
+                return static_cast<const float*>(scratch);
+            },
+            nx, ny, k0, n, finite);
+        fill.sparseSeconds += secondsSince(t);
+        fill.progress(k0 + n);
+    }
+}
+
+/// An irregular stack: every slice read whole, then each plane of the
+/// uniform grid interpolated from them (SliceResample.h).
+void resampleSlabs(GridFill& fill)
+{
+    const Geometry& geo = fill.grid.geo;
+    const Plan& plan = fill.plan;
+    const ResampleGrid& rg = fill.grid.rg;
+    const std::size_t inPlane = std::size_t(fill.grid.nx) * std::size_t(fill.grid.ny);
+    const std::size_t outPlane = std::size_t(rg.nx) * std::size_t(rg.ny);
+    std::vector<float> slab(outPlane * SparseSlabs::kSlabSlices);
+    std::vector<float> input(inPlane * plan.slices.size());
+    tbb::parallel_for(std::size_t(0), plan.slices.size(),
+        [&](std::size_t k) { fill.source.read(fill.slice(int(k)), input.data() + inPlane * k, fill.background); });
+    SliceResampler resampler(plan.stack, input.data(), fill.grid.nx, fill.grid.ny, plan.row, plan.col,
+        geo.spacing.head<2>(), fill.background);
+    for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
+        const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
+        tbb::parallel_for(0, n, [&](int k) {
+            resampler.sample(geo.origin + double(k0 + k) * geo.spacing[2] * plan.normal, rg.nx, rg.ny,
+                slab.data() + outPlane * std::size_t(k));
+        });
+        fill.sparse.addSlab(slab.data(), rg.nx, rg.ny, k0, n);
+        fill.progress(k0 + n);
+    }
+}
+
+/// Fill @p fill's sparse grid by the fastest way the files allow.
+/// @throw BadFile when a file of the series cannot be read
+void fillGrid(GridFill& fill)
+{
+    try {
+        std::vector<DicomFrames> layouts(fill.headers.size());
+        if (!fill.grid.resample && directLayouts(fill, layouts)) {
+            readDirect(fill, layouts);
+        } else if (!fill.grid.resample) {
+            decodeSlabs(fill);
+        } else {
+            resampleSlabs(fill);
+        }
+    } catch (const IoError& e) {
+        if (auto bad = fill.source.failed()) throw BadFile{*bad, e.what()};
+        throw;
+    }
+}
+
+/// The volume's metadata from the series' first file and the plan.
+void recordMetadata(VolumeMetadata& md, const DicomLoad& load, const SeriesWork& work, const DicomHeader& first,
+    const PlannedGrid& g, float airBelow)
+{
+    const Plan& plan = *work.plan;
+    md.modality = first.modality.empty() ? "unknown" : first.modality;
+    md.modalitySource = first.modality.empty() ? FactSource::Unknown : FactSource::Header;
+    md.source = "DICOM series " + load.chosen.uid;
+    md.description = first.seriesDescription;
+    md.seriesUid = load.chosen.uid;
+    md.extra["slices"] = std::to_string(plan.slices.size());
+    if (plan.volume > 0) {
+        md.volumeChoice =
+            VolumeChoice{int(plan.volume), int(work.volumes->count()), work.volumes->labels[plan.volume - 1]};
+    }
+    std::ostringstream air;
+    air << airBelow;
+    md.extra["air_below"] = air.str();
+    if (g.resample) {
+        md.extra["resampled"] = plan.stack.problem;
+        md.extra["interpolation"] = "bilinear within each slice, linear between slices";
+        md.extra["source_voxels_outside_grid"] = std::to_string(g.rg.outside);
+    }
+    if (!load.skippedBad.empty()) md.extra["skipped_bad_files"] = std::to_string(load.skippedBad.size());
+}
+
+/// An MR series' intensities become a material (MrMaterial.h); nothing for CT.
+std::optional<MrMaterialReport> assignMaterial(Volume& v, const DicomHeader& first, const DicomOptions& options)
+{
+    if (first.modality != "MR") return std::nullopt;
+    MrMaterialOptions mo;
+    mo.t1Map = options.t1Map || first.looksLikeT1Map();
+    mo.t1Weighted = options.t1Weighted;
+    mo.normaliseT1Weighted = options.normaliseT1Weighted;
+    mo.removeBackground = options.removeMrBackground;
+    recordFieldStrength(v.metadata(), first.fieldStrength, FactSource::Header, options.assumedField);
+    MrWeighting weighting = classifyMrWeighting(sequenceFields(first));
+    return assignMrMaterial(v, weighting, mo, first.file.parent_path().string());
+}
+
+void fillReport(DicomLoadReport& report, const DicomLoad& load, const SeriesWork& work, const Volume& v,
+    const PlannedGrid& g, const GridFill& fill, std::optional<MrMaterialReport> mr)
+{
+    const Plan& plan = *work.plan;
+    report.series = load.chosen;
+    report.allSeries = load.catalog.series;
+    report.skipped = load.catalog.skipped;
+    report.skippedBad = load.skippedBad;
+    report.volume = plan.volume;
+    report.chosenBecause = load.because;
+    report.mr = std::move(mr);
+    const auto active = v.has(Channel::Hu) ? v.grid(Channel::Hu)
+        : v.has(Channel::T1)               ? v.grid(Channel::T1)
+                                           : v.grid(Channel::Intensity);
+    report.denseVoxels = v.indexBox().voxelCount();
+    report.activeVoxels = std::int64_t(active->activeVoxelCount());
+    report.memoryBytes = active->memUsage();
+    report.resampled = g.resample;
+    report.irregularity = plan.stack.problem;
+    report.interpolation = g.resample ? "bilinear within each slice, linear between slices" : "";
+    report.sourceVoxelsOutside = g.resample ? g.rg.outside : 0;
+    report.paddedFiles = 0;
+    for (const auto& h : work.headers) report.paddedFiles += h.trailingPadding > 0 ? 1 : 0;
+    report.seconds = secondsSince(load.start);
+    report.scanSeconds = load.scanSeconds;
+    report.decodeSeconds = fill.decodeSeconds;
+    report.sparseSeconds = fill.sparseSeconds;
+}
+
+/// Load the volume @p work plans.
+/// @throw BadFile when a file of it cannot be read
+Volume loadPlanned(const DicomLoad& load, const SeriesWork& work, DicomLoadReport* report)
+{
+    const Plan& plan = *work.plan;
+    const DicomOptions& options = load.options;
+    const DicomHeader& first = work.headers[plan.slices.front().file];
+    const bool isMr = first.modality == "MR";
+    const PlannedGrid g = plannedGrid(plan, first);
+    checkMemoryCap(plan, first, g, options.memoryCapBytes);
+
+    // MR goes to the intensity channel first; assignMrMaterial moves it.
+    const float background = isMr ? kAirIntensity : kAirHu;
+    // MR: zero and below is background (magnitude images hold no tissue there).
+    const float airBelow = isMr ? std::nextafter(options.airT1, std::numeric_limits<float>::max()) : options.airHu;
+    SparseSlabs sparse(background, airBelow);
+    FrameSource source(work.headers);
+    GridFill fill{plan, work.headers, g, options, background, source, sparse};
+    fillGrid(fill);
+
+    Volume v(g.geo, IndexBox{Vec3i::Zero(), Vec3i(g.rg.nx - 1, g.rg.ny - 1, g.rg.nz - 1)});
+    Volume::GridPtr grid;
+    try {
+        grid = sparse.finish();
+    } catch (const ValueError& e) {
+        throw IoError(first.file.parent_path().string() + ": " + e.what());
+    }
+    v.setGrid(isMr ? Channel::Intensity : Channel::Hu, grid);
+    recordMetadata(v.metadata(), load, work, first, g, airBelow);
+    std::optional<MrMaterialReport> mr = assignMaterial(v, first, options);
+    if (report) fillReport(*report, load, work, v, g, fill, std::move(mr));
+    return v;
+}
+
+/// Under --skip-bad: @p work planned again without the file @p bad names.
+/// @throw IoError without --skip-bad, or when what is left does not load
+void leaveOut(const BadFile& bad, DicomLoad& load, SeriesWork& work)
+{
+    const std::string message = load.catalog.scan.originalNames(bad.message);
+    if (!load.options.skipBad) throw IoError(message + "; --skip-bad loads the rest of the series");
+    // Plan again without the file: the gap checks decide whether what is left loads.
+    load.skippedBad.push_back({work.headers[bad.file].file, "damaged", message, load.chosen.uid});
+    std::vector<DicomHeader> rest;
+    for (std::size_t f = 0; f < work.headers.size(); ++f) {
+        if (f != bad.file) rest.push_back(work.headers[f]);
+    }
+    if (rest.empty()) throw IoError(message);
+    SeriesWork again;
+    again.info = work.info;
+    again.info.problem.clear();
+    again.info.damagedFiles = 0;
+    // The headers are complete: studySeries completes them again, which is harmless.
+    studySeries(again, std::move(rest), {}, load.options);
+    if (!again.info.problem.empty())
+        throw IoError(load.catalog.scan.originalNames(again.info.problem) + " (after leaving out " +
+            work.headers[bad.file].file.string() + ", which could not be read)");
+    again.bad = work.bad;
+    work = std::move(again);
+}
+
+} // namespace
+
+Volume loadDicom(const std::vector<fs::path>& inputs, const DicomOptions& options, DicomLoadReport* report)
+{
+    const auto start = Clock::now();
+    Study st = study(inputs, options);
+    std::string because;
+    const DicomSeriesInfo& chosen = chooseSeries(st.catalog, inputsLine(inputs), options, because);
+    SeriesWork& work = st.work[std::size_t(chosen.index - 1)];
+    DicomLoad load{st.catalog, chosen, options, std::move(because), start, secondsSince(start), work.bad};
     // Under skipBad a file that fails to decode is left out and the volume
     // planned again (the gap checks see the missing slice).
     for (;;) {
-        Plan& plan = *work.plan;
         try {
-            const DicomHeader& first = work.headers[plan.slices.front().file];
-            const bool isMr = first.modality == "MR";
-            const bool resample = !plan.stack.problem.empty();
-            const Vec3d row = plan.row, col = plan.col, normal = plan.normal;
-            const int nx = first.columns, ny = first.rows;
-            Geometry geo;
-            geo.spacing = Vec3d(first.pixelSpacing[1], first.pixelSpacing[0], 1.0);
-            if (plan.slices.size() > 1)
-                geo.spacing[2] = plan.stack.step;
-            else if (first.sliceThickness > 0)
-                geo.spacing[2] = first.sliceThickness; // one slice: nothing else to go by
-            else if (first.spacingBetweenSlices)
-                geo.spacing[2] = *first.spacingBetweenSlices;
-            geo.direction.col(0) = row;
-            geo.direction.col(1) = col;
-            geo.direction.col(2) = normal;
-            geo.origin = plan.stack.slices.front().position;
-
-            ResampleGrid rg;
-            rg.nx = nx, rg.ny = ny, rg.nz = int(plan.slices.size());
-            if (resample) {
-                rg = coveringGrid(plan, nx, ny, geo.spacing[0], geo.spacing[1]);
-                geo.origin += double(rg.i0) * geo.spacing[0] * row + double(rg.j0) * geo.spacing[1] * col;
-            }
-            const std::size_t inPlane = std::size_t(nx) * std::size_t(ny);
-            const std::size_t outPlane = std::size_t(rg.nx) * std::size_t(rg.ny);
-            // Worst case: every voxel active in the float grid (leaf overhead is ~1%),
-            // plus one slab, plus the whole input stack when resampling.
-            const std::uint64_t need = std::uint64_t(outPlane) * std::uint64_t(rg.nz) * sizeof(float) +
-                std::uint64_t(outPlane) * SparseSlabs::kSlabSlices * sizeof(float) +
-                (resample ? std::uint64_t(inPlane) * plan.slices.size() * sizeof(float) : 0);
-            if (need > options.memoryCapBytes) {
-                throw IoError(first.file.parent_path().string() +
-                    ": (0028,0010) Rows × (0028,0011) Columns × slices = " + std::to_string(rg.nx) + "×" +
-                    std::to_string(rg.ny) + "×" + std::to_string(rg.nz) + " voxels may need " + mib(need) +
-                    ", over the memory cap of " + mib(options.memoryCapBytes));
-            }
-
-            // MR goes to the intensity channel first; assignMrMaterial moves it.
-            const float background = isMr ? kAirIntensity : kAirHu;
-            // MR: zero and below is background (magnitude images hold no tissue there).
-            const float airBelow =
-                isMr ? std::nextafter(options.airT1, std::numeric_limits<float>::max()) : options.airHu;
-            SparseSlabs sparse(background, airBelow);
-            FrameSource source(work.headers);
-            const auto& order = plan.stack.slices;
-            try {
-                // Single-frame uncompressed little-endian files (the shared CT, most
-                // exports) are read a row of leaves at a time: each task reads the 8
-                // image rows of each slice it converts straight from the files and
-                // converts them while they are in its cache, so reading overlaps
-                // conversion on every core and the slab's samples never exist whole.
-                std::vector<DicomFrames> layouts(work.headers.size());
-                bool direct = !resample;
-                for (std::size_t n = 0; direct && n < plan.slices.size(); ++n) {
-                    const Slice& s = plan.slices[n];
-                    const DicomHeader& h = work.headers[s.file];
-                    try {
-                        direct = h.storedFrames == 1 && h.mosaicImages == 0 && h.storedColumns == nx &&
-                            h.storedRows == ny && nativeFrameLayout(h, layouts[s.file]);
-                    } catch (const IoError&) {
-                        source.fail(s.file);
-                        throw;
-                    }
-                }
-                if (direct) {
-                    // Eight slabs (64 slices, as many files open) per parallel loop:
-                    // few joins of the two cores, a bounded number of open files,
-                    // and progress reported between batches.
-                    constexpr int kBatch = 8 * SparseSlabs::kSlabSlices;
-                    for (int k0 = 0; k0 < rg.nz; k0 += kBatch) {
-                        const int n = std::min(kBatch, rg.nz - k0);
-                        const auto t = std::chrono::steady_clock::now();
-                        std::vector<PixelFile> files;
-                        files.reserve(std::size_t(n));
-                        for (int k = 0; k < n; ++k) {
-                            const Slice& s = plan.slices[order[std::size_t(k0 + k)].source];
-                            files.emplace_back(work.headers[s.file], layouts[s.file], s.file);
-                            if (!files.back().open()) {
-                                source.fail(s.file);
-                                throw IoError(work.headers[s.file].file.string() + ": cannot open");
-                            }
-                        }
-                        sparse.addSlabBlocks(
-                            [&](int z, int y0, int y1, float* out) {
-                                const Slice& s = plan.slices[order[std::size_t(k0 + z)].source];
-                                PixelFile& f = files[std::size_t(z)];
-                                thread_local std::vector<char> raw; // one per converting thread, reused
-                                try {
-                                    f.readRows(y0, y1, raw);
-                                } catch (const IoError&) {
-                                    source.fail(f.index);
-                                    throw;
-                                }
-                                const std::size_t rowBytes = std::size_t(nx) * sampleBytes(f.layout.type);
-                                for (int y = y0; y < y1; ++y) {
-                                    rawSamplesToFloat(f.layout, raw.data() + std::size_t(y - y0) * rowBytes,
-                                        std::size_t(nx), s.slope, s.intercept, f.header.padding, background,
-                                        out + std::size_t(y - y0) * std::size_t(nx));
-                                }
-                            },
-                            nx, ny, k0, n, integerSamples(plan, order, layouts, k0, n));
-                        sparseSeconds += since(t);
-                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
-                    }
-                } else if (!resample) {
-                    // The slab's stored samples are decoded, then converted to floats row by
-                    // row straight into the grid's leaves: the slab never exists as floats.
-                    std::vector<DicomFrames> decoded(SparseSlabs::kSlabSlices);
-                    std::vector<const DicomFrames*> frames(SparseSlabs::kSlabSlices, nullptr);
-                    for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
-                        const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
-                        auto t = std::chrono::steady_clock::now();
-                        tbb::parallel_for(0, n, [&](int k) {
-                            frames[std::size_t(k)] =
-                                &source.frames(plan.slices[order[std::size_t(k0 + k)].source], decoded[std::size_t(k)]);
-                        });
-                        decodeSeconds += since(t);
-                        t = std::chrono::steady_clock::now();
-                        // Integer samples (at most 32 bits) under a rescale below 1e28 stay
-                        // far inside float's range (2^32 · 1e28 < 3.4e38): no NaN or inf to look for.
-                        constexpr double kFiniteRescale = 1e28;
-                        bool finite = true;
-                        for (int k = 0; k < n; ++k) {
-                            const Slice& s = plan.slices[order[std::size_t(k0 + k)].source];
-                            const SampleType type = frames[std::size_t(k)]->type;
-                            finite = finite && type != SampleType::Float32 && type != SampleType::Float64 &&
-                                std::abs(s.slope) < kFiniteRescale && std::abs(s.intercept) < kFiniteRescale;
-                        }
-                        sparse.addSlabRows(
-                            [&](int z, int y, float* scratch) {
-                                const Slice& s = plan.slices[order[std::size_t(k0 + z)].source];
-                                const DicomFrames& f = *frames[std::size_t(z)];
-                                samplesToFloat(f, s.frame,
-                                    std::size_t(s.row0 + y) * std::size_t(f.columns) + std::size_t(s.col0),
-                                    std::size_t(nx), s.slope, s.intercept, source.header(s).padding, background,
-                                    scratch);
-                                return static_cast<const float*>(scratch);
-                            },
-                            nx, ny, k0, n, finite);
-                        sparseSeconds += since(t);
-                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
-                    }
-                } else {
-                    std::vector<float> slab(outPlane * SparseSlabs::kSlabSlices);
-                    std::vector<float> input(inPlane * plan.slices.size());
-                    tbb::parallel_for(std::size_t(0), plan.slices.size(), [&](std::size_t k) {
-                        source.read(plan.slices[order[k].source], input.data() + inPlane * k, background);
-                    });
-                    SliceResampler resampler(
-                        plan.stack, input.data(), nx, ny, row, col, geo.spacing.head<2>(), background);
-                    for (int k0 = 0; k0 < rg.nz; k0 += SparseSlabs::kSlabSlices) {
-                        const int n = std::min(SparseSlabs::kSlabSlices, rg.nz - k0);
-                        tbb::parallel_for(0, n, [&](int k) {
-                            resampler.sample(geo.origin + double(k0 + k) * geo.spacing[2] * normal, rg.nx, rg.ny,
-                                slab.data() + outPlane * std::size_t(k));
-                        });
-                        sparse.addSlab(slab.data(), rg.nx, rg.ny, k0, n);
-                        if (options.progress) options.progress(double(k0 + n) / rg.nz, {});
-                    }
-                }
-            } catch (const IoError& e) {
-                if (auto bad = source.failed()) throw BadFile{*bad, e.what()};
-                throw;
-            }
-
-            Volume v(geo, IndexBox{Vec3i::Zero(), Vec3i(rg.nx - 1, rg.ny - 1, rg.nz - 1)});
-            Volume::GridPtr grid;
-            try {
-                grid = sparse.finish();
-            } catch (const ValueError& e) {
-                throw IoError(first.file.parent_path().string() + ": " + e.what());
-            }
-            v.setGrid(isMr ? Channel::Intensity : Channel::Hu, grid);
-
-            VolumeMetadata& md = v.metadata();
-            md.modality = first.modality.empty() ? "unknown" : first.modality;
-            md.modalitySource = first.modality.empty() ? FactSource::Unknown : FactSource::Header;
-            md.source = "DICOM series " + chosen->uid;
-            md.description = first.seriesDescription;
-            md.seriesUid = chosen->uid;
-            md.extra["slices"] = std::to_string(plan.slices.size());
-            if (plan.volume > 0) {
-                md.volumeChoice =
-                    VolumeChoice{int(plan.volume), int(work.volumes->count()), work.volumes->labels[plan.volume - 1]};
-            }
-            std::ostringstream air;
-            air << airBelow;
-            md.extra["air_below"] = air.str();
-            if (resample) {
-                md.extra["resampled"] = plan.stack.problem;
-                md.extra["interpolation"] = "bilinear within each slice, linear between slices";
-                md.extra["source_voxels_outside_grid"] = std::to_string(rg.outside);
-            }
-            if (!skippedBad.empty()) md.extra["skipped_bad_files"] = std::to_string(skippedBad.size());
-            std::optional<MrMaterialReport> mr;
-            if (isMr) {
-                MrMaterialOptions mo;
-                mo.t1Map = options.t1Map || first.looksLikeT1Map();
-                mo.t1Weighted = options.t1Weighted;
-                mo.normaliseT1Weighted = options.normaliseT1Weighted;
-                mo.removeBackground = options.removeMrBackground;
-                recordFieldStrength(md, first.fieldStrength, FactSource::Header, options.assumedField);
-                MrWeighting weighting = classifyMrWeighting(sequenceFields(first));
-                mr = assignMrMaterial(v, weighting, mo, first.file.parent_path().string());
-            }
-
-            if (report) {
-                report->series = *chosen;
-                report->allSeries = catalog.series;
-                report->skipped = catalog.skipped;
-                report->skippedBad = skippedBad;
-                report->volume = plan.volume;
-                report->chosenBecause = because;
-                report->mr = mr;
-                const auto active = v.has(Channel::Hu) ? v.grid(Channel::Hu)
-                    : v.has(Channel::T1)               ? v.grid(Channel::T1)
-                                                       : v.grid(Channel::Intensity);
-                report->denseVoxels = v.indexBox().voxelCount();
-                report->activeVoxels = std::int64_t(active->activeVoxelCount());
-                report->memoryBytes = active->memUsage();
-                report->resampled = resample;
-                report->irregularity = plan.stack.problem;
-                report->interpolation = resample ? "bilinear within each slice, linear between slices" : "";
-                report->sourceVoxelsOutside = resample ? rg.outside : 0;
-                report->paddedFiles = 0;
-                for (const auto& h : work.headers) report->paddedFiles += h.trailingPadding > 0 ? 1 : 0;
-                report->seconds = since(start);
-                report->scanSeconds = scanSeconds;
-                report->decodeSeconds = decodeSeconds;
-                report->sparseSeconds = sparseSeconds;
-            }
-            return v;
+            return loadPlanned(load, work, report);
         } catch (const BadFile& bad) {
-            const std::string message = catalog.scan.originalNames(bad.message);
-            if (!options.skipBad) throw IoError(message + "; --skip-bad loads the rest of the series");
-            // Plan again without the file: the gap checks decide whether what is left loads.
-            skippedBad.push_back({work.headers[bad.file].file, "damaged", message, chosen->uid});
-            std::vector<DicomHeader> rest;
-            for (std::size_t f = 0; f < work.headers.size(); ++f) {
-                if (f != bad.file) rest.push_back(work.headers[f]);
-            }
-            if (rest.empty()) throw IoError(message);
-            SeriesWork again;
-            again.info = work.info;
-            again.info.problem.clear();
-            again.info.damagedFiles = 0;
-            // The headers are complete: studySeries completes them again, which is harmless.
-            studySeries(again, std::move(rest), {}, options);
-            if (!again.info.problem.empty())
-                throw IoError(catalog.scan.originalNames(again.info.problem) + " (after leaving out " +
-                    work.headers[bad.file].file.string() + ", which could not be read)");
-            again.bad = work.bad;
-            work = std::move(again);
+            leaveOut(bad, load, work);
         }
     }
 }

@@ -3,7 +3,7 @@
 /// @brief CT or MR for formats that do not say (NIfTI, NRRD, MetaImage), from
 /// the values themselves.
 ///
-/// The rule (issue 27 item 8):
+/// The rule:
 /// - CT: negative values with air — at least kMinAirFraction of the voxels
 ///   between −1200 and −900 HU (air is −1000 HU; scanners' noise and
 ///   reconstruction spread it by tens of HU) — and soft tissue or water, at

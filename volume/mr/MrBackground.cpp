@@ -239,11 +239,13 @@ struct NoiseEstimate {
     std::string why;                 ///< why the peak was rejected, if it was
 };
 
-NoiseEstimate estimateNoise(
-    openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, std::int64_t total)
+/// Bins of the robust-range histogram (pass 2) for data that are not integers
+/// or do not fit unit bins.
+constexpr std::int64_t kRangeBins = std::int64_t(1) << 16;
+
+/// Pass 1: range and integrality of the active in-box values.
+ValueRange activeRange(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box)
 {
-    NoiseEstimate e;
-    // Pass 1: range and integrality of the active in-box values.
     tbb::enumerable_thread_specific<ValueRange> ranges;
     forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
         ValueRange& r = ranges.local();
@@ -264,16 +266,34 @@ NoiseEstimate estimateNoise(
         all.positive += r.positive;
         all.integer = all.integer && r.integer;
     }
-    e.zeros = total - all.positive;
-    if (all.positive == 0) {
-        e.why = "no positive value";
-        return e;
-    }
-    e.minPositive = all.lo;
+    return all;
+}
 
-    // Pass 2: the robust range over all in-box voxels (zeros in bin 0).
-    // Integer data get unit bins centred on the integers while the range fits.
-    constexpr std::int64_t kRangeBins = std::int64_t(1) << 16;
+/// Add the active in-box values for which counted(value) holds to @p h.
+template <typename Counted>
+void countValues(
+    openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, Histogram& h, const Counted& counted)
+{
+    tbb::enumerable_thread_specific<std::vector<std::int64_t>> local(
+        [&] { return std::vector<std::int64_t>(h.count.size(), 0); });
+    forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
+        std::vector<std::int64_t>& counts = local.local();
+        forEachVoxel(c, box, [&](openvdb::Index i, int, int, int) {
+            if (!leaf.isValueOn(i)) return;
+            const double v = leaf.getValue(i);
+            if (counted(v)) ++counts[std::size_t(h.bin(v))];
+        });
+    });
+    for (const auto& counts : local) {
+        for (std::size_t b = 0; b < counts.size(); ++b) h.count[b] += counts[b];
+    }
+}
+
+/// Pass 2: the robust range over all in-box voxels (the @p zeros in bin 0).
+/// Integer data get unit bins centred on the integers while the range fits.
+Histogram rangeHistogram(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box,
+    const ValueRange& all, std::int64_t zeros)
+{
     Histogram range;
     if (all.integer && all.hi < double(kRangeBins) - 1) {
         range.lo = -0.5;
@@ -284,94 +304,54 @@ NoiseEstimate estimateNoise(
         range.width = std::max(all.hi / double(kRangeBins), std::numeric_limits<double>::min());
         range.count.assign(std::size_t(kRangeBins), 0);
     }
-    // Pass 3: the low histogram, positive values below tBET (set after pass 2).
-    // Integer data: unit bins centred on the integers, else kLowBins bins.
-    constexpr std::int64_t kLowBins = 4096;
-    tbb::enumerable_thread_specific<std::vector<std::int64_t>> local(
-        [&] { return std::vector<std::int64_t>(range.count.size(), 0); });
-    forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
-        std::vector<std::int64_t>& h = local.local();
-        forEachVoxel(c, box, [&](openvdb::Index i, int, int, int) {
-            if (!leaf.isValueOn(i)) return;
-            const double v = leaf.getValue(i);
-            if (v > 0) ++h[std::size_t(range.bin(v))];
-        });
-    });
-    for (const auto& h : local) {
-        for (std::size_t b = 0; b < h.size(); ++b) range.count[b] += h[b];
-    }
-    range.count[0] += e.zeros;
-    e.t2 = std::max(0.0, percentile(range, total, 0.02));
-    e.t98 = percentile(range, total, 0.98);
-    e.bet = e.t2 + kBetFraction * (e.t98 - e.t2);
-    if (!(e.bet > 0)) {
-        e.why = "no robust range (t2 = t98 = 0)";
-        return e;
-    }
+    countValues(leaves, box, range, [](double v) { return v > 0; });
+    range.count[0] += zeros;
+    return range;
+}
 
+/// Pass 3: the low histogram, positive values below tBET (@p bet).
+/// Integer data: unit bins centred on the integers, else kLowBins bins.
+Histogram lowHistogram(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box,
+    const ValueRange& all, const Histogram& range, double bet)
+{
+    constexpr std::int64_t kLowBins = 4096;
     Histogram low;
-    if (all.integer && e.bet < double(kRangeBins)) {
+    if (all.integer && bet < double(kRangeBins)) {
         // Reuse pass 2's unit bins: bin b holds the integer b.
         low.lo = -0.5;
         low.width = 1.0;
         low.count.assign(range.count.begin(),
-            range.count.begin() + std::ptrdiff_t(std::min<double>(double(range.count.size()), std::floor(e.bet) + 1)));
+            range.count.begin() + std::ptrdiff_t(std::min<double>(double(range.count.size()), std::floor(bet) + 1)));
     } else {
         low.lo = 0;
-        low.width = e.bet / double(kLowBins);
+        low.width = bet / double(kLowBins);
         low.count.assign(std::size_t(kLowBins), 0);
-        tbb::enumerable_thread_specific<std::vector<std::int64_t>> lowLocal(
-            [&] { return std::vector<std::int64_t>(low.count.size(), 0); });
-        forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
-            std::vector<std::int64_t>& h = lowLocal.local();
-            forEachVoxel(c, box, [&](openvdb::Index i, int, int, int) {
-                if (!leaf.isValueOn(i)) return;
-                const double v = leaf.getValue(i);
-                if (v > 0 && v < e.bet) ++h[std::size_t(low.bin(v))];
-            });
-        });
-        for (const auto& h : lowLocal) {
-            for (std::size_t b = 0; b < h.size(); ++b) low.count[b] += h[b];
-        }
+        countValues(leaves, box, low, [bet](double v) { return v > 0 && v < bet; });
     }
-    // The zeros are not part of the noise fit: integer bin 0 is all zeros;
-    // float bin 0 holds positive values only.
-    const std::size_t first = all.integer ? 1 : 0;
-    if (low.count.size() < first + 3) {
-        e.why = "too few histogram bins below tBET";
-        return e;
-    }
-    // The peak of the histogram smoothed over kModeWindow of its bins: the
-    // Rayleigh's top is flat (within 5 % over ±0.3σ), and the argmax of the
-    // raw bins wanders over it with their counting noise.
-    const std::size_t window = std::max<std::size_t>(1, low.count.size() / kModeWindow);
-    std::vector<double> smooth(low.count.size(), 0.0);
-    {
-        double sum = 0.0;
-        std::size_t n = 0;
-        const std::size_t half = window / 2;
-        std::size_t lo = first, hi = first; // the window [lo, hi) around b
-        for (std::size_t b = first; b < low.count.size(); ++b) {
-            while (hi < low.count.size() && hi <= b + half) sum += double(low.count[hi++]), ++n;
-            while (lo + half < b) sum -= double(low.count[lo++]), --n;
-            smooth[b] = n ? sum / double(n) : 0.0;
-        }
-    }
-    std::size_t peak = first;
-    for (std::size_t b = first; b < low.count.size(); ++b) {
-        if (smooth[b] > smooth[peak]) peak = b;
-    }
-    e.mode = low.lowerEdge(std::int64_t(peak)) + low.width / 2;
-    if (low.count[peak] == 0 && smooth[peak] == 0.0) {
-        e.why = "no positive value below tBET";
-        return e;
-    }
-    if (e.mode > 0.5 * e.bet) {
-        e.why = "no peak at the low end of the histogram (mode " + num(e.mode) + " above tBET/2 = " + num(0.5 * e.bet) +
-            ")";
-        return e;
-    }
+    return low;
+}
 
+/// The counts from bin @p first on, averaged over a moving window of
+/// @p window bins centred on each (bins before @p first stay 0).
+std::vector<double> movingAverage(const std::vector<std::int64_t>& count, std::size_t first, std::size_t window)
+{
+    std::vector<double> smooth(count.size(), 0.0);
+    double sum = 0.0;
+    std::size_t n = 0;
+    const std::size_t half = window / 2;
+    std::size_t lo = first, hi = first; // the window [lo, hi) around b
+    for (std::size_t b = first; b < count.size(); ++b) {
+        while (hi < count.size() && hi <= b + half) sum += double(count[hi++]), ++n;
+        while (lo + half < b) sum -= double(count[lo++]), --n;
+        smooth[b] = n ? sum / double(n) : 0.0;
+    }
+    return smooth;
+}
+
+/// The Rayleigh fit to the low peak at e.mode, and whether it is the air's
+/// noise: close enough to a Rayleigh, and standing for enough voxels.
+void fitNoisePeak(NoiseEstimate& e, const Histogram& low, std::size_t first, std::int64_t total)
+{
     // The partial histogram up to kFitRangeModes modes, at least 3 bins.
     std::size_t last = std::max(first + 3, std::size_t(std::ceil((kFitRangeModes * e.mode - low.lo) / low.width)));
     last = std::min(last, low.count.size());
@@ -386,7 +366,7 @@ NoiseEstimate estimateNoise(
     if (e.distance > kMaxRayleighDistance) {
         e.why = "the low peak at " + num(e.mode) + " is not Rayleigh noise (Kolmogorov distance " + num(e.distance) +
             " > " + num(kMaxRayleighDistance) + ")";
-        return e;
+        return;
     }
     // How many voxels the fitted noise stands for: the fit range holds
     // mass(e0, eK) of the population.
@@ -396,10 +376,203 @@ NoiseEstimate estimateNoise(
     if (e.population < kMinBackgroundFraction * double(total)) {
         e.why = "the low peak at " + num(e.mode) + " stands for only " + num(e.population) + " voxels (" +
             num(100.0 * e.population / double(total)) + " %)";
-        return e;
+        return;
     }
     e.rayleigh = true;
+}
+
+NoiseEstimate estimateNoise(
+    openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, std::int64_t total)
+{
+    NoiseEstimate e;
+    const ValueRange all = activeRange(leaves, box);
+    e.zeros = total - all.positive;
+    if (all.positive == 0) {
+        e.why = "no positive value";
+        return e;
+    }
+    e.minPositive = all.lo;
+
+    const Histogram range = rangeHistogram(leaves, box, all, e.zeros);
+    e.t2 = std::max(0.0, percentile(range, total, 0.02));
+    e.t98 = percentile(range, total, 0.98);
+    e.bet = e.t2 + kBetFraction * (e.t98 - e.t2);
+    if (!(e.bet > 0)) {
+        e.why = "no robust range (t2 = t98 = 0)";
+        return e;
+    }
+
+    const Histogram low = lowHistogram(leaves, box, all, range, e.bet);
+    // The zeros are not part of the noise fit: integer bin 0 is all zeros;
+    // float bin 0 holds positive values only.
+    const std::size_t first = all.integer ? 1 : 0;
+    if (low.count.size() < first + 3) {
+        e.why = "too few histogram bins below tBET";
+        return e;
+    }
+    // The peak of the histogram smoothed over kModeWindow of its bins: the
+    // Rayleigh's top is flat (within 5 % over ±0.3σ), and the argmax of the
+    // raw bins wanders over it with their counting noise.
+    const std::vector<double> smooth =
+        movingAverage(low.count, first, std::max<std::size_t>(1, low.count.size() / kModeWindow));
+    std::size_t peak = first;
+    for (std::size_t b = first; b < low.count.size(); ++b) {
+        if (smooth[b] > smooth[peak]) peak = b;
+    }
+    e.mode = low.lowerEdge(std::int64_t(peak)) + low.width / 2;
+    if (low.count[peak] == 0 && smooth[peak] == 0.0) {
+        e.why = "no positive value below tBET";
+        return e;
+    }
+    if (e.mode > 0.5 * e.bet) {
+        e.why = "no peak at the low end of the histogram (mode " + num(e.mode) + " above tBET/2 = " + num(0.5 * e.bet) +
+            ")";
+        return e;
+    }
+    fitNoisePeak(e, low, first, total);
     return e;
+}
+
+/// Steps 1–3 from the noise estimate: the threshold into @p result, and how it
+/// was found into @p how. False when there is no air background to remove
+/// (result.rule then says why).
+bool chooseThreshold(const NoiseEstimate& noise, std::int64_t total, MrBackgroundResult& result, std::string& how)
+{
+    result.betThreshold = noise.bet;
+    const double zeroPercent = 100.0 * double(noise.zeros) / double(total);
+    if (noise.rayleigh) {
+        const double k = mrNoiseMultiple(total);
+        result.noiseFloor = noise.sigma;
+        result.threshold = k * noise.sigma;
+        how = "Rayleigh noise sigma " + num(noise.sigma) + " (histogram mode " + num(noise.mode) + " below tBET " +
+            num(noise.bet) + ", ML fit below " + num(kFitRangeModes) + " modes, Kolmogorov distance " +
+            num(noise.distance) + "); threshold " + num(k) + " sigma = " + num(result.threshold) +
+            " (k = sqrt(2 ln N), N = " + std::to_string(total) + ")";
+        return true;
+    }
+    if (double(noise.zeros) >= kMinBackgroundFraction * double(total) && noise.minPositive > 0) {
+        // No noise peak, but zeros: the scanner masked the air.
+        result.zeroBackground = true;
+        result.noiseFloor = 0;
+        result.threshold = noise.minPositive;
+        how = "zero background (" + num(zeroPercent) + " % of the voxels are 0, no Rayleigh noise: " + noise.why +
+            "); threshold: the smallest positive value, " + num(result.threshold);
+        return true;
+    }
+    result.threshold = 0;
+    result.rule = "MR background: none removed, no air background (no Rayleigh noise: " + noise.why + "; " +
+        num(zeroPercent) + " % zeros)";
+    return false;
+}
+
+/// Step 4's mask: kAbove where an active in-box value is at or above @p t.
+std::vector<std::uint8_t> markAbove(
+    openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, const DenseLayout& d, float t)
+{
+    std::vector<std::uint8_t> mask(std::size_t(d.size()), kBelow);
+    forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
+        forEachVoxel(c, box, [&](openvdb::Index i, int x, int y, int z) {
+            if (leaf.isValueOn(i) && leaf.getValue(i) >= t) mask[std::size_t(d.index(x, y, z))] = kAbove;
+        });
+    });
+    return mask;
+}
+
+/// Step 4: every component of kAbove voxels becomes kSpeck, then the largest
+/// kBody. Returns the number of components.
+std::int64_t keepLargestComponent(
+    std::uint8_t* m, const DenseLayout& d, std::vector<std::array<std::int32_t, 3>>& stack)
+{
+    std::int64_t components = 0, largest = 0;
+    std::array<std::int32_t, 3> largestSeed{0, 0, 0};
+    for (std::int64_t z = 0; z < d.nz; ++z) {
+        for (std::int64_t y = 0; y < d.ny; ++y) {
+            std::uint8_t* row = m + d.index(0, y, z);
+            for (std::int64_t x = 0; x < d.nx; ++x) {
+                if (row[x] != kAbove) continue;
+                stack.push_back({std::int32_t(x), std::int32_t(y), std::int32_t(z)});
+                const std::int64_t n = floodFill(
+                    m, d, stack, [](std::uint8_t v) { return v == kAbove; }, kSpeck);
+                ++components;
+                if (n > largest) {
+                    largest = n;
+                    largestSeed = {std::int32_t(x), std::int32_t(y), std::int32_t(z)};
+                }
+            }
+        }
+    }
+    if (largest > 0) {
+        stack.push_back(largestSeed);
+        floodFill(
+            m, d, stack, [](std::uint8_t v) { return v == kSpeck; }, kBody);
+    }
+    return components;
+}
+
+/// Step 5: the flood from the border through everything but the body marks
+/// kOutside. Returns the number of voxels it reached.
+std::int64_t floodFromBorder(std::uint8_t* m, const DenseLayout& d, std::vector<std::array<std::int32_t, 3>>& stack)
+{
+    const auto outside = [](std::uint8_t v) { return v == kBelow || v == kSpeck; };
+    std::int64_t removed = 0;
+    const auto seedFace = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        if (!outside(m[d.index(x, y, z)])) return;
+        stack.push_back({std::int32_t(x), std::int32_t(y), std::int32_t(z)});
+        removed += floodFill(m, d, stack, outside, kOutside);
+    };
+    for (std::int64_t z = 0; z < d.nz; ++z) {
+        for (std::int64_t y = 0; y < d.ny; ++y) {
+            if (z == 0 || z == d.nz - 1 || y == 0 || y == d.ny - 1) {
+                for (std::int64_t x = 0; x < d.nx; ++x) seedFace(x, y, z);
+            } else {
+                seedFace(0, y, z);
+                seedFace(d.nx - 1, y, z);
+            }
+        }
+    }
+    return removed;
+}
+
+/// Step 6, first half: a leaf for every 8³ block that keeps a voxel and has
+/// none (an enclosed hole the loader had left inactive).
+void touchKeptLeaves(FloatTree& tree, const openvdb::CoordBBox& box, const DenseLayout& d, const std::uint8_t* m)
+{
+    const openvdb::Coord origin0 = box.min() & ~7;
+    for (int bz = origin0.z(); bz <= box.max().z(); bz += 8) {
+        for (int by = origin0.y(); by <= box.max().y(); by += 8) {
+            for (int bx = origin0.x(); bx <= box.max().x(); bx += 8) {
+                const openvdb::Coord origin(bx, by, bz);
+                if (tree.probeConstLeaf(origin)) continue;
+                openvdb::CoordBBox c(origin, origin.offsetBy(7));
+                c.intersect(box);
+                bool keep = false;
+                for (int z = c.min().z(); z <= c.max().z() && !keep; ++z) {
+                    for (int y = c.min().y(); y <= c.max().y() && !keep; ++y) {
+                        for (int x = c.min().x(); x <= c.max().x() && !keep; ++x) {
+                            keep = m[d.index(x - d.min.x(), y - d.min.y(), z - d.min.z())] != kOutside;
+                        }
+                    }
+                }
+                if (keep) tree.touchLeaf(origin);
+            }
+        }
+    }
+}
+
+/// Step 6, second half: the mask per leaf, kOutside inactive background,
+/// everything else active.
+void applyMask(openvdb::tree::LeafManager<FloatTree>& leaves, const openvdb::CoordBBox& box, const DenseLayout& d,
+    const std::uint8_t* m, float background)
+{
+    forEachLeafInBox(leaves, box, [&](FloatLeaf& leaf, const openvdb::CoordBBox& c) {
+        forEachVoxel(c, box, [&](openvdb::Index i, int x, int y, int z) {
+            if (m[d.index(x, y, z)] == kOutside) {
+                leaf.setValueOff(i, background);
+            } else {
+                leaf.setValueOn(i);
+            }
+        });
+    });
 }
 
 /// The rule itself (removeMrBackground checks the arguments). Inside this
@@ -432,82 +605,15 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
     };
 
     // 1–3: noise floor and threshold.
-    const NoiseEstimate noise = estimateNoise(leaves, box, total);
-    result.betThreshold = noise.bet;
     std::string how;
-    const double zeroPercent = 100.0 * double(noise.zeros) / double(total);
-    if (noise.rayleigh) {
-        const double k = mrNoiseMultiple(total);
-        result.noiseFloor = noise.sigma;
-        result.threshold = k * noise.sigma;
-        how = "Rayleigh noise sigma " + num(noise.sigma) + " (histogram mode " + num(noise.mode) + " below tBET " +
-            num(noise.bet) + ", ML fit below " + num(kFitRangeModes) + " modes, Kolmogorov distance " +
-            num(noise.distance) + "); threshold " + num(k) + " sigma = " + num(result.threshold) +
-            " (k = sqrt(2 ln N), N = " + std::to_string(total) + ")";
-    } else if (double(noise.zeros) >= kMinBackgroundFraction * double(total) && noise.minPositive > 0) {
-        // No noise peak, but zeros: the scanner masked the air.
-        result.zeroBackground = true;
-        result.noiseFloor = 0;
-        result.threshold = noise.minPositive;
-        how = "zero background (" + num(zeroPercent) + " % of the voxels are 0, no Rayleigh noise: " + noise.why +
-            "); threshold: the smallest positive value, " + num(result.threshold);
-    } else {
-        result.threshold = 0;
-        result.rule = "MR background: none removed, no air background (no Rayleigh noise: " + noise.why + "; " +
-            num(zeroPercent) + " % zeros)";
-        return unchanged(result);
-    }
+    if (!chooseThreshold(estimateNoise(leaves, box, total), total, result, how)) return unchanged(result);
 
     // 4–5: mask, largest component, flood from the border.
-    std::vector<std::uint8_t> mask(std::size_t(total), kBelow);
-    const float t = float(result.threshold);
-    forEachLeafInBox(leaves, box, [&](const FloatLeaf& leaf, const openvdb::CoordBBox& c) {
-        forEachVoxel(c, box, [&](openvdb::Index i, int x, int y, int z) {
-            if (leaf.isValueOn(i) && leaf.getValue(i) >= t) mask[std::size_t(d.index(x, y, z))] = kAbove;
-        });
-    });
+    std::vector<std::uint8_t> mask = markAbove(leaves, box, d, float(result.threshold));
     std::uint8_t* m = mask.data();
     std::vector<std::array<std::int32_t, 3>> stack;
-    std::int64_t largest = 0;
-    std::array<std::int32_t, 3> largestSeed{0, 0, 0};
-    for (std::int64_t z = 0; z < d.nz; ++z) {
-        for (std::int64_t y = 0; y < d.ny; ++y) {
-            std::uint8_t* row = m + d.index(0, y, z);
-            for (std::int64_t x = 0; x < d.nx; ++x) {
-                if (row[x] != kAbove) continue;
-                stack.push_back({std::int32_t(x), std::int32_t(y), std::int32_t(z)});
-                const std::int64_t n = floodFill(
-                    m, d, stack, [](std::uint8_t v) { return v == kAbove; }, kSpeck);
-                ++result.components;
-                if (n > largest) {
-                    largest = n;
-                    largestSeed = {std::int32_t(x), std::int32_t(y), std::int32_t(z)};
-                }
-            }
-        }
-    }
-    if (largest > 0) {
-        stack.push_back(largestSeed);
-        floodFill(
-            m, d, stack, [](std::uint8_t v) { return v == kSpeck; }, kBody);
-    }
-    const auto outside = [](std::uint8_t v) { return v == kBelow || v == kSpeck; };
-    std::int64_t removed = 0;
-    const auto seedFace = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        if (!outside(m[d.index(x, y, z)])) return;
-        stack.push_back({std::int32_t(x), std::int32_t(y), std::int32_t(z)});
-        removed += floodFill(m, d, stack, outside, kOutside);
-    };
-    for (std::int64_t z = 0; z < d.nz; ++z) {
-        for (std::int64_t y = 0; y < d.ny; ++y) {
-            if (z == 0 || z == d.nz - 1 || y == 0 || y == d.ny - 1) {
-                for (std::int64_t x = 0; x < d.nx; ++x) seedFace(x, y, z);
-            } else {
-                seedFace(0, y, z);
-                seedFace(d.nx - 1, y, z);
-            }
-        }
-    }
+    result.components = keepLargestComponent(m, d, stack);
+    const std::int64_t removed = floodFromBorder(m, d, stack);
     if (double(removed) < kMinBackgroundFraction * double(total)) {
         result.rule = "MR background: none removed, no air background (" + how + "; only " + std::to_string(removed) +
             " voxels outside the body reach the volume border)";
@@ -515,39 +621,10 @@ MrBackgroundResult removeBackground(FloatGrid& grid, const IndexBox& indexBox)
     }
     for (std::uint8_t v : mask) result.holesFilled += v == kBelow ? 1 : 0;
 
-    // 6: apply. A leaf for every 8³ block that keeps a voxel and has none
-    // (an enclosed hole the loader had left inactive), then the mask per leaf.
-    const openvdb::Coord origin0 = box.min() & ~7;
-    for (int bz = origin0.z(); bz <= box.max().z(); bz += 8) {
-        for (int by = origin0.y(); by <= box.max().y(); by += 8) {
-            for (int bx = origin0.x(); bx <= box.max().x(); bx += 8) {
-                const openvdb::Coord origin(bx, by, bz);
-                if (tree.probeConstLeaf(origin)) continue;
-                openvdb::CoordBBox c(origin, origin.offsetBy(7));
-                c.intersect(box);
-                bool keep = false;
-                for (int z = c.min().z(); z <= c.max().z() && !keep; ++z) {
-                    for (int y = c.min().y(); y <= c.max().y() && !keep; ++y) {
-                        for (int x = c.min().x(); x <= c.max().x() && !keep; ++x) {
-                            keep = m[d.index(x - d.min.x(), y - d.min.y(), z - d.min.z())] != kOutside;
-                        }
-                    }
-                }
-                if (keep) tree.touchLeaf(origin);
-            }
-        }
-    }
+    // 6: apply.
+    touchKeptLeaves(tree, box, d, m);
     leaves.rebuild();
-    const float background = grid.background();
-    forEachLeafInBox(leaves, box, [&](FloatLeaf& leaf, const openvdb::CoordBBox& c) {
-        forEachVoxel(c, box, [&](openvdb::Index i, int x, int y, int z) {
-            if (m[d.index(x, y, z)] == kOutside) {
-                leaf.setValueOff(i, background);
-            } else {
-                leaf.setValueOn(i);
-            }
-        });
-    });
+    applyMask(leaves, box, d, m, grid.background());
     openvdb::tools::pruneInactive(tree);
     if (hadTiles) openvdb::tools::prune(tree);
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file MrBackground.h
 /// @brief Make the air around the body of a magnitude MR image the inactive
-/// background (issue 27 item 7): a noise-floor threshold, the largest
+/// background: a noise-floor threshold, the largest
 /// connected component, and its holes filled.
 ///
 /// ## The rule

@@ -2,8 +2,8 @@
 /// @file MrWeighting.h
 /// @brief What an MR series is (T1 map, T1-weighted, PD, T2, FLAIR, diffusion,
 /// field map, phase, ...), decided from its header fields, and the BIDS sidecar
-/// that carries those fields beside NIfTI, NRRD and MetaImage files (issue 27
-/// items 6 and 8).
+/// that carries those fields beside NIfTI, NRRD and MetaImage files
+/// (docs/reference.md, "MR weighting from the headers").
 ///
 /// ## The MR weighting rule
 ///

@@ -12,7 +12,7 @@
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

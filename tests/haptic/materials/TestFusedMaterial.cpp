@@ -9,7 +9,7 @@
 
 #include "haptic/materials/FieldGrids.h"
 #include "haptic/materials/MaterialField.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 
 #include <cmath>
 

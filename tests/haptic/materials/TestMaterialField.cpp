@@ -6,10 +6,10 @@
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
+#include "core/Errors.h"
 #include "haptic/materials/FieldGrids.h"
 #include "haptic/materials/MaterialField.h"
-#include "core/Errors.h"
-#include "volume/phantoms/Phantoms.h"
+#include "phantoms/Phantoms.h"
 #include "volume/VolumeFile.h"
 
 #include <cmath>

@@ -6,12 +6,12 @@
 
 #include "common/BuiltinTable.h"
 #include "common/SceneCache.h"
-#include "haptic/scene/ScriptedInsertion.h"
-#include "haptic/scene/Scene.h"
 #include "core/Errors.h"
 #include "core/Math.h"
-#include "volume/phantoms/Phantoms.h"
-#include "volume/phantoms/Rasterize.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
+#include "phantoms/Phantoms.h"
+#include "phantoms/Rasterize.h"
 
 #include <gtest/gtest.h>
 

@@ -5,20 +5,20 @@
 #include "common/Tolerances.h"
 
 #include "core/Errors.h"
+#include "phantoms/Phantoms.h"
 #include "volume/Grids.h"
-#include "volume/phantoms/Phantoms.h"
 #include "volume/io/VdbFile.h"
 
 #include <Eigen/Geometry>
 #include <openvdb/io/File.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
-#include <functional>
-#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <sys/resource.h>
 #include <sys/wait.h>

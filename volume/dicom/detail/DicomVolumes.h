@@ -4,7 +4,7 @@
 /// diffusion directions, echoes of a multi-echo or field-map acquisition,
 /// stacks and frame types of enhanced objects.
 ///
-/// Slices are split in two steps (the clarified rule of issue 27):
+/// Slices are split in two steps:
 /// 1. Slices that differ in image type, echo number, echo time, temporal
 ///    position, b-value or stack are never stacked together, even at distinct
 ///    positions (a two-echo field map whose echoes alternate along the stack
