@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file bench_segment.cpp
-/// @brief Segmentation time and memory on the real CT, with 1 and 2 threads measured in the same run (docs/benchmarks.md:
-/// speed with its error, comparisons as ratios from one run); the peak memory
-/// against the dense float copy of the volume and against segmentation's own
-/// estimate; the load average and the CPU time beside the
-/// wall time, because this machine is shared.
+/// @brief Segmentation time and memory on the real CT, with 1 and 2 threads measured in the same run
+/// (docs/benchmarks.md: speed with its error, comparisons as ratios from one run); the peak memory against the dense
+/// float copy of the volume and against segmentation's own estimate; the load average and the CPU time beside the wall
+/// time, because this machine is shared.
 ///
 ///     bench_segment [--repeats N] [--json]
 ///

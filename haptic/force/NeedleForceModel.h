@@ -79,8 +79,8 @@ struct ForceTerms {
     double couplingNPerMm = 0.0; ///< stick-slip proxy stiffness; 0: the device's maximum stiffness (§6.2)
     /// Uniform scale on the force sent to the device (the scene's force_scale):
     /// every term alike (palpation and guidance too), so the contrasts between
-    /// layers survive, while the device's I²t budget lasts to bone contact. The model's own figures (axialN, modelForce) stay unscaled; F_G is
-    /// not scaled.
+    /// layers survive, while the device's I²t budget lasts to bone contact. The model's own figures (axialN,
+    /// modelForce) stay unscaled; F_G is not scaled.
     double renderScale = 1.0;
 };
 

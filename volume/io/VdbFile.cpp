@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 #include <openvdb/io/File.h>
+#include <openvdb/points/StreamCompression.h>
 
 #include <algorithm>
 #include <array>
@@ -149,6 +150,9 @@ struct GridWalk {
 };
 
 /// Blosc's 16-byte header: the declared sizes must be the chunk's.
+/// The length OpenVDB pads a short buffer to before Blosc compresses it.
+constexpr std::uint64_t kBloscPadBytes = std::uint64_t(openvdb::compression::BLOSC_PAD_BYTES);
+
 void checkBlosc(Cursor& c, std::size_t at, std::uint64_t chunk, std::uint64_t expected, const std::string& field)
 {
     if (chunk < kBloscHeader)
@@ -197,7 +201,11 @@ void walkDelayedLoad(Cursor& c, std::uint32_t numBytes, const std::string& field
         if (part == 1 && bytes == std::numeric_limits<std::uint32_t>::max()) break; // no size table
         if (bytes > 0) {
             c.need(bytes, what, at);
-            checkBlosc(c, at, bytes, std::uint64_t(count) * elem, what);
+            // OpenVDB pads a table shorter than BLOSC_PAD_BYTES with zeros to
+            // that length before compressing it (compression::bloscCompress),
+            // so the chunk then declares the padded length.
+            const std::uint64_t table = std::uint64_t(count) * elem;
+            checkBlosc(c, at, bytes, std::max<std::uint64_t>(table, kBloscPadBytes), what);
             c.skip(bytes, what);
         } else {
             c.skip(std::uint64_t(count) * elem, what);
