@@ -65,7 +65,7 @@ double bruteForce(const volume::Volume& v, int id, const Vec3d& a, const Vec3d& 
     return best;
 }
 
-/// `voxhap plan`'s work on a CT without its views (tools/CmdPlan.cpp): load,
+/// `voxhap plan`'s work on a CT without its views (tools/commands/CmdPlan.cpp): load,
 /// segment, search the top 10 with bone allowed, and, with @p predict, the
 /// deflection of the ranked paths. @return the seconds it took; @p ranked the paths.
 double planOnCt(const std::filesystem::path& ct, const Vec3d& target, const planning::DeflectionOptions* predict,

@@ -69,6 +69,8 @@ const char* name(WireRead r)
         return "a pose";
     case WireRead::Skipped:
         return "skipped";
+    case WireRead::Shaft:
+        return "a shaft (not asked for)";
     case WireRead::BadPose:
         return "a bad pose";
     case WireRead::BadHeader:

@@ -38,8 +38,12 @@ nlohmann::json summaryJson(
         {"peak_plunger_force_N", s.peakPlungerN}, {"faults", s.faults}, {"final_depth_mm", s.finalDepthMm},
         {"duration_s", s.durationS}, {"events", events}, {"csv", csv}, {"png", png}};
     if (s.guidance) j["guidance"] = {{"peak_force_N", s.peakGuidanceN}, {"max_offset_mm", s.maxOffsetMm}};
-    if (s.bending)
-        j["bending"] = {{"tip_deviation_mm", s.tipDeviationMm}, {"max_tip_deviation_mm", s.maxTipDeviationMm}};
+    if (s.bending) {
+        nlohmann::json shaft = nlohmann::json::array();
+        for (const Vec3d& p : r.bentShaft) shaft.push_back({p.x(), p.y(), p.z()});
+        j["bending"] = {{"tip_deviation_mm", s.tipDeviationMm}, {"max_tip_deviation_mm", s.maxTipDeviationMm},
+            {"shaft", std::move(shaft)}};
+    }
     return j;
 }
 

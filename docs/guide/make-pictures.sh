@@ -35,6 +35,7 @@ pictures=(
   fusion-axial.png        # voxhap render --fusion: the porcine CT and MR, before and after registration
   fusion-plan-force.png   # voxhap plan on a fused torso phantom: damping from the MR's T1
   plan-bending-views.png  # voxhap plan with a bending needle: the predicted bent needles on the CT
+  bending-predicted-simulated.png  # the best path's bent needle as plan predicts it and as simulate runs it
 )
 
 while (($#)); do
@@ -115,6 +116,71 @@ cp fused-plan/force-depth.png fusion-plan-force.png
 step "plan on the CT with a needle that bends"
 "$voxhap" plan "$ct" --target 4,128,296 --allow-bone --scene kyung-bending --top 3 --out plan-bend >plan-bend.txt
 cp plan-bend/views.png plan-bending-views.png
+
+step "the best path's bent needle, predicted (plan) and simulated (simulate), with and without its half turn"
+# Scripts at 10 mm/s for the chosen bevel: without a turn, and with the half turn plan chose.
+/usr/bin/python3 - plan-bend/report.json <<'EOF' >bend-path.txt
+import json, sys
+path = json.load(open(sys.argv[1]))["paths"][0]
+d = path["deflection"]
+base = d["without_turn"][0]["bevel_orientation_deg"]
+roll = (d["best"]["bevel_orientation_deg"] - base) % 360.0  # the chosen bevel, as a roll from the scene's
+turn, length = d["best"]["turn_depth_mm"], path["length_mm"]
+with open("straight.csv", "w") as f:
+    f.write(f"t_s,depth_mm,roll_deg\n0,-5,{roll}\n{(length + 5) / 10},{length},{roll}\n")
+rows = [(0, -5, roll)]
+if turn is not None:
+    t = (turn + 5) / 10
+    rows += [(t, turn, roll), (t + 0.1, turn, roll + 180), (t + 0.1 + (length - turn) / 10, length, roll + 180)]
+else:
+    rows += [((length + 5) / 10, length, roll)]
+with open("turned.csv", "w") as f:
+    f.write("t_s,depth_mm,roll_deg\n" + "".join(f"{a},{b},{c}\n" for a, b, c in rows))
+print(",".join(map(str, path["entry"])), ",".join(map(str, path["target"])))
+EOF
+read -r bend_entry bend_target <bend-path.txt
+"$voxhap" segment "$ct" --out ct-labelled.vdb >/dev/null # the labels plan segments for itself
+for motion in straight turned; do
+  "$voxhap" simulate ct-labelled.vdb --scene kyung-bending --entry "$bend_entry" --target "$bend_target" \
+    --script $motion.csv --no-plot --json --out sim-$motion >sim-$motion.json
+done
+MPLBACKEND=Agg /usr/bin/python3 - plan-bend/report.json sim-straight.json sim-turned.json <<'EOF'
+import json, sys
+import matplotlib.pyplot as plt
+import numpy as np
+path = json.load(open(sys.argv[1]))["paths"][0]
+d = path["deflection"]
+entry, target = np.array(path["entry"]), np.array(path["target"])
+u = (target - entry) / np.linalg.norm(target - entry)
+def offsets(shaft):
+    p = np.array(shaft) - entry
+    depth = p @ u
+    return depth, p - np.outer(depth, u)
+straight = json.load(open(sys.argv[2]))["bending"]["shaft"]
+turned = json.load(open(sys.argv[3]))["bending"]["shaft"]
+# Signed along the side the unturned needle bends to (the bevel's push).
+_, lat = offsets(straight)
+side = lat[-1] / np.linalg.norm(lat[-1])
+turn = d["best"]["turn_depth_mm"]
+how = f"half turn at {turn:.0f} mm" if turn is not None else "no turn"
+fig, ax = plt.subplots(figsize=(8, 4.5), dpi=100)
+for shaft, style, label in [(d["bent_shaft"], "-", "predicted by plan"), (turned, "--", "simulated by simulate")]:
+    depth, lat = offsets(shaft)
+    ax.plot(depth, lat @ side, style, lw=2, label=f"{label} ({how})")
+depth, lat = offsets(straight)
+ax.plot(depth, lat @ side, ":", lw=2, label="simulated without the turn")
+unturned = [c for c in d["without_turn"] if c["bevel_orientation_deg"] == d["best"]["bevel_orientation_deg"]][0]
+ax.plot([path["length_mm"]], [unturned["tip_deviation_mm"]], "o",
+        label=f"predicted tip without the turn ({unturned['tip_deviation_mm']:.1f} mm off the line)")
+ax.axhline(0, color="grey", lw=0.8)
+ax.set_xlim(0, path["length_mm"] + 2)
+ax.set_xlabel("depth along the planned line [mm]")
+ax.set_ylabel("needle off the planned line [mm]")
+ax.set_title("kyung-bending on the CT: the best path's 18 G needle, hub pushed along the line")
+ax.legend(loc="upper left", fontsize=9)
+fig.tight_layout()
+fig.savefig("bending-predicted-simulated.png")
+EOF
 
 mkdir -p "$out"
 for p in "${pictures[@]}"; do

@@ -131,6 +131,7 @@ bool IgtlDevice::handleMessage(int fd) noexcept
         mCounters.rejected.fetch_add(1);
         return true; // a bad pose, not a broken stream
     case detail::WireRead::Skipped:
+    case detail::WireRead::Shaft: // not asked for (no shaft buffer): a POINT is skipped
         return true;
     case detail::WireRead::Pose:
         break;

@@ -101,17 +101,31 @@ WireRead poseFromTransformContent(const unsigned char* c, Vec3d& tip, Vec3d& dir
     return WireRead::Pose;
 }
 
+/// A POINT content: its points' positions, every one finite.
+WireRead shaftFromPointContent(const unsigned char* c, std::size_t size, std::vector<Vec3d>& shaft)
+{
+    if (size % kPointElementBytes != 0) return WireRead::BadHeader;
+    shaft.resize(size / kPointElementBytes);
+    for (std::size_t i = 0; i < shaft.size(); ++i) {
+        const unsigned char* at = c + i * kPointElementBytes + kPointPositionOffset;
+        shaft[i] = Vec3d(bigEndianFloat(at), bigEndianFloat(at + 4), bigEndianFloat(at + 8));
+        if (!shaft[i].allFinite()) return WireRead::BadPose;
+    }
+    return WireRead::Shaft;
+}
+
 /// A header-version-2 message, whatever its type: the body read whole (bounded
 /// by the caller's maxBodyBytes), its CRC-64 checked (the library's crc64,
 /// ECMA-182), its sections split; a TRANSFORM's content is the 48-byte matrix.
 WireRead readVersion2(int fd, const unsigned char* header, std::uint64_t bodySize, bool transform, double timeoutS,
-    Vec3d& tip, Vec3d& direction)
+    Vec3d& tip, Vec3d& direction, std::vector<Vec3d>* shaft)
 {
     std::vector<unsigned char> body(bodySize);
     if (bodySize > 0 && !readExactly(fd, body.data(), body.size(), timeoutS)) return WireRead::Broken;
     if (crc64(body.data(), bodySize, 0) != bigEndian(header + 50, 8)) return WireRead::BadHeader;
     std::size_t contentAt = 0, contentSize = 0;
     if (!splitVersion2Body(body, contentAt, contentSize)) return WireRead::BadHeader;
+    if (shaft) return shaftFromPointContent(body.data() + contentAt, contentSize, *shaft);
     if (!transform) return WireRead::Skipped;
     if (contentSize != kTransformBodyBytes) return WireRead::BadHeader;
     return poseFromTransformContent(&body[contentAt], tip, direction);
@@ -167,7 +181,8 @@ bool readExactly(int fd, unsigned char* buf, std::size_t n, double timeoutS)
     return true;
 }
 
-WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction) noexcept
+WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction,
+    std::vector<Vec3d>* shaft) noexcept
 {
     unsigned char header[kHeaderBytes];
     if (!readExactly(fd, header, kHeaderBytes, timeoutS)) return WireRead::Broken;
@@ -178,11 +193,21 @@ WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3
     for (int i = 0; i < 8; ++i) bodySize = (bodySize << 8) | header[42 + i];
     if (version < 1 || version > 2 || bodySize > maxBodyBytes) return WireRead::BadHeader;
     const bool transform = std::strncmp(type, "TRANSFORM", 12) == 0;
+    char device[21] = {};
+    std::memcpy(device, header + 14, 20);
+    // The shaft's POINT, when the caller reads shafts; any other POINT is skipped below.
+    if (!(shaft && std::strncmp(type, "POINT", 12) == 0 && std::strcmp(device, kShaftDeviceName) == 0)) shaft = nullptr;
     try {
         // OpenIGTLink 1.11 (Debian's) reads header version 1 only: on a version 2 header
         // (protocol 3: an extended header before the content, metadata after it) its
         // unpacking depends on uninitialised memory, so version 2 is read here.
-        if (version == 2) return readVersion2(fd, header, bodySize, transform, timeoutS, tip, direction);
+        if (version == 2) return readVersion2(fd, header, bodySize, transform, timeoutS, tip, direction, shaft);
+        if (shaft) { // the same layout in both header versions: read here, not through the library
+            std::vector<unsigned char> body(bodySize);
+            if (bodySize > 0 && !readExactly(fd, body.data(), body.size(), timeoutS)) return WireRead::Broken;
+            if (crc64(body.data(), bodySize, 0) != bigEndian(header + 50, 8)) return WireRead::BadHeader;
+            return shaftFromPointContent(body.data(), body.size(), *shaft);
+        }
         if (transform && bodySize != kTransformBodyBytes) return WireRead::BadHeader;
         if (!transform) { // read and discard, bounded by maxBodyBytes
             std::vector<unsigned char> body(bodySize);

@@ -8,6 +8,7 @@
 
 #include "core/Errors.h"
 
+#include <igtlPointMessage.h>
 #include <igtlTransformMessage.h>
 
 #include <arpa/inet.h>
@@ -121,8 +122,26 @@ bool PoseSender::send(const StreamedPose& pose)
     }
     msg->SetMatrix(m);
     msg->Pack();
-    const auto n = std::size_t(msg->GetPackSize());
-    const ssize_t r = ::send(mFd, msg->GetPackPointer(), n, MSG_NOSIGNAL);
+    // One send for the shaft and the pose: a dropped write drops both, never half.
+    std::vector<unsigned char> wire;
+    if (!pose.shaft.empty()) {
+        auto points = igtl::PointMessage::New();
+        points->SetDeviceName(detail::kShaftDeviceName);
+        for (const Vec3d& q : pose.shaft) {
+            auto e = igtl::PointElement::New();
+            e->SetName("shaft");
+            e->SetGroupName("Needle");
+            e->SetPosition(float(q.x()), float(q.y()), float(q.z()));
+            points->AddPointElement(e);
+        }
+        points->Pack();
+        const auto* bytes = static_cast<const unsigned char*>(points->GetPackPointer());
+        wire.assign(bytes, bytes + points->GetPackSize());
+    }
+    const auto* bytes = static_cast<const unsigned char*>(msg->GetPackPointer());
+    wire.insert(wire.end(), bytes, bytes + msg->GetPackSize());
+    const std::size_t n = wire.size();
+    const ssize_t r = ::send(mFd, wire.data(), n, MSG_NOSIGNAL);
     if (r == ssize_t(n)) {
         ++mSent;
         return true;
@@ -158,7 +177,8 @@ std::optional<StreamedPose> PoseReceiver::latest() const
 bool PoseReceiver::handleMessage(int fd) noexcept
 {
     StreamedPose p;
-    switch (detail::readTransform(fd, kPoseReadTimeoutS, kPoseMaxBodyBytes, p.tip, p.direction)) {
+    std::vector<Vec3d> shaft;
+    switch (detail::readTransform(fd, kPoseReadTimeoutS, kPoseMaxBodyBytes, p.tip, p.direction, &shaft)) {
     case detail::WireRead::Broken:
         return false;
     case detail::WireRead::BadHeader:
@@ -166,13 +186,19 @@ bool PoseReceiver::handleMessage(int fd) noexcept
         return false;
     case detail::WireRead::BadPose:
         mRejected.fetch_add(1);
-        return true; // a bad pose, not a broken stream
+        mPendingShaft.clear(); // a bad shaft or pose: the next pose is drawn straight, not with a stale shaft
+        return true;           // a bad pose, not a broken stream
     case detail::WireRead::Skipped:
+        return true;
+    case detail::WireRead::Shaft:
+        mPendingShaft = std::move(shaft);
         return true;
     case detail::WireRead::Pose:
         break;
     }
     try {
+        p.shaft = std::move(mPendingShaft); // the shaft sent just before, if any
+        mPendingShaft.clear();
         const double norm = p.direction.norm();
         // A unit column arrives unit to float precision; keep it as sent then,
         // so that the receiver returns exactly the float values on the wire.
@@ -201,6 +227,7 @@ void PoseReceiver::serve() noexcept
                 ::close(c); // one sender at a time
             } else if (c >= 0) {
                 client = c;
+                mPendingShaft.clear(); // a shaft belongs to the connection that sent it
                 mConnected.store(true);
             }
         }

@@ -6,7 +6,10 @@
 /// Same pose convention as the device bridge (IgtlDevice.h): the transform's
 /// translation is the needle tip [mm, LPS] and its third column the needle
 /// direction, hub to tip. TRANSFORM carries float32, so a pose arrives rounded
-/// to float (about 1e-5 mm at 100 mm from the origin).
+/// to float (about 1e-5 mm at 100 mm from the origin). A bending needle's shaft
+/// travels as a POINT message named "voxhap-shaft" (its points hub to tip, in
+/// float32) sent just before the TRANSFORM it belongs to; a TRANSFORM without
+/// one is a straight needle. Slicer shows that POINT as a list of fiducials.
 ///
 /// The sender is a client that (re)connects by itself and never blocks for
 /// long: it belongs on a status or logging thread, never on the servo thread
@@ -24,6 +27,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace voxhap::haptic {
 
@@ -31,6 +35,7 @@ namespace voxhap::haptic {
 struct StreamedPose {
     Vec3d tip{0, 0, 0};       ///< [mm, LPS]
     Vec3d direction{0, 0, 1}; ///< unit, hub to tip
+    std::vector<Vec3d> shaft; ///< a bending needle's shaft, hub to tip [mm, LPS]; empty: straight
 };
 
 /// @brief "HOST:PORT" or "PORT" (host 127.0.0.1) split and checked.
@@ -50,8 +55,8 @@ public:
     PoseSender(const PoseSender&) = delete;
     PoseSender& operator=(const PoseSender&) = delete;
 
-    /// @brief Send one pose; false if it was dropped (not connected, or the
-    /// socket buffer was full).
+    /// @brief Send one pose (its shaft's POINT first, when it has one); false if
+    /// it was dropped (not connected, or the socket buffer was full).
     bool send(const StreamedPose& pose);
     bool connected() const { return mFd >= 0; }
     long sent() const { return mSent; }
@@ -98,6 +103,7 @@ private:
     std::atomic<long> mPoses{0}, mRejected{0};
     mutable std::mutex mMutex; // guards mLatest (never taken by a servo thread)
     std::optional<StreamedPose> mLatest;
+    std::vector<Vec3d> mPendingShaft; ///< network thread only: the shaft for the next TRANSFORM
 };
 
 } // namespace voxhap::haptic

@@ -177,6 +177,7 @@ InsertionResult runInsertion(NeedleForceModel& model, const InsertionScript& scr
         }
         r.rows.push_back(row);
     }
+    if (const BentNeedle* b = model.bentNeedle()) r.bentShaft.assign(b->shaft().begin(), b->shaft().end());
     s.finalDepthMm = r.rows.empty() ? 0.0 : r.rows.back().depthMm;
     s.durationS = script.duration();
     r.outcome = outcome.result();

@@ -69,7 +69,8 @@ struct InsertionResult {
     std::vector<InsertionRow> rows;
     std::vector<Event> events;
     InsertionSummary summary;
-    ProcedureOutcome outcome; ///< under the rule runInsertion was given
+    ProcedureOutcome outcome;     ///< under the rule runInsertion was given
+    std::vector<Vec3d> bentShaft; ///< a bending needle's shaft at the last tick, hub to tip [mm, LPS]; else empty
 };
 
 /// @brief Drive @p model along its path by @p script at @p rateHz (the tip on the

@@ -78,6 +78,7 @@ ServoLoop::ServoLoop(NeedleForceModel& model, Device& device, const ServoOptions
       mEvents(std::make_unique<SpscQueue<Event, 1024>>()), mRecords(std::make_unique<SpscQueue<ServoRecord, 1 << 16>>())
 {
     mOpt.rateHz = mStep.options().rateHz; // a rate that is not positive and finite is 1 kHz
+    mShaftEveryTicks = std::max(1L, std::lround(kShaftPublishS * mOpt.rateHz));
 }
 
 ServoLoop::~ServoLoop() { stop(); }
@@ -107,6 +108,10 @@ void ServoLoop::tick(double t, double dt, double lastPeriod) noexcept
     rec.critical = out.critical;
     mRecords->push(rec);
 
+    // Counted in ticks, not seconds: a sum of periods drifts off the 10 ms marks.
+    if (const BentNeedle* bent = mModel.bentNeedle();
+        bent && mTicks.load(std::memory_order_relaxed) % mShaftEveryTicks == 0)
+        mShaft.publish(bent->shaft());
     mLastForce.store(f.norm(), std::memory_order_relaxed);
     mLastLayer.store(rec.layer, std::memory_order_relaxed);
     mGainPublic.store(mStep.gain(), std::memory_order_relaxed);

@@ -10,6 +10,7 @@
 #include "haptic/servo/Device.h"
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/servo/ServoStep.h"
+#include "haptic/servo/ShaftSnapshot.h"
 #include "haptic/servo/SpscQueue.h"
 
 #include <array>
@@ -197,6 +198,11 @@ public:
     double lastForceN() const noexcept { return mLastForce.load(); }
     int lastLayer() const noexcept { return mLastLayer.load(); }
     double watchdogGain() const noexcept { return mGainPublic.load(); }
+    /// @brief A bending needle's shaft, published by the first tick and then every
+    /// kShaftPublishS of the loop's time (a display rate); empty when the needle
+    /// does not bend. For a viewer (`serve --viewer`), never for control.
+    const ShaftSnapshot& shaft() const noexcept { return mShaft; }
+    static constexpr double kShaftPublishS = 0.010; ///< [chosen]: 100 Hz, above the viewer's 50 Hz
 
 private:
     void tick(double timeS, double dtS, double lastPeriodS) noexcept;
@@ -220,6 +226,8 @@ private:
     std::atomic<double> mMaxComputeNs{0}, mLastForce{0}, mGainPublic{1};
     std::atomic<int> mLastLayer{-1};
     double mSimTime = 0.0;
+    ShaftSnapshot mShaft;
+    long mShaftEveryTicks = 1; ///< kShaftPublishS in ticks at the loop's rate
     std::thread mThread;
 };
 

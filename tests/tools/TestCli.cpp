@@ -5,6 +5,8 @@
 
 #include "common/CliRunner.h"
 
+#include "haptic/scene/Scene.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -27,6 +29,7 @@ namespace fs = std::filesystem;
 
 using Result = voxhap::test::CliResult;
 using Cli = voxhap::test::CliTest;
+using voxhap::Vec3d;
 using voxhap::test::expectFailure;
 using voxhap::test::expectUsageError;
 using voxhap::test::slurp;
@@ -186,6 +189,47 @@ TEST_F(Cli, SimulateWritesCsvPlotAndSummary)
     EXPECT_EQ(s2["scene"].get<std::string>(), "senac-average");
     for (const auto& e : fs::directory_iterator(mDir / "sim"))
         EXPECT_EQ(e.path().filename().string().rfind(".tmp.", 0), std::string::npos) << e.path();
+}
+
+// A bending needle's summary holds its bent shaft at the end (reference.md "simulate").
+// Checked against the geometry the summary states: the needle's 90 mm from hub to
+// tip (the beam's nodes keep their spacing along the needle, so the polyline is
+// longer by about L·θ²/2: under 0.1 mm for slopes under 0.04), and
+// the tip's distance from the straight line equal to tip_deviation_mm. Control: a
+// half turn at 20 mm ends the tip on the other side of where the unturned one ends.
+TEST_F(Cli, SimulateABendingNeedleReportsItsShaft)
+{
+    const auto shaftOf = [&](const std::string& args) {
+        const Result r = run("simulate --scene lumbar-puncture-bending --no-plot --json " + args);
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        const nlohmann::json s = nlohmann::json::parse(r.out);
+        std::vector<Vec3d> shaft;
+        for (const auto& p : s["bending"]["shaft"]) shaft.emplace_back(p[0], p[1], p[2]);
+        return std::make_pair(shaft, s["bending"]["tip_deviation_mm"].get<double>());
+    };
+    {
+        std::ofstream script(mDir / "straight.csv");
+        script << "t_s,depth_mm,roll_deg\n0,-5,0\n1,40,0\n";
+        std::ofstream turned(mDir / "turned.csv");
+        turned << "t_s,depth_mm,roll_deg\n0,-5,0\n0.5,20,0\n0.6,20,180\n1.1,40,180\n";
+    }
+    const auto [shaft, deviation] = shaftOf("--script straight.csv --out bent");
+    ASSERT_GE(shaft.size(), 2u);
+    double length = 0;
+    for (std::size_t i = 1; i < shaft.size(); ++i) length += (shaft[i] - shaft[i - 1]).norm();
+    EXPECT_NEAR(length, 90.0, 0.1);
+    const voxhap::haptic::SceneInstance inst(
+        voxhap::haptic::loadScene("lumbar-puncture-bending"), nullptr, voxhap::volume::TissueTable::builtin());
+    const Vec3d u = (inst.target() - inst.entry()).normalized(), off = shaft.back() - inst.entry();
+    const Vec3d lateral = off - off.dot(u) * u;
+    EXPECT_NEAR(lateral.norm(), deviation, 1e-9);
+    EXPECT_GT(deviation, 0.05) << "40 mm of a 22 G Quincke needle bends";
+
+    const auto [turnedShaft, turnedDeviation] = shaftOf("--script turned.csv --out turned");
+    ASSERT_GE(turnedShaft.size(), 2u);
+    const Vec3d off2 = turnedShaft.back() - inst.entry();
+    EXPECT_LT((off2 - off2.dot(u) * u).dot(lateral), lateral.squaredNorm())
+        << "control: the half turn brings the tip back toward the line";
 }
 
 TEST_F(Cli, SimulateScriptedMotionAndBadInput)

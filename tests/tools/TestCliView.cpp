@@ -236,6 +236,59 @@ TEST_F(CliView, StreamedNeedleIsDrawnInTheSnapshot)
         << "and not elsewhere";
 }
 
+TEST_F(CliView, StreamedBentNeedleIsDrawnAlongItsShaft)
+{
+    int port = 0;
+    {
+        voxhap::haptic::PoseReceiver probe(0);
+        port = probe.port();
+    }
+    write("wait.txt", "wait-pose 30\n");
+    Result r;
+    std::atomic<bool> done{false};
+    std::thread viewer([&] {
+        r = run("view s.vdb --no-3d --listen " + std::to_string(port) + " --script wait.txt --snapshot b.png " +
+            std::string(kViewSize) + " --point 0,-20,0 --json");
+        done = true;
+    });
+    // The hub straight above x = −10 as before, the shaft turning at z = 30 to a tip at x = +10
+    // in the coronal plane; the pose's straight line (x = −10 down to z = 0) is not the needle.
+    voxhap::haptic::PoseSender tx("127.0.0.1", port, 0.05);
+    const voxhap::haptic::StreamedPose bent{
+        Vec3d(-10, -20, 0), Vec3d(0, 0, -1), {Vec3d(-10, -20, 90), Vec3d(-10, -20, 30), Vec3d(10, -20, 0)}};
+    while (!done) {
+        tx.send(bent);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    viewer.join();
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    const Image shot = voxhap::render::readImage(mDir / "b.png");
+    const Rgb needle = voxhap::render::OverlayStyle{}.needle;
+    // Off the crosshair (x = 0), which is drawn over the needle.
+    EXPECT_TRUE(viewColourNear(shot, viewWindowPixel(j, "coronal", Vec3d(-5, -20, 22.5)), needle)) << "on the bend";
+    EXPECT_FALSE(viewColourNear(shot, viewWindowPixel(j, "coronal", Vec3d(-10, -20, 10)), needle))
+        << "control: the straight line of the pose is not drawn";
+}
+
+TEST_F(CliView, ServeStreamsTheBentShaftOfABendingScene)
+{
+    voxhap::haptic::PoseReceiver rx(0);
+    const Result r =
+        run("serve --scene lumbar-puncture-bending --device sim --speed 50 --out bent --json --viewer 127.0.0.1:" +
+            std::to_string(rx.port()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto pose = rx.latest();
+    ASSERT_TRUE(pose.has_value());
+    ASSERT_GE(pose->shaft.size(), 2u) << "a bending needle's pose carries its shaft";
+    // The hub is clamped to the device's pose (physics.md §9): the shaft starts where the
+    // streamed straight needle's hub is, 90 mm behind its tip (to the float32 the
+    // wire carries, 1e-5 mm here), and bends away from that line toward its tip.
+    EXPECT_LT((pose->shaft.front() - (pose->tip - 90.0 * pose->direction)).norm(), 1e-3);
+    const Vec3d off = pose->shaft.back() - pose->shaft.front();
+    EXPECT_GT((off - off.dot(pose->direction) * pose->direction).norm(), 0.01) << "the shaft bends";
+}
+
 TEST_F(CliView, ServeStreamsTheNeedleToAViewer)
 {
     voxhap::haptic::PoseReceiver rx(0);
@@ -246,6 +299,7 @@ TEST_F(CliView, ServeStreamsTheNeedleToAViewer)
     ASSERT_GE(rx.poses(), 1);
     const auto pose = rx.latest();
     ASSERT_TRUE(pose.has_value());
+    EXPECT_TRUE(pose->shaft.empty()) << "a straight needle streams no shaft";
     // The pose streamed is one the servo loop recorded: find it in session.csv.
     // The wire holds float32 (6e-6 mm at 100 mm) and the CSV 10 digits: 1e-4 mm covers both.
     constexpr double kStreamMm = 1e-4;

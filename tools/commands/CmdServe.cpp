@@ -115,7 +115,9 @@ int run(const ServeOptions& o, const CLI::App& cmd)
         session.drain(loop);
         if (viewer && session.recordCount() > sentRecords) {
             sentRecords = session.recordCount();
-            viewer->send({session.lastRecord()->tip, session.lastRecord()->direction});
+            haptic::StreamedPose pose{session.lastRecord()->tip, session.lastRecord()->direction, {}};
+            loop.shaft().read(pose.shaft); // a bending needle's shaft; empty: straight
+            viewer->send(pose);
         }
         if (live) {
             std::cerr << "\r" << std::fixed << std::setprecision(1) << elapsed() << " s  " << std::setprecision(0)

@@ -73,6 +73,7 @@ public:
                 pose.tip = p->tip;
                 pose.direction = p->direction;
                 pose.lengthMm = mLengthMm;
+                pose.shaft = p->shaft; // a bending needle's, as streamed; empty: straight
                 viewer.setNeedle(pose);
             }
             mSeen = n;

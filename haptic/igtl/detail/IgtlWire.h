@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace voxhap::haptic::detail {
 
@@ -28,6 +29,7 @@ double steadySeconds();
 /// @brief The outcome of reading one message.
 enum class WireRead {
     Pose,      ///< a TRANSFORM with a finite tip and a non-zero z column
+    Shaft,     ///< a POINT named kShaftDeviceName with finite positions (when asked for)
     Skipped,   ///< another message type, read and discarded
     BadPose,   ///< a TRANSFORM whose pose is unusable: count it, keep the link
     BadHeader, ///< version, size or CRC wrong: count it, drop the link
@@ -41,6 +43,19 @@ enum class WireRead {
 /// header, content, metadata) is parsed here from the published layout, its
 /// CRC and every section size checked.
 /// @param tip, direction for Pose: the translation and the z column as sent (not normalised)
-WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction) noexcept;
+/// @param shaft null: POINT messages are Skipped like any other type; else a
+///        POINT whose device name is kShaftDeviceName is read into it (its
+///        points' positions, in order) and returns Shaft, its CRC checked in
+///        either header version; a POINT of another name is still Skipped.
+WireRead readTransform(int fd, double timeoutS, std::uint64_t maxBodyBytes, Vec3d& tip, Vec3d& direction,
+    std::vector<Vec3d>* shaft = nullptr) noexcept;
+
+/// The device name of the POINT message that carries a bent needle's shaft,
+/// hub to tip, ahead of the TRANSFORM of the same pose (PoseStream.h).
+inline constexpr const char* kShaftDeviceName = "voxhap-shaft";
+/// The POINT content per point (OpenIGTLink "POINT": NAME char[64], GROUP
+/// char[32], RGBA u8[4], XYZ float32[3], RADIUS float32, OWNER char[20]).
+inline constexpr std::size_t kPointElementBytes = 136;
+inline constexpr std::size_t kPointPositionOffset = 100;
 
 } // namespace voxhap::haptic::detail

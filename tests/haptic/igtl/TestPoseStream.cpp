@@ -3,11 +3,16 @@
 /// @brief The live-needle stream over a real loopback socket: a PoseSender's
 /// pose reads back exactly (to the float32 the TRANSFORM carries), the sender
 /// reconnects by itself to a receiver started later, the receiver survives a
-/// garbage header, and addresses are checked with one clear message.
+/// garbage header, and addresses are checked with one clear message. A bending
+/// needle's shaft rides a POINT message ahead of its pose and belongs to that
+/// pose only.
 
 #include "haptic/igtl/PoseStream.h"
 
 #include "core/Errors.h"
+
+#include <igtlPointMessage.h>
+#include <igtlTransformMessage.h>
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -17,7 +22,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <thread>
+#include <vector>
 
 namespace voxhap::haptic {
 namespace {
@@ -94,6 +101,103 @@ TEST(PoseStream, ReceiverDropsAGarbageHeaderAndAcceptsTheNextSender)
     PoseSender tx("127.0.0.1", rx.port(), 0.01);
     ASSERT_TRUE(waitUntil([&] { return tx.send({Vec3d(4, 5, 6), Vec3d(1, 0, 0)}) && rx.poses() > 0; }));
     EXPECT_EQ(rx.latest()->tip, Vec3d(4, 5, 6));
+}
+
+/// A shaft that is not float32 exactly: 41 points on an arc of radius 300 mm.
+std::vector<Vec3d> arcShaft()
+{
+    std::vector<Vec3d> shaft;
+    for (int i = 0; i <= 40; ++i) {
+        const double s = 2.0 * i, a = s / 300.0; // 80 mm of arc
+        shaft.emplace_back(300.0 * (1.0 - std::cos(a)) + 0.1, -20.0, 100.0 - 300.0 * std::sin(a));
+    }
+    return shaft;
+}
+
+TEST(PoseStream, BentShaftArrivesWithItsPoseAndOnlyWithIt)
+{
+    PoseReceiver rx(0);
+    PoseSender tx("127.0.0.1", rx.port(), 0.01);
+    StreamedPose bent{Vec3d(0.1, -20, 20), Vec3d(0, 0, -1), arcShaft()};
+    ASSERT_TRUE(waitUntil([&] { return tx.send(bent) && rx.poses() > 0; }));
+    ASSERT_TRUE(waitUntil([&] { return rx.poses() == tx.sent(); }));
+    auto got = rx.latest();
+    ASSERT_EQ(got->shaft.size(), bent.shaft.size());
+    for (std::size_t i = 0; i < bent.shaft.size(); ++i) {
+        for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(got->shaft[i][c], wire(bent.shaft[i][c])) << "point " << i << " axis " << c;
+    }
+    // The control: a pose sent without a shaft is straight, not drawn with the last one.
+    ASSERT_TRUE(tx.send({Vec3d(0, -20, 20), Vec3d(0, 0, -1), {}}));
+    ASSERT_TRUE(waitUntil([&] { return rx.poses() == tx.sent(); }));
+    EXPECT_TRUE(rx.latest()->shaft.empty());
+}
+
+/// Writes @p bytes to a fresh connection to @p port and leaves it open.
+int sendRaw(int port, const std::vector<unsigned char>& bytes)
+{
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(std::uint16_t(port));
+    ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return -1;
+    if (::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) != ssize_t(bytes.size())) return -1;
+    return fd;
+}
+
+/// A POINT of @p points named @p device, packed by the library, then a TRANSFORM.
+std::vector<unsigned char> pointThenPose(const char* device, int points, bool corruptCrc = false)
+{
+    auto pm = igtl::PointMessage::New();
+    pm->SetDeviceName(device);
+    for (int i = 0; i < points; ++i) {
+        auto e = igtl::PointElement::New();
+        e->SetPosition(float(i), 2.0f, 3.0f);
+        pm->AddPointElement(e);
+    }
+    pm->Pack();
+    auto tm = igtl::TransformMessage::New();
+    tm->SetDeviceName("voxhap-needle");
+    igtl::Matrix4x4 m;
+    igtl::IdentityMatrix(m);
+    tm->SetMatrix(m);
+    tm->Pack();
+    std::vector<unsigned char> out(static_cast<unsigned char*>(pm->GetPackPointer()),
+        static_cast<unsigned char*>(pm->GetPackPointer()) + pm->GetPackSize());
+    if (corruptCrc) out[57] ^= 0x01; // the CRC-64's last byte
+    out.insert(out.end(), static_cast<unsigned char*>(tm->GetPackPointer()),
+        static_cast<unsigned char*>(tm->GetPackPointer()) + tm->GetPackSize());
+    return out;
+}
+
+TEST(PoseStream, OnlyTheShaftsPointMessageMakesAShaftAndItsCrcIsChecked)
+{
+    {
+        PoseReceiver rx(0);
+        const int fd = sendRaw(rx.port(), pointThenPose("voxhap-shaft", 3));
+        ASSERT_GE(fd, 0);
+        ASSERT_TRUE(waitUntil([&] { return rx.poses() == 1; }));
+        ASSERT_EQ(rx.latest()->shaft.size(), 3u) << "the library's POINT, read by voxhap's layout";
+        EXPECT_EQ(rx.latest()->shaft[2], Vec3d(2, 2, 3));
+        ::close(fd);
+    }
+    {
+        PoseReceiver rx(0); // a POINT of another name (a tracker's fiducials): skipped
+        const int fd = sendRaw(rx.port(), pointThenPose("fiducials", 3));
+        ASSERT_TRUE(waitUntil([&] { return rx.poses() == 1; }));
+        EXPECT_TRUE(rx.latest()->shaft.empty());
+        EXPECT_EQ(rx.rejected(), 0);
+        ::close(fd);
+    }
+    {
+        PoseReceiver rx(0); // a damaged shaft: refused, the link dropped, its pose never taken
+        const int fd = sendRaw(rx.port(), pointThenPose("voxhap-shaft", 3, true));
+        ASSERT_TRUE(waitUntil([&] { return rx.rejected() == 1; }));
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        EXPECT_EQ(rx.poses(), 0);
+        ::close(fd);
+    }
 }
 
 TEST(PoseStream, HostAndPortAreChecked)

@@ -18,6 +18,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -787,6 +789,83 @@ TEST(Session, TheRollIsRecordedAndReplayed)
     EXPECT_NEAR((replayTip(poses) - tip).norm(), 0.0, 1e-5);
     for (ServoRecord& r : poses) r.rollRad = std::nan("");
     EXPECT_GT((replayTip(poses) - tip).norm(), 0.1) << "control: unturned, the tip ends elsewhere";
+}
+
+// The bent shaft the viewer is sent (ServoLoop::shaft, ShaftSnapshot.h): the tick
+// publishes the beam's nodes as they are, at about 100 Hz of the loop's time, and
+// nothing when the needle does not bend. Control: the straight lumbar-puncture scene.
+TEST(ServoLoop, PublishesTheBentShaftForAViewer)
+{
+    const SceneInstance inst(loadScene("lumbar-puncture-bending"), nullptr, volume::TissueTable::builtin());
+    auto model = inst.makeModel();
+    ScriptedDevice device(model->path(), InsertionScript::constantSpeed(-5.0, 30.0, 10.0), model->device());
+    ServoLoop loop(*model, device);
+    std::vector<Vec3d> shaft;
+    EXPECT_EQ(loop.shaft().read(shaft), 0u) << "nothing before the first tick";
+    loop.runTicks(3001); // the tick at 3.000 s publishes: 3.000 s is a 10 ms mark
+    EXPECT_EQ(loop.shaft().read(shaft), 301u) << "one publication per 10 ms of loop time, the first at 0";
+    const auto nodes = model->bentNeedle()->shaft();
+    ASSERT_EQ(shaft.size(), nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) EXPECT_EQ(shaft[i], nodes[i]) << "node " << i;
+    // It bends: the tip is off the hub's straight line (the bevel's push, 30 mm in).
+    const Vec3d hub = shaft.front(), dir = model->path().direction.normalized();
+    const Vec3d off = (shaft.back() - hub) - (shaft.back() - hub).dot(dir) * dir;
+    EXPECT_GT(off.norm(), 0.01);
+
+    const SceneInstance straight(loadScene("lumbar-puncture"), nullptr, volume::TissueTable::builtin());
+    auto model2 = straight.makeModel();
+    ScriptedDevice device2(model2->path(), InsertionScript::constantSpeed(-5.0, 30.0, 10.0), model2->device());
+    ServoLoop loop2(*model2, device2);
+    loop2.runTicks(3001);
+    EXPECT_EQ(loop2.shaft().read(shaft), 0u);
+    EXPECT_TRUE(shaft.empty());
+}
+
+// Concurrent publication: every copy a reader gets is one whole publication (all its
+// points carry the same stamp), never a mix of two. Control: the same reading done
+// without the sequence check (a plain copy of the points) does see mixes.
+TEST(ShaftSnapshot, AReaderNeverSeesHalfAPublication)
+{
+    ShaftSnapshot snap;
+    std::array<std::atomic<double>, 150> plain{}; // the same stamps, written without the sequence lock
+    std::atomic<bool> stop{false};
+    std::thread writer([&] {
+        std::vector<Vec3d> pts(plain.size());
+        for (double stamp = 1; !stop.load(std::memory_order_relaxed); stamp += 1) {
+            for (Vec3d& p : pts) p = Vec3d(stamp, stamp, stamp);
+            snap.publish(pts);
+            for (auto& v : plain) v.store(stamp, std::memory_order_relaxed);
+        }
+    });
+    std::vector<Vec3d> got;
+    long torn = 0, reads = 0, plainTorn = 0;
+    // Read until 200 whole copies are in and the control has seen a mix (5 s at most: a
+    // reader preempted mid-copy sees one at once, even on one core; the writer, which
+    // publishes without pause here where the servo publishes every 10 ms, slows the
+    // reader's retries to a few thousand copies a second).
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while ((reads < 200 || plainTorn == 0) && std::chrono::steady_clock::now() < end) {
+        if (snap.read(got) != 0) {
+            ++reads;
+            for (const Vec3d& p : got) torn += p != got.front();
+        }
+        const double first = plain[0].load(std::memory_order_relaxed);
+        for (const auto& v : plain) plainTorn += v.load(std::memory_order_relaxed) != first;
+    }
+    stop = true;
+    writer.join();
+    EXPECT_GE(reads, 200);
+    EXPECT_EQ(torn, 0);
+    EXPECT_GT(plainTorn, 0) << "control: a copy without the sequence check mixes publications";
+    // A longer polyline keeps its ends and an even subsample.
+    std::vector<Vec3d> many;
+    for (int i = 0; i < 1001; ++i) many.emplace_back(i, 0, 0);
+    snap.publish(many);
+    snap.read(got);
+    ASSERT_EQ(got.size(), std::size_t(ShaftSnapshot::kMaxPoints));
+    EXPECT_EQ(got.front(), Vec3d(0, 0, 0));
+    EXPECT_EQ(got.back(), Vec3d(1000, 0, 0));
+    for (std::size_t i = 1; i < got.size(); ++i) EXPECT_GT(got[i].x(), got[i - 1].x());
 }
 
 // A constant-speed script: mean speed is the script's, variance zero (to round-off of
