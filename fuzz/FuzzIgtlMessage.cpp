@@ -12,7 +12,11 @@
 /// (big-endian float32, finite, z column non-zero); bad versions, sizes,
 /// section layouts and CRCs are refused as such; another message type is
 /// skipped whole (for version 2 once its CRC and sections check), and the
-/// next message is read after it.
+/// next message is read after it. The stream is read twice: as the device
+/// bridge reads it (no shaft asked for: a POINT is skipped like any type) and
+/// as the pose stream reads it, where a POINT named "voxhap-shaft" is a shaft:
+/// its CRC checked in both header versions, its content whole 136-byte points,
+/// each position the big-endian float32 triple at byte 100, all finite.
 
 #include "FuzzInput.h"
 
@@ -25,6 +29,7 @@
 #include <cstring>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace {
 
@@ -70,7 +75,7 @@ const char* name(WireRead r)
     case WireRead::Skipped:
         return "skipped";
     case WireRead::Shaft:
-        return "a shaft (not asked for)";
+        return "a shaft";
     case WireRead::BadPose:
         return "a bad pose";
     case WireRead::BadHeader:
@@ -86,7 +91,24 @@ struct Expected {
     WireRead read = WireRead::Broken;
     std::size_t bytes = 0; ///< the message's length, header included
     Vec3d tip{0, 0, 0}, direction{0, 0, 0};
+    std::vector<Vec3d> shaft;
 };
+
+/// A shaft's POINT content: whole points, every position finite.
+void expectShaft(const std::uint8_t* c, std::uint64_t size, Expected& e)
+{
+    constexpr std::uint64_t kPoint = 136, kPosition = 100;
+    if (size % kPoint != 0) return; // BadHeader
+    for (std::uint64_t i = 0; i < size / kPoint; ++i) {
+        const std::uint8_t* p = c + i * kPoint + kPosition;
+        e.shaft.emplace_back(float32(p), float32(p + 4), float32(p + 8));
+        if (!e.shaft.back().allFinite()) {
+            e.read = WireRead::BadPose;
+            return;
+        }
+    }
+    e.read = WireRead::Shaft;
+}
 
 /// Header version 2's body: extended header (its size >= 12, then metadata header
 /// size, metadata size), content, metadata header (count, then 8 bytes per entry),
@@ -116,7 +138,7 @@ long version2Content(const std::uint8_t* b, std::uint64_t body, std::uint64_t& c
     return long(ext);
 }
 
-Expected expect(const std::uint8_t* m, std::size_t left)
+Expected expect(const std::uint8_t* m, std::size_t left, bool shafts)
 {
     Expected e;
     if (left < kHeader) return e; // the stream ends inside the header
@@ -125,6 +147,9 @@ Expected expect(const std::uint8_t* m, std::size_t left)
         reinterpret_cast<const char*>(m + 2), ::strnlen(reinterpret_cast<const char*>(m + 2), 12));
     const std::uint64_t body = bigEndian(m + 42, 8), crc = bigEndian(m + 50, 8);
     const bool transform = type == "TRANSFORM";
+    const std::string_view device(
+        reinterpret_cast<const char*>(m + 14), ::strnlen(reinterpret_cast<const char*>(m + 14), 20));
+    const bool shaft = shafts && type == "POINT" && device == "voxhap-shaft";
     e.read = WireRead::BadHeader;
     if (version < 1 || version > 2 || body > kMaxBody) return e;
     if (transform && version == 1 && body != kTransformBody) return e;
@@ -139,6 +164,10 @@ Expected expect(const std::uint8_t* m, std::size_t left)
         std::uint64_t contentSize = 0;
         const long content = version2Content(b, body, contentSize);
         if (content < 0) return e; // BadHeader
+        if (shaft) {
+            expectShaft(b + content, contentSize, e);
+            return e;
+        }
         if (!transform) {
             e.read = WireRead::Skipped;
             return e;
@@ -146,6 +175,10 @@ Expected expect(const std::uint8_t* m, std::size_t left)
         if (contentSize != kTransformBody) return e;
         b += content;
     } else {
+        if (shaft) {
+            if (crc64(b, std::size_t(body)) == crc) expectShaft(b, body, e);
+            return e;
+        }
         if (!transform) {
             e.read = WireRead::Skipped;
             return e;
@@ -182,25 +215,40 @@ struct Stream {
     }
 };
 
+/// Reads the input message by message as a server does, each outcome against the model.
+void readAll(const std::uint8_t* data, std::size_t size, bool shafts)
+{
+    Stream stream(data, size);
+    std::size_t at = 0;
+    const std::string reader = shafts ? " (pose stream)" : " (device bridge)";
+    for (int message = 1;; ++message) {
+        Vec3d tip(0, 0, 0), direction(0, 0, 0);
+        std::vector<Vec3d> shaft;
+        const WireRead got = voxhap::haptic::detail::readTransform(
+            stream.fd[0], 1.0, kMaxBody, tip, direction, shafts ? &shaft : nullptr);
+        const Expected e = expect(data + at, size - at, shafts);
+        if (got != e.read) {
+            finding(
+                "message " + std::to_string(message) + reader + " read as " + name(got) + ", expected " + name(e.read));
+        }
+        if (got == WireRead::Pose && (tip != e.tip || direction != e.direction)) {
+            finding("message " + std::to_string(message) + ": the pose is not the one sent");
+        }
+        if (got == WireRead::Shaft && shaft != e.shaft) {
+            finding("message " + std::to_string(message) + ": the shaft is not the one sent");
+        }
+        if (got != WireRead::Pose && got != WireRead::BadPose && got != WireRead::Skipped && got != WireRead::Shaft)
+            break; // the link drops
+        at += e.bytes;
+    }
+}
+
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     if (size > 65536) return 0; // more than a socket buffer holds without a reader
-    Stream stream(data, size);
-    std::size_t at = 0;
-    for (int message = 1;; ++message) {
-        Vec3d tip(0, 0, 0), direction(0, 0, 0);
-        const WireRead got = voxhap::haptic::detail::readTransform(stream.fd[0], 1.0, kMaxBody, tip, direction);
-        const Expected e = expect(data + at, size - at);
-        if (got != e.read) {
-            finding("message " + std::to_string(message) + " read as " + name(got) + ", expected " + name(e.read));
-        }
-        if (got == WireRead::Pose && (tip != e.tip || direction != e.direction)) {
-            finding("message " + std::to_string(message) + ": the pose is not the one sent");
-        }
-        if (got != WireRead::Pose && got != WireRead::BadPose && got != WireRead::Skipped) break; // the link drops
-        at += e.bytes;
-    }
+    readAll(data, size, false);
+    readAll(data, size, true);
     return 0;
 }
