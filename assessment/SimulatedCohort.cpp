@@ -11,8 +11,8 @@
 #include "haptic/servo/Session.h"
 
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 
 namespace voxhap::assessment {

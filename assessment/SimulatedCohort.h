@@ -10,8 +10,8 @@
 /// trainees.
 #pragma once
 
-#include "haptic/scene/Scene.h"
 #include "haptic/devices/SimulatedDevices.h"
+#include "haptic/scene/Scene.h"
 
 #include <nlohmann/json.hpp>
 

@@ -4,8 +4,8 @@
 
 #include "bench/DenseField.h"
 
-#include "haptic/materials/FieldGrids.h"
 #include "core/Errors.h"
+#include "haptic/materials/FieldGrids.h"
 
 #include <cmath>
 

@@ -7,17 +7,17 @@
 #include "bench/BlockDdaPeer.h"
 #include "bench/DenseField.h"
 #include "bench/PlaneCrossingSum.h"
-#include "render/plots/Gnuplot.h"
 #include "bench/VtkProbe.h"
-#include "haptic/shaft/ShaftIntegration.h"
 #include "core/Errors.h"
 #include "haptic/materials/MaterialLaws.h"
+#include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/shaft/TrajectoryProfile.h"
+#include "phantoms/Phantoms.h"
+#include "render/plots/Gnuplot.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 #include "volume/mr/T1Normalisation.h"
-#include "phantoms/Phantoms.h"
 
 #include <Eigen/Geometry>
 #include <openvdb/tools/ChangeBackground.h>

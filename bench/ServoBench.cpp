@@ -3,10 +3,10 @@
 #include "bench/ServoBench.h"
 
 #include "bench/SamplerBench.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
-#include "haptic/devices/SimulatedDevices.h"
 
 #include <igtlTransformMessage.h>
 

@@ -13,9 +13,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <sstream>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 int main(int argc, char** argv)
 {

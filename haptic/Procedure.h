@@ -19,9 +19,9 @@
 /// path must not touch lung, kidney, aorta or cord) [chosen].
 #pragma once
 
+#include "core/Math.h"
 #include "haptic/Events.h"
 #include "haptic/Layer.h"
-#include "core/Math.h"
 
 #include <cstdint>
 #include <optional>

@@ -5,14 +5,14 @@
 /// and the risk score (RiskScore.h).
 #include "planning/Planner.h"
 
+#include "haptic/shaft/LabelTrace.h"
 #include "planning/Clearance.h"
 #include "planning/ForcePrediction.h"
-#include "haptic/shaft/LabelTrace.h"
 #include "planning/RiskScore.h"
 
+#include "core/Errors.h"
 #include "haptic/materials/MaterialField.h"
 #include "segmentation/DistanceField.h"
-#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <algorithm>

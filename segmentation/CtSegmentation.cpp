@@ -7,11 +7,11 @@
 
 #include "segmentation/CtSegmentation.h"
 
+#include "core/Errors.h"
+#include "segmentation/detail/VoxelLoops.h"
 #include "segmentation/lattice/Components.h"
 #include "segmentation/lattice/DistanceTransform.h"
 #include "segmentation/lattice/Morphology.h"
-#include "segmentation/detail/VoxelLoops.h"
-#include "core/Errors.h"
 #include "volume/Grids.h"
 
 #include <openvdb/tools/Dense.h>

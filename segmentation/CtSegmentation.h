@@ -28,8 +28,8 @@
 /// kidney, aorta or spinal canal is soft_tissue there, and a note says so.
 #pragma once
 
-#include "segmentation/lattice/Lattice.h"
 #include "segmentation/TorsoExtent.h"
+#include "segmentation/lattice/Lattice.h"
 #include "volume/Grids.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"

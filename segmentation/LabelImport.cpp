@@ -6,8 +6,8 @@
 
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
-#include "volume/Grids.h"
 #include "core/JsonFields.h"
+#include "volume/Grids.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>

@@ -6,8 +6,8 @@
 
 #include "haptic/scene/Scene.h"
 
-#include <csignal>
 #include <Eigen/Geometry>
+#include <csignal>
 
 #include <cmath>
 #include <iostream>

@@ -4,8 +4,8 @@
 /// force-depth.png in one directory (`voxhap simulate`, `voxhap demo`).
 #pragma once
 
-#include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/scene/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
 
 #include <nlohmann/json.hpp>
 

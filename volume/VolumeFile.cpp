@@ -8,11 +8,11 @@
 #include "volume/Grids.h"
 #include "volume/io/MetaImageFile.h"
 #include "volume/io/ModalityInference.h"
-#include "volume/mr/MrMaterial.h"
-#include "volume/mr/MrWeighting.h"
 #include "volume/io/NiftiFile.h"
 #include "volume/io/NrrdFile.h"
 #include "volume/io/VdbFile.h"
+#include "volume/mr/MrMaterial.h"
+#include "volume/mr/MrWeighting.h"
 
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/Prune.h>

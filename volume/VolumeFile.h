@@ -5,9 +5,9 @@
 /// with the DICOM magic is DICOM, otherwise the extension decides.
 #pragma once
 
+#include "volume/Volume.h"
 #include "volume/dicom/DicomSeries.h"
 #include "volume/io/RasterReader.h"
-#include "volume/Volume.h"
 
 #include <filesystem>
 #include <string>

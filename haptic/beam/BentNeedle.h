@@ -19,10 +19,10 @@
 /// in the hub's frame: the deflection w(x) is lateral to the hub's axis, x along it.
 #pragma once
 
+#include "haptic/Needle.h"
 #include "haptic/beam/CutTrack.h"
 #include "haptic/beam/Foundation.h"
 #include "haptic/beam/WinklerBeam.h"
-#include "haptic/Needle.h"
 
 #include <cmath>
 #include <memory>

@@ -4,8 +4,8 @@
 
 #include "haptic/beam/Foundation.h"
 
-#include "haptic/materials/FieldGrids.h"
 #include "core/Errors.h"
+#include "haptic/materials/FieldGrids.h"
 
 namespace voxhap::haptic {
 

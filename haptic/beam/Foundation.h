@@ -5,8 +5,8 @@
 /// `foundation_modulus`, or uniform (the closed-form tests).
 #pragma once
 
-#include "haptic/materials/MaterialField.h"
 #include "core/Math.h"
+#include "haptic/materials/MaterialField.h"
 
 #include <memory>
 

@@ -5,9 +5,9 @@
 /// that pushes the needle along the path and reacts to the loss of resistance.
 #pragma once
 
-#include "haptic/servo/Device.h"
-#include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/servo/Device.h"
 
 namespace voxhap::haptic {
 

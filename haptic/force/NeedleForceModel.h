@@ -9,19 +9,19 @@
 /// resistance is reported positive when it pushes the needle back out.
 #pragma once
 
-#include "haptic/beam/BentNeedle.h"
-#include "haptic/force/ContactTransient.h"
 #include "haptic/DeviceLimits.h"
 #include "haptic/Events.h"
+#include "haptic/Needle.h"
+#include "haptic/beam/BentNeedle.h"
+#include "haptic/force/ContactTransient.h"
 #include "haptic/force/Guidance.h"
 #include "haptic/force/InsertionState.h"
 #include "haptic/force/LorChannel.h"
-#include "haptic/Needle.h"
 #include "haptic/force/Palpation.h"
 #include "haptic/force/PivotCorrection.h"
 #include "haptic/force/Safety.h"
-#include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/force/StickSlipProxy.h"
+#include "haptic/shaft/ShaftIntegration.h"
 
 #include <limits>
 #include <memory>

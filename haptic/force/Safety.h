@@ -6,8 +6,8 @@
 /// and a latched fault on anything non-finite.
 #pragma once
 
-#include "haptic/DeviceLimits.h"
 #include "core/Math.h"
+#include "haptic/DeviceLimits.h"
 
 namespace voxhap::haptic {
 

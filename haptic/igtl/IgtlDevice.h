@@ -17,8 +17,8 @@
 /// in a lock-free queue.
 #pragma once
 
-#include "haptic/servo/Device.h"
 #include "haptic/Events.h"
+#include "haptic/servo/Device.h"
 #include "haptic/servo/SpscQueue.h"
 
 #include <atomic>

@@ -5,8 +5,8 @@
 
 #include "haptic/materials/MaterialField.h"
 
-#include "haptic/materials/FieldGrids.h"
 #include "core/Errors.h"
+#include "haptic/materials/FieldGrids.h"
 
 #include <openvdb/tools/Count.h> // for minMax
 #include <openvdb/tree/LeafManager.h>

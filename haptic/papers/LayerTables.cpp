@@ -7,9 +7,9 @@
 
 #include "haptic/shaft/LabelTrace.h"
 
+#include "core/Errors.h"
 #include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/papers/SenacModel.h"
-#include "core/Errors.h"
 
 #include <algorithm>
 #include <cmath>

@@ -9,11 +9,11 @@
 /// layer's parameters are filled, and from what.
 #pragma once
 
-#include "haptic/papers/ConciModel.h"
-#include "haptic/Layer.h"
-#include "haptic/shaft/LabelTrace.h"
-#include "haptic/materials/MaterialField.h"
 #include "core/Math.h"
+#include "haptic/Layer.h"
+#include "haptic/materials/MaterialField.h"
+#include "haptic/papers/ConciModel.h"
+#include "haptic/shaft/LabelTrace.h"
 #include "phantoms/Phantoms.h"
 #include "volume/TissueTable.h"
 

@@ -7,11 +7,11 @@
 #pragma once
 
 #include "haptic/DeviceLimits.h"
-#include "haptic/papers/LayerTables.h"
-#include "haptic/materials/MaterialField.h"
 #include "haptic/Needle.h"
-#include "haptic/force/NeedleForceModel.h"
 #include "haptic/Procedure.h"
+#include "haptic/force/NeedleForceModel.h"
+#include "haptic/materials/MaterialField.h"
+#include "haptic/papers/LayerTables.h"
 #include "volume/Volume.h"
 
 #include <filesystem>

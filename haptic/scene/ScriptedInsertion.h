@@ -4,8 +4,8 @@
 /// engine of `voxhap simulate` and of the preset regression tests.
 #pragma once
 
-#include "haptic/force/NeedleForceModel.h"
 #include "haptic/Procedure.h"
+#include "haptic/force/NeedleForceModel.h"
 
 #include <filesystem>
 #include <string>

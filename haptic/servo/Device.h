@@ -5,9 +5,9 @@
 /// replay and network devices implement it; a vendor SDK plugs in the same way.
 #pragma once
 
+#include "core/Math.h"
 #include "haptic/DeviceLimits.h"
 #include "haptic/Events.h"
-#include "core/Math.h"
 
 #include <limits>
 #include <string>

@@ -5,10 +5,10 @@
 #include "haptic/servo/InterruptionPhase.h"
 
 #include <algorithm>
-#include <cmath>
-#include <ctime>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
+#include <ctime>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 

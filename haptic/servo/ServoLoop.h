@@ -7,8 +7,8 @@
 /// timing statistics are lock-free histograms.
 #pragma once
 
-#include "haptic/servo/Device.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/servo/Device.h"
 #include "haptic/servo/ServoStep.h"
 #include "haptic/servo/ShaftSnapshot.h"
 #include "haptic/servo/SpscQueue.h"

@@ -7,8 +7,8 @@
 /// thread. step() never allocates, locks, throws or logs.
 #pragma once
 
-#include "haptic/servo/Device.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/servo/Device.h"
 
 #include <atomic>
 

@@ -5,11 +5,11 @@
 /// plays one back.
 #pragma once
 
+#include "core/AtomicFile.h"
 #include "haptic/Procedure.h"
-#include "haptic/servo/TraineeMetrics.h"
 #include "haptic/servo/Device.h"
 #include "haptic/servo/ServoLoop.h"
-#include "core/AtomicFile.h"
+#include "haptic/servo/TraineeMetrics.h"
 
 #include <filesystem>
 #include <memory>

@@ -5,8 +5,8 @@
 
 #include "haptic/shaft/ExactTraversal.h"
 
-#include "haptic/shaft/detail/FieldReaders.h"
 #include "core/Errors.h"
+#include "haptic/shaft/detail/FieldReaders.h"
 
 #include <optional>
 

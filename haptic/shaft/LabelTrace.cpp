@@ -2,9 +2,9 @@
 /// @file LabelTrace.cpp
 #include "haptic/shaft/LabelTrace.h"
 
+#include "core/Errors.h"
 #include "haptic/shaft/detail/FieldReaders.h"
 #include "haptic/shaft/detail/Traversal.h"
-#include "core/Errors.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

@@ -4,8 +4,8 @@
 
 #include "haptic/shaft/RayMarch.h"
 
-#include "haptic/shaft/detail/FieldReaders.h"
 #include "core/Errors.h"
+#include "haptic/shaft/detail/FieldReaders.h"
 
 #include <optional>
 #include <sstream>

@@ -14,8 +14,8 @@
 /// Labels are categorical: lengths and first hits always use the voxel cells.
 #pragma once
 
-#include "haptic/materials/MaterialField.h"
 #include "core/Math.h"
+#include "haptic/materials/MaterialField.h"
 
 #include <array>
 #include <limits>

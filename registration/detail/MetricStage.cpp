@@ -11,16 +11,16 @@
 #include <itkCommand.h>
 #include <itkEuler3DTransform.h>
 #include <itkImage.h>
-#include <itkSpatialObject.h>
 #include <itkMattesMutualInformationImageToImageMetricv4.h>
 #include <itkRegularStepGradientDescentOptimizerv4.h>
+#include <itkSpatialObject.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
-#include <tuple>
 #include <random>
+#include <tuple>
 
 namespace voxhap::registration::detail {
 

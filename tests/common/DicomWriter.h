@@ -11,12 +11,12 @@
 #include <gdcmAttribute.h>
 #include <gdcmImageWriter.h>
 #include <gdcmReader.h>
-#include <gdcmWriter.h>
 #include <gdcmUIDs.h>
+#include <gdcmWriter.h>
 
 #include <cstdint>
-#include <sstream>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>

@@ -4,8 +4,8 @@
 /// trip, RAS input, and one clear error per bad field.
 
 #include "common/TempDirTest.h"
-#include "planning/Markups.h"
 #include "core/Errors.h"
+#include "planning/Markups.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

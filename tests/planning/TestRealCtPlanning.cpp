@@ -3,9 +3,9 @@
 /// @brief Planning on the real abdominal CT (../shared/data): segmentation once per
 /// binary, then a search from the posterior skin to a vertebral body.
 
+#include "PlanningFixtures.h"
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
-#include "PlanningFixtures.h"
 #include "haptic/scene/Scene.h"
 #include "planning/Search.h"
 #include "segmentation/Segmentation.h"

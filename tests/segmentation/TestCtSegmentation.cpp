@@ -7,10 +7,10 @@
 
 #include "SegmentationFixtures.h"
 
+#include "phantoms/Phantoms.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
-#include "phantoms/Phantoms.h"
 
 #include <gtest/gtest.h>
 

@@ -5,9 +5,9 @@
 /// table). No reference segmentation exists for it, so the checks are anatomical
 /// facts with ranges that say where they come from.
 
+#include "SegmentationFixtures.h"
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
-#include "SegmentationFixtures.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
 #include "segmentation/TorsoExtent.h"

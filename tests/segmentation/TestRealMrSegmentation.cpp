@@ -10,9 +10,9 @@
 /// where that normalisation fails, as an intensity grid marked T1-weighted;
 /// either way fat is the bright (short-T1) class and the checks hold.
 
+#include "SegmentationFixtures.h"
 #include "common/BuiltinTable.h"
 #include "common/SharedData.h"
-#include "SegmentationFixtures.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"

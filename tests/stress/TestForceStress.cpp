@@ -6,16 +6,16 @@
 /// record queue draining or full.
 
 #include "common/BuiltinTable.h"
-#include "common/SceneCache.h"
 #include "common/Phantom.h"
+#include "common/SceneCache.h"
 #include "stress/AllocationCounter.h"
 
-#include "haptic/papers/LayerTables.h"
+#include "haptic/devices/SimulatedDevices.h"
 #include "haptic/force/NeedleForceModel.h"
+#include "haptic/papers/LayerTables.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/ServoStep.h"
-#include "haptic/devices/SimulatedDevices.h"
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>

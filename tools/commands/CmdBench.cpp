@@ -10,8 +10,8 @@
 #include "core/AtomicFile.h"
 
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 

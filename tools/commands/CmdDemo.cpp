@@ -11,13 +11,13 @@
 #include "core/Errors.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
+#include "phantoms/Phantoms.h"
 #include "planning/Report.h"
 #include "planning/Search.h"
 #include "render/outputs/PlanOutputs.h"
 #include "segmentation/Segmentation.h"
 #include "volume/Grids.h"
 #include "volume/io/VdbFile.h"
-#include "phantoms/Phantoms.h"
 
 #include <nlohmann/json.hpp>
 

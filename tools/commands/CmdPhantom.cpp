@@ -5,12 +5,12 @@
 #include "tools/Cli.h"
 #include "tools/InfoReport.h"
 
-#include "phantoms/Phantoms.h"
 #include "core/AtomicFile.h"
-#include "volume/io/NrrdFile.h"
-#include "volume/mr/MrWeighting.h"
-#include "volume/io/VdbFile.h"
 #include "phantoms/PhantomScans.h"
+#include "phantoms/Phantoms.h"
+#include "volume/io/NrrdFile.h"
+#include "volume/io/VdbFile.h"
+#include "volume/mr/MrWeighting.h"
 
 #include <nlohmann/json.hpp>
 

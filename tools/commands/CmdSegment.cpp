@@ -7,11 +7,11 @@
 #include "tools/Cli.h"
 #include "tools/LoadOptions.h"
 
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 #include "segmentation/DistanceField.h"
 #include "segmentation/Segmentation.h"
 #include "segmentation/TotalSegmentator.h"
-#include "core/AtomicFile.h"
-#include "core/Errors.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
 

@@ -8,14 +8,14 @@
 
 #include "assessment/Metrics.h"
 
+#include "core/AtomicFile.h"
+#include "core/Errors.h"
 #include "haptic/devices/DeviceSpec.h"
 #include "haptic/igtl/IgtlDevice.h"
 #include "haptic/igtl/PoseStream.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
 #include "haptic/servo/Session.h"
-#include "core/AtomicFile.h"
-#include "core/Errors.h"
 
 #include <nlohmann/json.hpp>
 

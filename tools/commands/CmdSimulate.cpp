@@ -7,10 +7,10 @@
 #include "tools/Guide.h"
 #include "tools/SimulationOutputs.h"
 
-#include "haptic/scene/ScriptedInsertion.h"
-#include "haptic/scene/Scene.h"
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
+#include "haptic/scene/Scene.h"
+#include "haptic/scene/ScriptedInsertion.h"
 
 #include <cmath>
 #include <filesystem>

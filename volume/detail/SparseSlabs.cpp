@@ -20,8 +20,8 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
-#include <vector>
 #include <string>
+#include <vector>
 
 namespace voxhap::volume {
 

@@ -5,12 +5,12 @@
 
 #include "volume/dicom/DicomHeaders.h"
 
-#include "volume/dicom/detail/DicomPixels.h"
-#include "volume/dicom/detail/DicomMosaic.h"
-#include "volume/dicom/detail/DicomPreflight.h"
 #include "core/Errors.h"
-#include "volume/io/GzipFile.h"
+#include "volume/dicom/detail/DicomMosaic.h"
+#include "volume/dicom/detail/DicomPixels.h"
+#include "volume/dicom/detail/DicomPreflight.h"
 #include "volume/dicom/detail/StoredPrecision.h"
+#include "volume/io/GzipFile.h"
 
 #include <Eigen/Geometry>
 #include <gdcmAttribute.h>

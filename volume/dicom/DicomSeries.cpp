@@ -5,23 +5,23 @@
 
 #include "volume/dicom/DicomSeries.h"
 
-#include "volume/dicom/detail/DicomDecodeProcess.h"
+#include "core/Errors.h"
+#include "volume/Grids.h"
+#include "volume/detail/SparseSlabs.h"
 #include "volume/dicom/DicomHeaders.h"
+#include "volume/dicom/detail/DicomDecodeProcess.h"
 #include "volume/dicom/detail/DicomMosaic.h"
 #include "volume/dicom/detail/DicomPixels.h"
 #include "volume/dicom/detail/DicomVolumes.h"
-#include "core/Errors.h"
-#include "volume/io/GzipFile.h"
-#include "volume/Grids.h"
 #include "volume/dicom/detail/SliceResample.h"
 #include "volume/dicom/detail/SliceStack.h"
-#include "volume/detail/SparseSlabs.h"
 #include "volume/dicom/detail/StoredPrecision.h"
+#include "volume/io/GzipFile.h"
 
 #include <Eigen/Geometry>
 #include <fcntl.h>
-#include <unistd.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -650,7 +650,7 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-/// The series to load: the one --series names, else the default rule's.
+/// The series to load: the one DicomOptions::series names, else the default rule's.
 /// @param because set to why this one
 /// @throw IoError when there is none to load, or the named one does not load
 const DicomSeriesInfo& chooseSeries(
@@ -666,7 +666,8 @@ const DicomSeriesInfo& chooseSeries(
     }
     if (!options.series.empty()) {
         const DicomSeriesInfo& chosen = findSeries(catalog.series, options.series);
-        because = "--series " + options.series;
+        // Not an option's name: `info` takes --series, `fuse` --ct-series and --mr-series.
+        because = "the series asked for (" + options.series + ")";
         if (!chosen.problem.empty()) throw IoError(chosen.problem);
         return chosen;
     }

@@ -19,10 +19,10 @@
 #pragma once
 
 #include "core/Progress.h"
-#include "volume/dicom/DicomHeaders.h"
-#include "volume/mr/MrMaterial.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
+#include "volume/dicom/DicomHeaders.h"
+#include "volume/mr/MrMaterial.h"
 
 #include <cstdint>
 #include <filesystem>

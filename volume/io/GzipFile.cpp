@@ -4,8 +4,8 @@
 
 #include "volume/io/GzipFile.h"
 
-#include "volume/io/ByteSource.h"
 #include "core/Errors.h"
+#include "volume/io/ByteSource.h"
 
 #include <cstdlib>
 #include <cstring>

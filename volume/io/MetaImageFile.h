@@ -8,9 +8,9 @@
 /// which the volume library must not depend on.
 #pragma once
 
+#include "volume/Volume.h"
 #include "volume/io/MetaImageHeader.h"
 #include "volume/io/RasterReader.h"
-#include "volume/Volume.h"
 
 #include <filesystem>
 #include <string_view>

@@ -4,8 +4,8 @@
 /// data file located.
 #pragma once
 
-#include "volume/io/RasterLayout.h"
 #include "volume/Volume.h"
+#include "volume/io/RasterLayout.h"
 
 #include <cstdint>
 #include <filesystem>

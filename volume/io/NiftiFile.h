@@ -5,8 +5,8 @@
 /// streamed slab by slab; RAS world coordinates become LPS once, here.
 #pragma once
 
-#include "volume/io/RasterReader.h"
 #include "volume/Volume.h"
+#include "volume/io/RasterReader.h"
 
 #include <filesystem>
 

@@ -7,9 +7,9 @@
 #include "volume/io/NiftiHeader.h"
 #include "volume/io/RasterLayout.h"
 
-#include "volume/io/ByteSource.h"
 #include "core/BoundedRead.h"
 #include "core/Errors.h"
+#include "volume/io/ByteSource.h"
 
 #include <nifti2_io.h>
 

@@ -4,8 +4,8 @@
 /// geometry in LPS (sform, else qform, else pixdim) and where the data is.
 #pragma once
 
-#include "volume/io/RasterLayout.h"
 #include "volume/Volume.h"
+#include "volume/io/RasterLayout.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -17,10 +17,10 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace voxhap::volume {

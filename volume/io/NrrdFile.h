@@ -6,9 +6,9 @@
 /// attached-header NRRD volumes (raw or gzip; LPS, RAS or LAS space).
 #pragma once
 
+#include "volume/Volume.h"
 #include "volume/io/NrrdHeader.h"
 #include "volume/io/RasterReader.h"
-#include "volume/Volume.h"
 
 #include <filesystem>
 #include <map>

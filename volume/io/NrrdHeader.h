@@ -4,8 +4,8 @@
 /// converted to LPS.
 #pragma once
 
-#include "volume/io/RasterLayout.h"
 #include "volume/Volume.h"
+#include "volume/io/RasterLayout.h"
 
 #include <cstddef>
 #include <map>

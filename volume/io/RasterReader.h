@@ -6,9 +6,9 @@
 #pragma once
 
 #include "core/Progress.h"
+#include "volume/Volume.h"
 #include "volume/io/ByteSource.h"
 #include "volume/io/RasterLayout.h"
-#include "volume/Volume.h"
 
 #include <cstdint>
 #include <filesystem>

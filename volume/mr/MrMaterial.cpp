@@ -4,9 +4,9 @@
 
 #include "volume/mr/MrMaterial.h"
 
-#include "volume/mr/BodyWidth.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/mr/BodyWidth.h"
 #include "volume/mr/T1Normalisation.h"
 
 #include <sstream>

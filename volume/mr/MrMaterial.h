@@ -19,10 +19,10 @@
 /// The metadata record the weighting, the fields that decided it and every step.
 #pragma once
 
-#include "volume/mr/MrBackground.h"
-#include "volume/mr/MrWeighting.h"
 #include "volume/TissueTable.h"
 #include "volume/Volume.h"
+#include "volume/mr/MrBackground.h"
+#include "volume/mr/MrWeighting.h"
 
 #include <optional>
 #include <string>

@@ -4,11 +4,11 @@
 /// grid (its own accessors, so one per thread) and the active box.
 #pragma once
 
+#include "core/Errors.h"
 #include "haptic/materials/FieldGrids.h"
 #include "haptic/shaft/detail/LeafReader.h"
 #include "haptic/shaft/detail/Traversal.h"
 #include "haptic/shaft/detail/VoxelWalk.h"
-#include "core/Errors.h"
 
 #include <optional>
 #include <string>

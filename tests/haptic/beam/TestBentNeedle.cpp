@@ -8,9 +8,9 @@
 /// its track; bone pins the tip; the measured deflections; the needle's section
 /// (EI) from its gauge, wall and stylet; the nodes.
 
-#include "haptic/beam/BentNeedle.h"
 #include "core/Errors.h"
 #include "core/Math.h"
+#include "haptic/beam/BentNeedle.h"
 #include "volume/TissueTable.h"
 
 #include <Eigen/Geometry>

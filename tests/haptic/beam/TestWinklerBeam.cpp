@@ -7,9 +7,9 @@
 /// propped cantilever (the end pinned).
 /// Each with a control where the rule it checks does not hold.
 
+#include "core/Errors.h"
 #include "haptic/beam/BandedCholesky.h"
 #include "haptic/beam/WinklerBeam.h"
-#include "core/Errors.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

@@ -10,12 +10,12 @@
 #include "common/BuiltinTable.h"
 #include "common/Phantom.h"
 
+#include "core/Errors.h"
+#include "core/Math.h"
 #include "haptic/beam/Foundation.h"
 #include "haptic/force/NeedleForceModel.h"
 #include "haptic/papers/LayerTables.h"
 #include "haptic/shaft/LabelTrace.h"
-#include "core/Errors.h"
-#include "core/Math.h"
 #include "volume/Grids.h"
 
 #include <gtest/gtest.h>

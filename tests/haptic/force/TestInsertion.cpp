@@ -7,10 +7,10 @@
 #include "common/Layers.h"
 #include "common/Tolerances.h"
 
-#include "haptic/scene/ScriptedInsertion.h"
+#include "haptic/force/NeedleForceModel.h"
 #include "haptic/papers/LayerTables.h"
 #include "haptic/papers/LumbarPunctureModel.h"
-#include "haptic/force/NeedleForceModel.h"
+#include "haptic/scene/ScriptedInsertion.h"
 
 #include <gtest/gtest.h>
 

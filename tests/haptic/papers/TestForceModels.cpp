@@ -5,10 +5,10 @@
 
 #include "common/Tolerances.h"
 
-#include "haptic/papers/ConciModel.h"
 #include "haptic/force/ContactTransient.h"
-#include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/force/PivotCorrection.h"
+#include "haptic/papers/ConciModel.h"
+#include "haptic/papers/LumbarPunctureModel.h"
 #include "haptic/papers/SenacModel.h"
 
 #include <cmath>

@@ -8,11 +8,11 @@
 #include "common/BuiltinTable.h"
 #include "common/SceneCache.h"
 
+#include "core/Errors.h"
 #include "haptic/Procedure.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/scene/ScriptedInsertion.h"
 #include "haptic/servo/Session.h"
-#include "core/Errors.h"
 
 #include <gtest/gtest.h>
 

@@ -10,9 +10,9 @@
 #include "common/TempDirTest.h"
 
 #include "core/Errors.h"
+#include "haptic/Events.h"
 #include "haptic/scene/Scene.h"
 #include "haptic/servo/ServoLoop.h"
-#include "haptic/Events.h"
 #include "haptic/servo/Session.h"
 #include "haptic/servo/SpscQueue.h"
 
@@ -20,8 +20,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <limits>
+#include <sstream>
 #include <string>
 
 namespace voxhap::haptic {

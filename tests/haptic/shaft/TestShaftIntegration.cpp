@@ -6,10 +6,10 @@
 #include "common/Phantom.h"
 #include "common/Tolerances.h"
 
+#include "core/Errors.h"
 #include "haptic/shaft/LabelTrace.h"
 #include "haptic/shaft/ShaftIntegration.h"
 #include "haptic/shaft/TrajectoryProfile.h"
-#include "core/Errors.h"
 #include "haptic/shaft/detail/VoxelWalk.h"
 
 #include <Eigen/Geometry>

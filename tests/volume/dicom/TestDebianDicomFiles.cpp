@@ -9,9 +9,9 @@
 #include "common/Prerequisites.h"
 #include "common/TempDirTest.h"
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <cstdint>
 #include <cstdlib>

@@ -8,9 +8,9 @@
 #include "common/SharedData.h"
 #include "common/TempDirTest.h"
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <gdcmDICOMDIRGenerator.h>
 #include <gdcmFileExplicitFilter.h>

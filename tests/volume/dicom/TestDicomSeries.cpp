@@ -9,9 +9,9 @@
 #include "common/TempDirTest.h"
 #include "common/Tolerances.h"
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 #include "volume/mr/T1Normalisation.h"
 
 #include <Eigen/Geometry>

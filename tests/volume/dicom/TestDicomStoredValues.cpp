@@ -7,9 +7,9 @@
 #include "common/DicomWriter.h"
 #include "common/TempDirTest.h"
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 #include "volume/dicom/detail/StoredPrecision.h"
 
 #include <Eigen/Geometry>

@@ -14,8 +14,8 @@
 #include "common/TempDirTest.h"
 
 #include "core/Errors.h"
-#include "volume/dicom/DicomSeries.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <nlohmann/json.hpp>
 

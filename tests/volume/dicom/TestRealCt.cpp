@@ -9,12 +9,12 @@
 #include "common/Tolerances.h"
 
 #include "common/DicomNative.h"
-#include "volume/dicom/DicomSeries.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <gdcmImageReader.h>
-#include <openvdb/tools/Statistics.h>
 #include <gtest/gtest.h>
+#include <openvdb/tools/Statistics.h>
 
 #include <cstring>
 #include <filesystem>

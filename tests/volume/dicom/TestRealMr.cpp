@@ -6,9 +6,9 @@
 
 #include "common/SharedData.h"
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 
 #include <gdcmImageReader.h>
 

@@ -8,8 +8,8 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/io/ModalityInference.h"
 #include "volume/VolumeFile.h"
+#include "volume/io/ModalityInference.h"
 
 #include <nifti2_io.h>
 

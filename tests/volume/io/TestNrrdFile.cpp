@@ -9,8 +9,8 @@
 
 #include "core/Errors.h"
 #include "volume/Grids.h"
-#include "volume/io/NrrdFile.h"
 #include "volume/detail/SparseSlabs.h"
+#include "volume/io/NrrdFile.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

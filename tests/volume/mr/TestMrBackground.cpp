@@ -4,9 +4,9 @@
 /// Rayleigh noise of known σ, on masked and air-free images, and on the shared
 /// real MR series.
 
-#include "volume/dicom/DicomSeries.h"
 #include "core/Errors.h"
 #include "volume/Grids.h"
+#include "volume/dicom/DicomSeries.h"
 #include "volume/mr/MrBackground.h"
 
 #include "common/SharedData.h"

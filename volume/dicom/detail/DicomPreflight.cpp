@@ -5,18 +5,18 @@
 
 #include "volume/dicom/detail/DicomPreflight.h"
 
-#include "volume/dicom/detail/DicomElementRules.h"
 #include "core/Errors.h"
+#include "volume/dicom/detail/DicomElementRules.h"
 
 #include <gdcmReader.h>
 #include <gdcmTransferSyntax.h>
 
 #include <algorithm>
 #include <cstdint>
-#include <iterator>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <string_view>

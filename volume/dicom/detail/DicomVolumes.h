@@ -26,8 +26,8 @@
 /// which puts a diffusion series' b = 0 first.
 #pragma once
 
-#include "volume/dicom/DicomHeaders.h"
 #include "core/Math.h"
+#include "volume/dicom/DicomHeaders.h"
 
 #include <cstddef>
 #include <string>
