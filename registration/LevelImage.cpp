@@ -206,19 +206,6 @@ LevelImage blockAverage(const LevelImage& fine, const Vec3i& factors)
 
 namespace {
 
-/// 6-neighbour offsets of voxel @p at that lie inside dims @p d, through @p f(neighbour).
-template <typename F> void forFaceNeighbours(const Vec3i& d, std::int64_t at, F&& f)
-{
-    const std::int64_t nx = d.x(), nxy = std::int64_t(d.x()) * d.y();
-    const int i = int(at % nx), j = int((at / nx) % d.y()), k = int(at / nxy);
-    if (i > 0) f(at - 1);
-    if (i + 1 < d.x()) f(at + 1);
-    if (j > 0) f(at - nx);
-    if (j + 1 < d.y()) f(at + nx);
-    if (k > 0) f(at - nxy);
-    if (k + 1 < d.z()) f(at + nxy);
-}
-
 /// One pass of 6-neighbour erosion (grow = false), or of dilation within @p limit.
 /// Row by row, so that a voxel's neighbours are offsets, not divisions.
 std::vector<std::uint8_t> morphologyPass(
@@ -246,21 +233,72 @@ std::vector<std::uint8_t> morphologyPass(
     return out;
 }
 
-/// Mark with 1 the voxels 6-connected to @p seeds through voxels where @p pass is true.
-template <typename Pass> std::vector<std::uint8_t> flood(const Vec3i& d, std::vector<std::int64_t> seeds, Pass&& pass)
-{
-    std::vector<std::uint8_t> reached(std::size_t(std::int64_t(d.x()) * d.y() * d.z()), 0);
-    for (std::int64_t s : seeds) reached[std::size_t(s)] = 1;
-    while (!seeds.empty()) {
-        const std::int64_t at = seeds.back();
-        seeds.pop_back();
-        forFaceNeighbours(d, at, [&](std::int64_t q) {
-            if (reached[std::size_t(q)] || !pass(std::size_t(q))) return;
-            reached[std::size_t(q)] = 1;
-            seeds.push_back(q);
-        });
+/// The runs along x of the voxels where @p in holds, row by row (row r = k·ny + j),
+/// and their 6-connected parts: each run joined to the runs it overlaps in x in
+/// the row before (j − 1) and the slice before (k − 1). The same parts as a
+/// flood's, in O(voxels + runs) without a division per voxel.
+struct RunParts {
+    std::vector<std::int32_t> begin, end; ///< [begin, end) along x
+    std::vector<std::int64_t> rowFirst;   ///< the first run of each row; one more for the end
+    std::vector<std::int32_t> parent;     ///< union-find over the runs
+
+    std::int32_t root(std::int32_t r)
+    {
+        while (parent[std::size_t(r)] != r) {
+            parent[std::size_t(r)] = parent[std::size_t(parent[std::size_t(r)])];
+            r = parent[std::size_t(r)];
+        }
+        return r;
     }
-    return reached;
+    void join(std::int32_t a, std::int32_t b)
+    {
+        a = root(a), b = root(b);
+        if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b); // the earlier run is the root
+    }
+    /// Join the runs of row @p r to the overlapping runs of row @p s.
+    void joinRows(std::int64_t r, std::int64_t s)
+    {
+        std::int64_t a = rowFirst[std::size_t(r)], b = rowFirst[std::size_t(s)];
+        const std::int64_t aEnd = rowFirst[std::size_t(r) + 1], bEnd = rowFirst[std::size_t(s) + 1];
+        while (a < aEnd && b < bEnd) {
+            if (begin[std::size_t(a)] < end[std::size_t(b)] && begin[std::size_t(b)] < end[std::size_t(a)])
+                join(std::int32_t(a), std::int32_t(b));
+            if (end[std::size_t(a)] < end[std::size_t(b)])
+                ++a;
+            else
+                ++b;
+        }
+    }
+};
+
+template <typename In> RunParts runParts(const Vec3i& d, In&& in)
+{
+    RunParts p;
+    const std::int64_t rows = std::int64_t(d.y()) * d.z();
+    p.rowFirst.reserve(std::size_t(rows) + 1);
+    for (std::int64_t r = 0; r < rows; ++r) {
+        p.rowFirst.push_back(std::int64_t(p.begin.size()));
+        const std::int64_t row = r * d.x();
+        for (int i = 0; i < d.x();) {
+            if (!in(std::size_t(row + i))) {
+                ++i;
+                continue;
+            }
+            const int from = i;
+            while (i < d.x() && in(std::size_t(row + i))) ++i;
+            p.begin.push_back(from);
+            p.end.push_back(i);
+        }
+    }
+    p.rowFirst.push_back(std::int64_t(p.begin.size()));
+    p.parent.resize(p.begin.size());
+    for (std::size_t q = 0; q < p.parent.size(); ++q) p.parent[q] = std::int32_t(q);
+    for (std::int64_t r = 0; r < rows; ++r) {
+        const std::int64_t j = r % d.y();
+        if (j > 0) p.joinRows(r, r - 1);
+        if (r >= d.y()) p.joinRows(r, r - d.y());
+    }
+    return p;
 }
 
 } // namespace
@@ -276,45 +314,53 @@ void bodyAbove(LevelImage& image, float threshold, int openingVoxels)
     // the part kept back its skin.
     std::vector<std::uint8_t> core = mask;
     for (int p = 0; p < openingVoxels; ++p) core = morphologyPass(core, d, false, nullptr);
-    // The parts of the core, labelled one flood each; the largest is the body.
-    std::vector<std::int32_t> part(n, -1);
-    std::int32_t best = -1, next = 0;
+    // The parts of the core; the largest is the body (on a tie the one met first
+    // in scan order: a run's root is its part's first run).
+    RunParts parts = runParts(d, [&](std::size_t q) { return core[q] != 0; });
+    const auto runs = std::int32_t(parts.begin.size());
+    std::vector<std::int64_t> size(parts.begin.size(), 0);
+    for (std::int32_t r = 0; r < runs; ++r)
+        size[std::size_t(parts.root(r))] += parts.end[std::size_t(r)] - parts.begin[std::size_t(r)];
+    std::int32_t best = -1;
     std::int64_t bestSize = 0;
-    std::vector<std::int64_t> stack;
-    for (std::size_t seed = 0; seed < n; ++seed) {
-        if (part[seed] >= 0 || !core[seed]) continue;
-        std::int64_t size = 0;
-        part[seed] = next;
-        stack.push_back(std::int64_t(seed));
-        while (!stack.empty()) {
-            const std::int64_t at = stack.back();
-            stack.pop_back();
-            ++size;
-            forFaceNeighbours(d, at, [&](std::int64_t q) {
-                if (part[std::size_t(q)] >= 0 || !core[std::size_t(q)]) return;
-                part[std::size_t(q)] = next;
-                stack.push_back(q);
-            });
-        }
-        if (size > bestSize) bestSize = size, best = next;
-        ++next;
+    for (std::int32_t r = 0; r < runs; ++r) {
+        if (parts.parent[std::size_t(r)] == r && size[std::size_t(r)] > bestSize)
+            best = r, bestSize = size[std::size_t(r)];
     }
-    std::vector<std::uint8_t> body(n);
-    for (std::size_t q = 0; q < n; ++q) body[q] = best >= 0 && part[q] == best ? 1 : 0;
+    const std::int64_t rows = std::int64_t(d.y()) * d.z();
+    std::vector<std::uint8_t> body(n, 0);
+    for (std::int64_t row = 0; row < rows; ++row) {
+        for (std::int64_t r = parts.rowFirst[std::size_t(row)]; r < parts.rowFirst[std::size_t(row) + 1]; ++r) {
+            if (parts.root(std::int32_t(r)) != best) continue;
+            const auto at = std::size_t(row * d.x());
+            std::fill(body.begin() + std::ptrdiff_t(at + std::size_t(parts.begin[std::size_t(r)])),
+                body.begin() + std::ptrdiff_t(at + std::size_t(parts.end[std::size_t(r)])), std::uint8_t(1));
+        }
+    }
     for (int p = 0; p < openingVoxels; ++p) body = morphologyPass(body, d, true, &mask);
     // Its holes filled: what the border cannot reach through the rest is
     // inside (gas, marrow, a dark cyst), so that the body's surface is its skin.
-    auto inBody = [&](std::size_t q) { return body[q] != 0; };
-    std::vector<std::int64_t> border;
-    for (int k = 0; k < d.z(); ++k)
-        for (int j = 0; j < d.y(); ++j)
-            for (int i = 0; i < d.x(); ++i) {
-                const auto m = image.index(i, j, k);
-                const bool edge = i == 0 || j == 0 || k == 0 || i == d.x() - 1 || j == d.y() - 1 || k == d.z() - 1;
-                if (edge && !inBody(std::size_t(m))) border.push_back(m);
-            }
-    const auto outside = flood(d, std::move(border), [&](std::size_t q) { return !inBody(q); });
-    for (std::size_t q = 0; q < n; ++q) image.body[q] = best >= 0 && !outside[q] ? 1 : 0;
+    // The rest's parts that touch the image's border are outside.
+    RunParts gaps = runParts(d, [&](std::size_t q) { return body[q] == 0; });
+    std::vector<std::uint8_t> outside(gaps.begin.size(), 0);
+    for (std::int64_t row = 0; row < rows; ++row) {
+        const std::int64_t j = row % d.y(), k = row / d.y();
+        const bool edgeRow = j == 0 || k == 0 || j == d.y() - 1 || k == d.z() - 1;
+        for (std::int64_t r = gaps.rowFirst[std::size_t(row)]; r < gaps.rowFirst[std::size_t(row) + 1]; ++r) {
+            if (edgeRow || gaps.begin[std::size_t(r)] == 0 || gaps.end[std::size_t(r)] == d.x())
+                outside[std::size_t(gaps.root(std::int32_t(r)))] = 1;
+        }
+    }
+    std::fill(image.body.begin(), image.body.end(), std::uint8_t(best >= 0 ? 1 : 0));
+    if (best < 0) return;
+    for (std::int64_t row = 0; row < rows; ++row) {
+        for (std::int64_t r = gaps.rowFirst[std::size_t(row)]; r < gaps.rowFirst[std::size_t(row) + 1]; ++r) {
+            if (!outside[std::size_t(gaps.root(std::int32_t(r)))]) continue;
+            const auto at = std::size_t(row * d.x());
+            std::fill(image.body.begin() + std::ptrdiff_t(at + std::size_t(gaps.begin[std::size_t(r)])),
+                image.body.begin() + std::ptrdiff_t(at + std::size_t(gaps.end[std::size_t(r)])), std::uint8_t(0));
+        }
+    }
 }
 
 std::vector<std::uint8_t> grownBody(const LevelImage& image, int passes)

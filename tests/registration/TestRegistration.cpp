@@ -19,6 +19,12 @@
 #include "volume/VolumeFile.h"
 
 #include <gtest/gtest.h>
+#include <itkBinaryCrossStructuringElement.h>
+#include <itkBinaryDilateImageFilter.h>
+#include <itkBinaryErodeImageFilter.h>
+#include <itkBinaryFillholeImageFilter.h>
+#include <itkConnectedComponentImageFilter.h>
+#include <itkRelabelComponentImageFilter.h>
 
 #include <cmath>
 #include <random>
@@ -115,6 +121,112 @@ TEST(LevelImage, EachVoxelIsTheMeanOfItsBlockWithAirAtTheBackground)
     // The level's voxel centre is the block's centre in world space.
     const Vec3d blockCentre = v.indexToWorld(Vec3d(1.0, 0.5, 0.5)); // block (0,0,0): indices 0..2, 0..1, 0..1
     EXPECT_LT((li.world(Vec3d::Zero()) - blockCentre).norm(), 1e-12);
+}
+
+/// The body mask of bodyAbove, made by ITK's own filters: erosion and dilation by the
+/// 6-neighbour cross (outside the image neither body nor air for the erosion, air for
+/// the dilation), 6-connected parts ranked by size, and the holes that 6-connected
+/// air from the border cannot reach filled.
+std::vector<std::uint8_t> itkBodyMask(const LevelImage& image, float threshold, int opening)
+{
+    using Mask = itk::Image<unsigned char, 3>;
+    using Labels = itk::Image<unsigned int, 3>;
+    auto toItk = [&](const std::vector<std::uint8_t>& v) {
+        auto m = Mask::New();
+        Mask::SizeType size;
+        for (int a = 0; a < 3; ++a) size[unsigned(a)] = itk::SizeValueType(image.dims[a]);
+        m->SetRegions(Mask::RegionType(size));
+        m->Allocate();
+        std::copy(v.begin(), v.end(), m->GetBufferPointer());
+        return m;
+    };
+    auto fromItk = [&](const Mask* m) {
+        return std::vector<std::uint8_t>(m->GetBufferPointer(), m->GetBufferPointer() + image.count());
+    };
+    std::vector<std::uint8_t> mask(std::size_t(image.count()));
+    for (std::size_t q = 0; q < mask.size(); ++q) mask[q] = image.values[q] > threshold ? 1 : 0;
+    using Cross = itk::BinaryCrossStructuringElement<unsigned char, 3>;
+    Cross cross;
+    cross.SetRadius(1);
+    cross.CreateStructuringElement();
+    Mask::Pointer core = toItk(mask);
+    for (int p = 0; p < opening; ++p) {
+        auto erode = itk::BinaryErodeImageFilter<Mask, Mask, Cross>::New();
+        erode->SetInput(core);
+        erode->SetKernel(cross);
+        erode->SetErodeValue(1);
+        erode->SetBoundaryToForeground(true);
+        erode->Update();
+        core = erode->GetOutput();
+    }
+    auto parts = itk::ConnectedComponentImageFilter<Mask, Labels>::New();
+    parts->SetInput(core);
+    parts->SetFullyConnected(false);
+    auto ranked = itk::RelabelComponentImageFilter<Labels, Labels>::New();
+    ranked->SetInput(parts->GetOutput());
+    ranked->Update();
+    std::vector<std::uint8_t> body(mask.size());
+    const unsigned* label = ranked->GetOutput()->GetBufferPointer();
+    for (std::size_t q = 0; q < body.size(); ++q) body[q] = label[q] == 1 ? 1 : 0; // 1: the largest part
+    for (int p = 0; p < opening; ++p) {
+        auto dilate = itk::BinaryDilateImageFilter<Mask, Mask, Cross>::New();
+        dilate->SetInput(toItk(body));
+        dilate->SetKernel(cross);
+        dilate->SetDilateValue(1);
+        dilate->Update();
+        body = fromItk(dilate->GetOutput());
+        for (std::size_t q = 0; q < body.size(); ++q) body[q] = body[q] && mask[q];
+    }
+    auto fill = itk::BinaryFillholeImageFilter<Mask>::New();
+    fill->SetInput(toItk(body));
+    fill->SetFullyConnected(false);
+    fill->SetForegroundValue(1);
+    fill->Update();
+    return fromItk(fill->GetOutput());
+}
+
+// The body mask (the largest part once opened, its holes filled) against ITK's filters
+// on random bodies: blobs of every size, thin bridges, cavities, parts on the border.
+// Control: the masks differ from the plain threshold, so each step had work to do.
+TEST(LevelImage, BodyMaskIsItksLargestOpenedPartWithItsHolesFilled)
+{
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int trial = 0; trial < 6; ++trial) {
+        LevelImage image;
+        image.dims = Vec3i(37 + trial, 29, 23 - trial);
+        image.values.assign(std::size_t(image.count()), 0.0f);
+        image.body.assign(image.values.size(), 0);
+        struct Blob {
+            Vec3d c;
+            double r, sign;
+        };
+        std::vector<Blob> blobs;
+        for (int b = 0; b < 14; ++b) {
+            const Vec3d c(u(rng) * image.dims.x(), u(rng) * image.dims.y(), u(rng) * image.dims.z());
+            blobs.push_back({c, 2.0 + 7.0 * u(rng), b % 4 == 3 ? -1.0 : 1.0}); // every 4th digs a cavity
+        }
+        for (int k = 0; k < image.dims.z(); ++k)
+            for (int j = 0; j < image.dims.y(); ++j)
+                for (int i = 0; i < image.dims.x(); ++i) {
+                    double v = 0.3 * u(rng); // speckle: single voxels and thin bridges above the threshold
+                    for (const Blob& b : blobs)
+                        v += b.sign * std::exp(-(Vec3d(i, j, k) - b.c).squaredNorm() / (b.r * b.r));
+                    image.values[std::size_t(image.index(i, j, k))] = float(v);
+                }
+        for (int opening : {0, 1, 2}) {
+            const std::vector<std::uint8_t> expected = itkBodyMask(image, 0.5f, opening);
+            LevelImage mine = image;
+            bodyAbove(mine, 0.5f, opening);
+            long differ = 0, fromThreshold = 0;
+            for (std::size_t q = 0; q < expected.size(); ++q) {
+                differ += (mine.body[q] != 0) != (expected[q] != 0);
+                fromThreshold += (expected[q] != 0) != (image.values[q] > 0.5f);
+            }
+            EXPECT_EQ(differ, 0) << "trial " << trial << ", opening " << opening;
+            EXPECT_GT(fromThreshold, 0) << "control: trial " << trial << ", opening " << opening;
+        }
+    }
 }
 
 TEST(Resample, AShiftByWholeVoxelsCopiesTheValuesExactly)
