@@ -145,9 +145,9 @@ LevelImage blockAverage(const volume::Volume& v, Channel c, const Vec3i& factors
             for (int j = 0; j < out.dims.y(); ++j) {
                 std::fill(rowSum.begin(), rowSum.end(), 0.0);
                 std::fill(rowActive.begin(), rowActive.end(), 0u);
-                for (int c = 0; c < factors.z(); ++c) {
-                    for (int b = 0; b < factors.y(); ++b) {
-                        const int y = box.min.y() + j * factors.y() + b, z = box.min.z() + k * factors.z() + c;
+                for (int dz = 0; dz < factors.z(); ++dz) {
+                    for (int dy = 0; dy < factors.y(); ++dy) {
+                        const int y = box.min.y() + j * factors.y() + dy, z = box.min.z() + k * factors.z() + dz;
                         for (int x = box.min.x(); x < xEnd;) {
                             const int segmentEnd = std::min(xEnd, (x & ~(kLeafDim - 1)) + kLeafDim);
                             if (const Leaf* leaf = acc.probeConstLeaf(openvdb::Coord(x, y, z))) {

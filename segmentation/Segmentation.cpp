@@ -176,9 +176,9 @@ SegmentReport segment(volume::Volume& v, const volume::TissueTable& table, const
             resampleLabels(*o.imported->labels, o.imported->mapping, v, lat, o.imported->file);
         report.importedVoxels =
             std::int64_t(std::count_if(imported.begin(), imported.end(), [](std::int32_t x) { return x >= 0; }));
-        for (const auto& [mapped, automatic] : o.imported->mapping.keepAutomatic) {
+        for (const auto& [mapped, kept] : o.imported->mapping.keepAutomatic) {
             for (std::size_t n = 0; n < imported.size(); ++n) {
-                if (imported[n] == mapped && labels[n] == automatic) imported[n] = -1;
+                if (imported[n] == mapped && labels[n] == kept) imported[n] = -1;
             }
         }
         applyImported(labels, imported);

@@ -24,7 +24,10 @@
 
 namespace voxhap::registration::detail {
 
-namespace {
+// Not an anonymous namespace: MetricPair::Impl, declared in the header's
+// namespace, holds these types, and a member of an anonymously namespaced type
+// would give Impl a linkage of its own (GCC's -Wsubobject-linkage).
+namespace stage {
 
 using ImageF = itk::Image<float, 3>;
 using MattesMetric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
@@ -43,7 +46,7 @@ public:
     using Superclass = MattesMetric;
     using Pointer = itk::SmartPointer<Self>;
     using ConstPointer = itk::SmartPointer<const Self>;
-    itkNewMacro(Self);
+    itkNewMacro(Self)
     itkTypeMacro(SerialMattes, MattesMutualInformationImageToImageMetricv4);
 
 protected:
@@ -100,7 +103,7 @@ public:
     using Superclass = itk::SpatialObject<3>;
     using Pointer = itk::SmartPointer<Self>;
     using ConstPointer = itk::SmartPointer<const Self>;
-    itkNewMacro(Self);
+    itkNewMacro(Self)
     itkTypeMacro(LevelMask, SpatialObject);
 
     void set(const LevelImage& li, const std::vector<std::uint8_t>& mask)
@@ -218,7 +221,7 @@ class HistoryObserver : public itk::Command {
 public:
     using Self = HistoryObserver;
     using Pointer = itk::SmartPointer<Self>;
-    itkNewMacro(Self);
+    itkNewMacro(Self)
     std::vector<double>* history = nullptr;
     Optimizer::ParametersType evaluatedAt; ///< where the next reported value was computed
     Optimizer::ParametersType bestPosition;
@@ -242,7 +245,9 @@ public:
     }
 };
 
-} // namespace
+} // namespace stage
+
+using namespace stage; // this file's own parts
 
 struct MetricPair::Impl {
     LevelImage fixedLattice; ///< the fixed level's geometry and dims (its voxels are in `fixed`)

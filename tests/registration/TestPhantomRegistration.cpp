@@ -119,7 +119,7 @@ INSTANTIATE_TEST_SUITE_P(Moves, PhantomRegistration,
         MoveCase{"TorsoFeetFirst", "torso", {0, 0, 0}, {5, 0, -10}, true},
         MoveCase{"LumbarAboutXYZ", "lumbar", {-10, 12, 15}, {-25, 15, 30}},
         MoveCase{"LumbarFeetFirst", "lumbar", {5, 0, -5}, {0, 10, 0}, true}),
-    [](const testing::TestParamInfo<MoveCase>& info) { return info.param.name; });
+    [](const testing::TestParamInfo<MoveCase>& move) { return move.param.name; });
 
 } // namespace
 } // namespace voxhap::registration

@@ -251,7 +251,9 @@ TEST(Resample, AShiftByWholeVoxelsCopiesTheValuesExactly)
                 const bool on = src.isValueOn(s);
                 expectedActive += on;
                 ASSERT_EQ(dst.isValueOn(c), on) << c;
-                if (on) ASSERT_FLOAT_EQ(dst.getValue(c), src.getValue(s)) << c;
+                if (on) {
+                    ASSERT_FLOAT_EQ(dst.getValue(c), src.getValue(s)) << c;
+                }
             }
     EXPECT_EQ(report.activeVoxels, expectedActive);
     EXPECT_GT(expectedActive, 0);

@@ -162,8 +162,8 @@ int run(const ViewOptions& o)
 
     const InterruptGuard guard;
     render::ViewerRunHooks hooks;
-    hooks.pump = [&feed](render::Viewer& v) {
-        feed.pump(v);
+    hooks.pump = [&feed](render::Viewer& shown) {
+        feed.pump(shown);
         return feed.poses();
     };
     hooks.stop = [] { return InterruptGuard::interrupted(); };

@@ -202,10 +202,10 @@ Volume loadNrrd(const std::filesystem::path& file, const RasterOptions& options)
                 : channel == Channel::Intensity ? md.intensityUnits
                                                 : md.huUnits) = it->second;
     }
-    for (const auto& [key, text] : h.keyValues) {
+    for (const auto& [key, value] : h.keyValues) {
         if (key.rfind("voxhap_", 0) != 0) continue;
         try {
-            setMetadataFact(md, std::string_view(key).substr(7), text, name);
+            setMetadataFact(md, std::string_view(key).substr(7), value, name);
         } catch (const ValueError& e) {
             throw IoError(e.what());
         }

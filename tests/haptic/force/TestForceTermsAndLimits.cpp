@@ -265,7 +265,9 @@ TEST(LumbarPunctureLabels, LayersCarryTheTableValuesAtTheGauge)
         EXPECT_EQ(layers[i].tents, k > 0.0) << t.name;
         EXPECT_NEAR(layers[i].coulombN, t.frictionCoulomb->value * s, kRoundOffN) << t.name;
         EXPECT_NEAR(layers[i].viscousNsPerMm2, t.frictionViscous->value, kRoundOffN) << t.name;
-        if (k > 0.0) EXPECT_NEAR(layers[i].punctureDepthMm, runs[i].endMm - runs[i].startMm, 1e-12) << t.name;
+        if (k > 0.0) {
+            EXPECT_NEAR(layers[i].punctureDepthMm, runs[i].endMm - runs[i].startMm, 1e-12) << t.name;
+        }
     }
 }
 

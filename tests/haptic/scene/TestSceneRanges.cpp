@@ -114,7 +114,9 @@ TEST(SceneRanges, EveryDocumentedRangeIsEnforcedNamingFileAndField)
         const std::string low = refusal(with(baseScene(), r.field, below));
         EXPECT_NE(low.find("ranges.json: " + field + ": must be in"), std::string::npos)
             << r.field << " at " << below << ": '" << low << "'";
-        if (!r.openLow) EXPECT_EQ(refusal(with(baseScene(), r.field, r.lo)), "") << r.field << " = " << r.lo;
+        if (!r.openLow) {
+            EXPECT_EQ(refusal(with(baseScene(), r.field, r.lo)), "") << r.field << " = " << r.lo;
+        }
     }
 }
 

@@ -75,7 +75,9 @@ TEST_F(HeldOutDicomClasses, EveryClassLoadsWithItsMaterialOrIsRefusedInOneLine)
                 } catch (const voxhap::Error& e) {
                     const std::string m = e.what();
                     EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-                    if (p != dir) EXPECT_NE(m.find(c.at("refusal").get<std::string>()), std::string::npos) << m;
+                    if (p != dir) {
+                        EXPECT_NE(m.find(c.at("refusal").get<std::string>()), std::string::npos) << m;
+                    }
                 }
             }
             continue;
@@ -85,9 +87,12 @@ TEST_F(HeldOutDicomClasses, EveryClassLoadsWithItsMaterialOrIsRefusedInOneLine)
         const DicomSeriesInfo& s = catalog.series.front();
         EXPECT_EQ(s.modality, c.at("modality").get<std::string>());
         EXPECT_EQ(s.volumes, c.at("volumes").get<std::size_t>()) << s.volumeSummary << " " << s.problem;
-        if (c.contains("separated_by"))
+        if (c.contains("separated_by")) {
             EXPECT_NE(s.separatedBy.find(c.at("separated_by").get<std::string>()), std::string::npos) << s.separatedBy;
-        if (c.at("weighting").is_string()) EXPECT_EQ(s.weighting, c.at("weighting").get<std::string>());
+        }
+        if (c.at("weighting").is_string()) {
+            EXPECT_EQ(s.weighting, c.at("weighting").get<std::string>());
+        }
 
         // The stored values, rescaled: no air or background made inactive, no T1 normalisation.
         DicomOptions o;
@@ -109,7 +114,7 @@ TEST_F(HeldOutDicomClasses, EveryClassLoadsWithItsMaterialOrIsRefusedInOneLine)
         const std::vector<int> shape = c.at("shape"); // slices, rows, columns
         ASSERT_EQ(v.indexBox().dims(), voxhap::Vec3i(shape[2], shape[1], shape[0]));
         std::ifstream raw(mDir / "classes" / (name + ".raw"), std::ios::binary);
-        std::vector<double> ref(std::size_t(shape[0]) * shape[1] * shape[2]);
+        std::vector<double> ref(static_cast<std::size_t>(shape[0]) * shape[1] * shape[2]);
         raw.read(reinterpret_cast<char*>(ref.data()), std::streamsize(ref.size() * sizeof(double)));
         ASSERT_TRUE(raw) << "reference voxels";
         const double tolerance = c.at("tolerance").get<double>();

@@ -261,7 +261,8 @@ TEST(VdbFile, SixteenFfBytesOverAMetadataLengthAreRefusedWithinOneGiB)
     const int spin = loadBounded(
         dir / "ff.vdb", "",
         [](const fs::path&) {
-            for (volatile unsigned long i = 0;; i = i + 1) { }
+            volatile unsigned long i = 0;
+            for (;;) i = i + 1;
         },
         1);
     EXPECT_EQ(spin, 128 + SIGXCPU);

@@ -213,7 +213,7 @@ DicomVolumeSet splitVolumes(
         byStack |= k.stack != k0.stack;
     }
 
-    struct Volume {
+    struct SeriesVolume {
         std::vector<std::size_t> members;
         /// Time point, echo number, echo time, stack: the volumes' natural
         /// order where the headers number them; acquisition order otherwise.
@@ -221,7 +221,7 @@ DicomVolumeSet splitVolumes(
         Order first;
         std::string label;
     };
-    std::vector<Volume> volumes;
+    std::vector<SeriesVolume> volumes;
     for (auto& [key, members] : groups) {
         // 2. Repeated positions within a group: cluster along the group's own
         // normal (a localizer in a CT series lies in another plane than the
@@ -265,14 +265,14 @@ DicomVolumeSet splitVolumes(
         }
         if (hi > 1) byRepeat = true;
         // The k-th slice of each position, in acquisition order, goes to the k-th volume.
-        std::vector<Volume> repeats(hi);
+        std::vector<SeriesVolume> repeats(hi);
         for (auto& c : clusters) {
             std::sort(c.begin(), c.end(), [&](std::size_t a, std::size_t b) {
                 return orderOf(slices[a], headers) < orderOf(slices[b], headers);
             });
             for (std::size_t r = 0; r < c.size(); ++r) repeats[r].members.push_back(c[r]);
         }
-        for (Volume& v : repeats) {
+        for (SeriesVolume& v : repeats) {
             v.index = {k.temporalPosition.value_or(0), k.echoNumber.value_or(0),
                 std::lround(k.echoTime.value_or(0) * 100), k.stack.value_or(0)};
             v.first = orderOf(slices[v.members.front()], headers);
@@ -281,8 +281,9 @@ DicomVolumeSet splitVolumes(
             volumes.push_back(std::move(v));
         }
     }
-    std::sort(volumes.begin(), volumes.end(),
-        [](const Volume& a, const Volume& b) { return std::tie(a.index, a.first) < std::tie(b.index, b.first); });
+    std::sort(volumes.begin(), volumes.end(), [](const SeriesVolume& a, const SeriesVolume& b) {
+        return std::tie(a.index, a.first) < std::tie(b.index, b.first);
+    });
     std::vector<std::string> by;
     if (byType) by.push_back("image type");
     if (byEcho) by.push_back("echo");
@@ -291,7 +292,7 @@ DicomVolumeSet splitVolumes(
     if (byStack) by.push_back("stack");
     if (byRepeat) by.push_back("acquisition order");
     for (std::size_t i = 0; i < by.size(); ++i) out.separatedBy += (i ? ", " : "") + by[i];
-    for (Volume& v : volumes) {
+    for (SeriesVolume& v : volumes) {
         out.volumes.push_back(std::move(v.members));
         out.labels.push_back(v.label);
     }
