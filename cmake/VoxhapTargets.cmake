@@ -29,6 +29,11 @@ function(voxhap_add_library name)
   # The public headers are C++20: an embedding project compiles them as such.
   target_compile_features(voxhap_${name} PUBLIC cxx_std_20)
   target_link_libraries(voxhap_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  # Every library position-independent: the Python module (a shared object)
+  # links them, and the libraries share one precompiled header, which GCC
+  # ignores, parsing the headers again, in a target whose -fPIC differs from
+  # the header's ("created and used with different settings of -fpie").
+  set_target_properties(voxhap_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   voxhap_warnings(voxhap_${name})
   if(NOT ARG_NO_PCH)
     voxhap_precompile(voxhap_${name} library)
