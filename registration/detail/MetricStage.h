@@ -54,7 +54,14 @@ class MetricPair {
 public:
     /// @param marginMm the bodies grown by this much into the air around them
     ///        (within a voxel), so that the skin's edge is sampled
-    MetricPair(const LevelImage& fixed, const LevelImage& moving, double marginMm);
+    /// @param movingCropVoxels the moving image handed to ITK is the box of its
+    ///        mask grown by this many voxels (kMovingCropVoxels reads every voxel
+    ///        the whole image would give); negative: the whole image
+    MetricPair(
+        const LevelImage& fixed, const LevelImage& moving, double marginMm, int movingCropVoxels = kMovingCropVoxels);
+    /// Half a voxel to the sample, one to its interpolation's far voxel, one to
+    /// a central difference's: MetricStage.cpp, toItkCropped.
+    static constexpr int kMovingCropVoxels = 3;
     ~MetricPair();
     MetricPair(const MetricPair&) = delete;
     MetricPair& operator=(const MetricPair&) = delete;

@@ -14,6 +14,7 @@
 #include "registration/RegistrationFixtures.h"
 #include "registration/Resample.h"
 #include "registration/TransformFile.h"
+#include "registration/detail/MetricStage.h"
 #include "registration/detail/SurfaceCheck.h"
 #include "volume/Grids.h"
 #include "volume/VolumeFile.h"
@@ -227,6 +228,45 @@ TEST(LevelImage, BodyMaskIsItksLargestOpenedPartWithItsHolesFilled)
             EXPECT_GT(fromThreshold, 0) << "control: trial " << trial << ", opening " << opening;
         }
     }
+}
+
+// The moving image ITK is handed is cropped to its mask's box and a margin
+// (MetricPair, kMovingCropVoxels): the metric must be the whole image's to the
+// last bit, at the truth and at maps that put samples on the mask's edge and
+// past the crop. Control: a crop without its margin changes the metric.
+TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
+{
+    const auto& table = volume::TissueTable::builtin();
+    volume::PhantomSpec spec;
+    spec.kind = "lumbar";
+    volume::GridSpec grid;
+    grid.spacing = Vec3d(2, 2, 2);
+    const volume::PhantomModel model = volume::phantomModel(spec, table);
+    const volume::Volume ct = volume::phantomCtScan(model, grid, table);
+    volume::PhantomMrScan scan;
+    scan.rotation = test::rotationDeg(Vec3d(5, -8, 12));
+    scan.translationMm = Vec3d(6, -4, 10);
+    scan.seed = 3;
+    volume::PhantomScanTruth truth;
+    const volume::Volume mr = volume::phantomMrScan(model, table, scan, &truth);
+    LevelImage fixed = blockAverage(ct, Channel::Hu, blockFactors(ct.geometry().spacing, 2.0));
+    LevelImage moving = blockAverage(mr, Channel::T1, blockFactors(mr.geometry().spacing, 2.0));
+    clampValues(fixed, -1000.0f, 2000.0f);
+    bodyAbove(fixed, -500.0f, 1);
+    bodyAbove(moving, 0.2f * bodyQuantile(moving, 0.9), 1);
+    const detail::MetricPair cropped(fixed, moving, 3.0), whole(fixed, moving, 3.0, -1), bare(fixed, moving, 3.0, 0);
+    detail::StageSettings s;
+    s.samples = 4000;
+    const Vec3d centre = fixed.bodyCentroid();
+    const AffineMap truthMap{truth.linear, truth.offset};
+    int changedByBareCrop = 0;
+    for (const Vec3d& shift : {Vec3d(0, 0, 0), Vec3d(8, 0, 0), Vec3d(0, -12, 0), Vec3d(0, 0, 20), Vec3d(-15, 10, -6)}) {
+        AffineMap m = truthMap;
+        m.offset += shift; // the body slid across the mask's edge by up to 20 mm
+        EXPECT_EQ(cropped.metricAt(m, centre, s), whole.metricAt(m, centre, s)) << shift.transpose();
+        changedByBareCrop += bare.metricAt(m, centre, s) != whole.metricAt(m, centre, s);
+    }
+    EXPECT_GT(changedByBareCrop, 0) << "control: without the margin the crop changes the metric";
 }
 
 TEST(Resample, AShiftByWholeVoxelsCopiesTheValuesExactly)
