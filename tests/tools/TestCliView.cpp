@@ -108,6 +108,31 @@ protected:
         os << "click axial " << std::lround(px.x()) << ' ' << std::lround(px.y()) << '\n';
         return os.str();
     }
+    /// `view --listen` on a free port, its snapshot @p png taken once a pose came,
+    /// while this thread sends @p pose every 20 ms until the viewer has ended.
+    Result viewWhileStreaming(const std::string& png, const voxhap::haptic::StreamedPose& pose)
+    {
+        int port = 0;
+        {
+            voxhap::haptic::PoseReceiver probe(0); // a free port, released for the viewer
+            port = probe.port();
+        }
+        write("wait.txt", "wait-pose 30\n");
+        Result r;
+        std::atomic<bool> done{false};
+        std::thread viewer([&] {
+            r = run("view s.vdb --no-3d --listen " + std::to_string(port) + " --script wait.txt --snapshot " + png +
+                " " + std::string(kViewSize) + " --point 0,-20,0 --json");
+            done = true;
+        });
+        voxhap::haptic::PoseSender tx("127.0.0.1", port, 0.05);
+        while (!done) {
+            tx.send(pose);
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+        viewer.join();
+        return r;
+    }
     // The axial slice through the crosshair (--point 0,-20,0): z = 0.
     const Vec3d mEntry{-15, -35, 0}, mTarget{0, -20, 0};
 };
@@ -206,26 +231,8 @@ TEST_F(CliView, WindowRunsUnderXvfbAndQuitsFromTheScript)
 
 TEST_F(CliView, StreamedNeedleIsDrawnInTheSnapshot)
 {
-    int port = 0;
-    {
-        voxhap::haptic::PoseReceiver probe(0); // a free port, released for the viewer
-        port = probe.port();
-    }
-    write("wait.txt", "wait-pose 30\n");
-    Result r;
-    std::atomic<bool> done{false};
-    std::thread viewer([&] {
-        r = run("view s.vdb --no-3d --listen " + std::to_string(port) + " --script wait.txt --snapshot n.png " +
-            std::string(kViewSize) + " --point 0,-20,0 --json");
-        done = true;
-    });
     // A vertical needle in the coronal plane through the crosshair (y = −20).
-    voxhap::haptic::PoseSender tx("127.0.0.1", port, 0.05);
-    while (!done) {
-        tx.send({Vec3d(-10, -20, 0), Vec3d(0, 0, -1)});
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    viewer.join();
+    const Result r = viewWhileStreaming("n.png", {Vec3d(-10, -20, 0), Vec3d(0, 0, -1), {}});
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_GE(j["poses"].get<int>(), 1);
@@ -238,29 +245,10 @@ TEST_F(CliView, StreamedNeedleIsDrawnInTheSnapshot)
 
 TEST_F(CliView, StreamedBentNeedleIsDrawnAlongItsShaft)
 {
-    int port = 0;
-    {
-        voxhap::haptic::PoseReceiver probe(0);
-        port = probe.port();
-    }
-    write("wait.txt", "wait-pose 30\n");
-    Result r;
-    std::atomic<bool> done{false};
-    std::thread viewer([&] {
-        r = run("view s.vdb --no-3d --listen " + std::to_string(port) + " --script wait.txt --snapshot b.png " +
-            std::string(kViewSize) + " --point 0,-20,0 --json");
-        done = true;
-    });
     // The hub straight above x = −10 as before, the shaft turning at z = 30 to a tip at x = +10
     // in the coronal plane; the pose's straight line (x = −10 down to z = 0) is not the needle.
-    voxhap::haptic::PoseSender tx("127.0.0.1", port, 0.05);
-    const voxhap::haptic::StreamedPose bent{
-        Vec3d(-10, -20, 0), Vec3d(0, 0, -1), {Vec3d(-10, -20, 90), Vec3d(-10, -20, 30), Vec3d(10, -20, 0)}};
-    while (!done) {
-        tx.send(bent);
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    viewer.join();
+    const Result r = viewWhileStreaming(
+        "b.png", {Vec3d(-10, -20, 0), Vec3d(0, 0, -1), {Vec3d(-10, -20, 90), Vec3d(-10, -20, 30), Vec3d(10, -20, 0)}});
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     const Image shot = voxhap::render::readImage(mDir / "b.png");
