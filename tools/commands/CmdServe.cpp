@@ -217,7 +217,7 @@ Action registerServe(CLI::App& app)
     cmd->add_option("--out,-o", o->out, "Output directory (default voxhap-serve)");
     cmd->add_option("--viewer", o->viewer,
         "Stream the needle pose at about 50 Hz to `voxhap view --listen PORT` at [HOST:]PORT (OpenIGTLink "
-        "TRANSFORM)");
+        "TRANSFORM; a bending needle's shaft as the POINT 'voxhap-shaft' before it)");
     addGuideOptions(*cmd, o->guide);
     addCommonOptions(*cmd, o->common);
     return [o, cmd] { return run(*o, *cmd); };

@@ -226,7 +226,8 @@ Action registerView(CLI::App& app)
         ->check(CLI::ExistingFile);
     cmd->add_option("--snapshot", o->snapshot, "No window: play the script, write the window as this PNG and exit");
     cmd->add_option("--listen", o->listen,
-           "Receive the live needle (OpenIGTLink TRANSFORM) on 127.0.0.1:PORT (0: any free port)")
+           "Receive the live needle (OpenIGTLink TRANSFORM; a bending needle's shaft as the POINT "
+           "'voxhap-shaft' before it) on 127.0.0.1:PORT (0: any free port)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--timeout", o->timeoutS, "Quit after this many seconds")->check(CLI::PositiveNumber);
     cmd->add_option(
