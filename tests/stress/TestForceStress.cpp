@@ -182,6 +182,28 @@ TEST(ForceStress, ServoTickNeverAllocates)
     EXPECT_TRUE(dura); // the ticks did go through the interesting states
 }
 
+// ... and with a needle that bends: the beam's solve, the bent shaft and the shaft's
+// publication for a viewer (ServoLoop::shaft, a sequence lock over preallocated
+// atomics) allocate nothing either.
+TEST(ForceStress, ServoTickOfABendingNeedleNeverAllocates)
+{
+    const SceneInstance& inst = instance("lumbar-puncture-bending");
+    auto model = inst.makeModel();
+    HandParams p;
+    p.speedMmPerS = 10.0;
+    p.stopOnLor = false;
+    HandDevice hand(model->path(), p, model->device());
+    ServoLoop loop(*model, hand);
+    loop.runTicks(10); // first touches
+    const long before = test::allocations(), freesBefore = test::deallocations();
+    loop.runTicks(5000); // through skin and the ligaments, bending
+    EXPECT_EQ(test::allocations() - before, 0);
+    EXPECT_EQ(test::deallocations() - freesBefore, 0);
+    std::vector<Vec3d> shaft;
+    EXPECT_EQ(loop.shaft().read(shaft), 501u) << "a publication every 10 ticks, the first at tick 0";
+    EXPECT_GE(shaft.size(), 2u);
+}
+
 // The tick in a caller's own loop (a device SDK's callback, examples/device-loop/):
 // ServoStep's step from the caller's times, reading and writing the caller's device,
 // allocates nothing either.
