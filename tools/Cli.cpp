@@ -5,6 +5,8 @@
 #include "tools/Cli.h"
 
 #include "haptic/scene/Scene.h"
+#include "render/views/ViewTypes.h"
+#include "volume/Volume.h"
 
 #include <Eigen/Geometry>
 #include <csignal>
@@ -78,6 +80,22 @@ Mat3d rotationFromDegrees(const Vec3d& degrees)
     return (AngleAxisd(degToRad(degrees.z()), Vec3d::UnitZ()) * AngleAxisd(degToRad(degrees.y()), Vec3d::UnitY()) *
         AngleAxisd(degToRad(degrees.x()), Vec3d::UnitX()))
         .toRotationMatrix();
+}
+
+void checkViewOptions(const volume::Volume& v, const std::string& window, const std::optional<Vec3d>& point)
+{
+    // The presets are Hounsfield windows: on MR they would show nothing true.
+    if (!v.has(volume::Channel::Hu) && render::namesCtPreset(window)) {
+        throw UsageError("--window " + window +
+            ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
+            "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
+    }
+    if (point) {
+        const auto b = v.worldBounds();
+        if ((point->array() < b[0].array()).any() || (point->array() > b[1].array()).any()) {
+            throw UsageError("--point lies outside the volume's bounds");
+        }
+    }
 }
 
 namespace {

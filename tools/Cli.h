@@ -14,6 +14,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <functional>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -25,6 +26,10 @@ struct Scene;
 
 namespace voxhap::render {
 struct PlanFiles;
+}
+
+namespace voxhap::volume {
+class Volume;
 }
 
 namespace voxhap::tools {
@@ -62,6 +67,11 @@ Vec3d parseSpacing(const std::string& text, const std::string& option);
 
 /// @brief Rotation from Euler angles in degrees (about x, then y, then z).
 Mat3d rotationFromDegrees(const Vec3d& degrees);
+
+/// @brief The view options `render` and `view` share, against the loaded volume:
+/// a CT window preset on a volume without HU, or a --point outside its bounds.
+/// @throw UsageError naming the option
+void checkViewOptions(const volume::Volume& v, const std::string& window, const std::optional<Vec3d>& point);
 
 /// @brief Ctrl-C and SIGTERM as a request to stop: while a guard lives, they set a flag
 /// that the command polls (interrupted()) instead of killing the process, so

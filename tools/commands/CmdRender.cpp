@@ -129,18 +129,7 @@ int run(const RenderOptions& o)
     const auto start = std::chrono::steady_clock::now();
     const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
     const double loadS = secondsSince(start);
-    // The presets are Hounsfield windows: on MR they would show nothing true.
-    if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
-        throw UsageError("--window " + o.window +
-            ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
-            "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
-    }
-    if (req.point) {
-        const auto b = v.worldBounds();
-        if ((req.point->array() < b[0].array()).any() || (req.point->array() > b[1].array()).any()) {
-            throw UsageError("--point lies outside the volume's bounds");
-        }
-    }
+    checkViewOptions(v, o.window, req.point);
     const auto setUp = std::chrono::steady_clock::now();
     render::Snapshot snap(v, req, table);
     const double setUpS = secondsSince(setUp);

@@ -146,18 +146,7 @@ int run(const ViewOptions& o)
     NeedleFeed feed(receiver.get(), o.needleLengthMm);
 
     const volume::Volume v = loadVolumeWithProgress(o.input, o.reader, stderrIsTerminal() && !o.common.json);
-    // The presets are Hounsfield windows: on MR they would show nothing true.
-    if (!v.has(volume::Channel::Hu) && render::namesCtPreset(o.window)) {
-        throw UsageError("--window " + o.window +
-            ": a CT preset in HU; this is MR: give WIDTH,LEVEL in its units "
-            "(ms for T1, a.u. otherwise), or leave it out for the body's 1st-99th percentile");
-    }
-    if (vo.point) {
-        const auto b = v.worldBounds();
-        if ((vo.point->array() < b[0].array()).any() || (vo.point->array() > b[1].array()).any()) {
-            throw UsageError("--point lies outside the volume's bounds");
-        }
-    }
+    checkViewOptions(v, o.window, vo.point);
     render::Viewer viewer(v, vo, table);
 
     const InterruptGuard guard;

@@ -81,19 +81,26 @@ TEST(PoseStream, SenderConnectsToAViewerThatStartsLater)
     EXPECT_EQ(rx.latest()->tip, Vec3d(1, 1, 1));
 }
 
+/// Writes @p bytes to a fresh connection to @p port and leaves it open.
+int sendRaw(int port, const std::vector<unsigned char>& bytes)
+{
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(std::uint16_t(port));
+    ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return -1;
+    if (::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) != ssize_t(bytes.size())) return -1;
+    return fd;
+}
+
 TEST(PoseStream, ReceiverDropsAGarbageHeaderAndAcceptsTheNextSender)
 {
     PoseReceiver rx(0);
     {
-        const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-        sockaddr_in a{};
-        a.sin_family = AF_INET;
-        a.sin_port = htons(std::uint16_t(rx.port()));
-        ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
-        ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-        unsigned char junk[58];
-        for (int i = 0; i < 58; ++i) junk[i] = 0xff; // version 0xffff, body size 2^64 − 1
-        ASSERT_EQ(::send(fd, junk, sizeof junk, MSG_NOSIGNAL), ssize_t(sizeof junk));
+        // Version 0xffff, body size 2^64 − 1.
+        const int fd = sendRaw(rx.port(), std::vector<unsigned char>(58, 0xff));
+        ASSERT_GE(fd, 0);
         EXPECT_TRUE(waitUntil([&] { return rx.rejected() == 1; }));
         ::close(fd);
     }
@@ -131,19 +138,6 @@ TEST(PoseStream, BentShaftArrivesWithItsPoseAndOnlyWithIt)
     ASSERT_TRUE(tx.send({Vec3d(0, -20, 20), Vec3d(0, 0, -1), {}}));
     ASSERT_TRUE(waitUntil([&] { return rx.poses() == tx.sent(); }));
     EXPECT_TRUE(rx.latest()->shaft.empty());
-}
-
-/// Writes @p bytes to a fresh connection to @p port and leaves it open.
-int sendRaw(int port, const std::vector<unsigned char>& bytes)
-{
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(std::uint16_t(port));
-    ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
-    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return -1;
-    if (::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) != ssize_t(bytes.size())) return -1;
-    return fd;
 }
 
 /// A POINT of @p points named @p device, packed by the library, then a TRANSFORM.
