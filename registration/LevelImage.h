@@ -77,4 +77,7 @@ void clampValues(LevelImage& image, float lo, float hi);
 /// @brief The value below which @p fraction of the body's values lie (0 for an empty body).
 float bodyQuantile(const LevelImage& image, double fraction);
 
+/// @brief bodyQuantile at each of @p fractions, from one gathering of the values.
+std::vector<float> bodyQuantiles(const LevelImage& image, const std::vector<double>& fractions);
+
 } // namespace voxhap::registration

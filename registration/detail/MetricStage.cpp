@@ -19,9 +19,12 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <random>
 #include <tuple>
+
+#include <tbb/task_group.h>
 
 namespace voxhap::registration::detail {
 
@@ -33,32 +36,117 @@ namespace stage {
 using ImageF = itk::Image<float, 3>;
 using MattesMetric = itk::MattesMutualInformationImageToImageMetricv4<ImageF, ImageF>;
 
-/// ITK's Mattes mutual information on one work unit. With more, each work unit
-/// fills its own derivative buffer and adds it to the shared one under a
-/// try-lock, in whatever order the units reach it: the sums, and from them the
-/// optimiser's path, change from run to run (the porcine pair's answer moved by
-/// a millimetre). `SetMaximumNumberOfWorkUnits` caps the threads, not the work
-/// units, so the units are set here on the metric's own threaders. The
-/// orientation search runs its candidates in parallel instead (Registration.cpp).
-class SerialMattes : public MattesMetric {
+/// ITK's Mattes mutual information, split over work units with the same
+/// answer on every run. ITK's own threader sums each unit's derivative
+/// contributions into one shared buffer under a try-lock, whenever a unit's
+/// small buffer fills and at its end, in whatever order the units get there:
+/// the sums, and from them the optimiser's path, changed from run to run (the
+/// porcine pair's answer moved by a millimetre). Here each unit reduces into a
+/// buffer of its own, in its samples' order, and the units' buffers are added
+/// to ITK's in unit order once all have finished. The joint histograms ITK
+/// already adds in unit order. The partition of the samples into units is
+/// fixed by their count, so a given number of units gives the same bits on any
+/// machine. One unit reproduces ITK's serial sums exactly.
+class OrderedMattes : public MattesMetric {
 public:
-    ITK_DISALLOW_COPY_AND_MOVE(SerialMattes);
-    using Self = SerialMattes;
+    ITK_DISALLOW_COPY_AND_MOVE(OrderedMattes);
+    using Self = OrderedMattes;
     using Superclass = MattesMetric;
     using Pointer = itk::SmartPointer<Self>;
     using ConstPointer = itk::SmartPointer<const Self>;
     itkNewMacro(Self)
-    itkTypeMacro(SerialMattes, MattesMutualInformationImageToImageMetricv4);
+    itkTypeMacro(OrderedMattes, MattesMutualInformationImageToImageMetricv4);
+    using SparseThreader = Superclass::MattesMutualInformationSparseGetValueAndDerivativeThreaderType;
+
+    /// @brief Use @p units work units (samples split in index order).
+    void setWorkUnits(itk::ThreadIdType units)
+    {
+        this->SetMaximumNumberOfWorkUnits(units);
+        this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(units);
+        this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(units);
+    }
+
+    /// @brief Point each unit's derivative buffer at a sum of its own. Called
+    /// by the threader after ITK has set the buffers up for this evaluation,
+    /// before any unit starts.
+    void giveEachUnitItsOwnSum(itk::ThreadIdType units)
+    {
+        if (!this->GetComputeDerivative() || this->HasLocalSupport()) return;
+        const auto region = this->m_JointPDFDerivatives->GetBufferedRegion();
+        if (mUnitSums.size() != units) {
+            mUnitSums.assign(units, nullptr);
+            mUnitLocks = std::vector<std::mutex>(units);
+        }
+        for (itk::ThreadIdType u = 0; u < units; ++u) {
+            if (mUnitSums[u].IsNull() || mUnitSums[u]->GetBufferedRegion() != region) {
+                mUnitSums[u] = JointPDFDerivativesType::New();
+                mUnitSums[u]->SetRegions(region);
+                mUnitSums[u]->Allocate();
+            }
+            mUnitSums[u]->FillBuffer(0.0);
+            // ITK's own buffer length for this many units (its threader's
+            // BeforeThreadedExecution), with this unit's lock and sum.
+            const std::size_t bins = this->m_NumberOfHistogramBins;
+            this->m_ThreaderDerivativeManager[u].Initialize(std::max<std::size_t>(500, bins * bins / units),
+                this->GetNumberOfLocalParameters(), &mUnitLocks[u], mUnitSums[u]);
+        }
+    }
 
 protected:
-    SerialMattes()
+    OrderedMattes();
+    ~OrderedMattes() override = default;
+
+    /// The units' sums into ITK's, in unit order, before ITK's own reduction
+    /// of the histograms and its scaling of the derivative sums.
+    void GetValueCommonAfterThreadedExecution() override
     {
-        this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
-        this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+        if (this->GetComputeDerivative() && !this->HasLocalSupport()) {
+            const itk::SizeValueType n = this->m_JointPDFDerivatives->GetBufferedRegion().GetNumberOfPixels();
+            JointPDFDerivativesValueType* total = this->m_JointPDFDerivatives->GetBufferPointer();
+            const itk::ThreadIdType units = this->GetNumberOfWorkUnitsUsed();
+            for (itk::ThreadIdType u = 0; u < units && u < mUnitSums.size(); ++u) {
+                const JointPDFDerivativesValueType* part = mUnitSums[u]->GetBufferPointer();
+                for (itk::SizeValueType i = 0; i < n; ++i) total[i] += part[i];
+            }
+        }
+        Superclass::GetValueCommonAfterThreadedExecution();
     }
-    ~SerialMattes() override = default;
+
+private:
+    std::vector<typename JointPDFDerivativesType::Pointer> mUnitSums;
+    std::vector<std::mutex> mUnitLocks; ///< one per unit: a unit's reductions never wait on another's
 };
-using Metric = SerialMattes;
+
+/// ITK's threader for sampled points, which hands each unit its own sum
+/// before the units start (OrderedMattes::giveEachUnitItsOwnSum).
+class OrderedMattesThreader : public OrderedMattes::SparseThreader {
+public:
+    ITK_DISALLOW_COPY_AND_MOVE(OrderedMattesThreader);
+    using Self = OrderedMattesThreader;
+    using Superclass = OrderedMattes::SparseThreader;
+    using Pointer = itk::SmartPointer<Self>;
+    itkNewMacro(Self)
+
+protected:
+    OrderedMattesThreader() = default;
+    ~OrderedMattesThreader() override = default;
+    void BeforeThreadedExecution() override
+    {
+        Superclass::BeforeThreadedExecution();
+        static_cast<OrderedMattes*>(this->m_Associate)->giveEachUnitItsOwnSum(this->GetNumberOfWorkUnitsUsed());
+    }
+};
+
+/// The metric samples a point set, so its sparse threader is the one that
+/// runs; the dense one stays ITK's, on one unit.
+OrderedMattes::OrderedMattes()
+{
+    this->m_SparseGetValueAndDerivativeThreader = OrderedMattesThreader::New();
+    this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+    this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(1);
+}
+
+using Metric = OrderedMattes;
 using PointSet = Metric::FixedSampledPointSetType;
 using Optimizer = itk::RegularStepGradientDescentOptimizerv4<double>;
 using Rigid = itk::Euler3DTransform<double>;
@@ -299,8 +387,16 @@ struct MetricPair::Impl {
     LevelImage fixedLattice; ///< the fixed level's geometry and dims (its voxels are in `fixed`)
     ImageF::Pointer fixed, moving;
     MaskObject::Pointer movingMask;
-    std::vector<Vec3d> candidates; ///< index positions of the fixed body (dilated), for sampling
-    double radius = 1.0;           ///< RMS distance of the fixed body from its centroid [mm]
+    std::vector<std::int64_t> candidates; ///< the fixed body's voxels (dilated), for sampling, as linear indices
+
+    /// The index position of candidate voxel @p linear.
+    Vec3d ijkOf(std::int64_t linear) const
+    {
+        const std::int64_t nx = fixedLattice.dims.x(), ny = fixedLattice.dims.y();
+        return Vec3d(double(linear % nx), double((linear / nx) % ny), double(linear / (nx * ny)));
+    }
+    int workUnits = 1;   ///< of each metric evaluation
+    double radius = 1.0; ///< RMS distance of the fixed body from its centroid [mm]
     Vec3d centroid = Vec3d::Zero();
 
     PointSet::Pointer samples(int count, std::uint32_t seed) const
@@ -310,9 +406,20 @@ struct MetricPair::Impl {
         std::mt19937 rng(seed);
         std::uniform_int_distribution<std::size_t> pick(0, candidates.size() - 1);
         std::uniform_real_distribution<double> jitter(-0.5, 0.5);
-        for (int n = 0; n < count; ++n) {
-            const Vec3d ijk = candidates[pick(rng)] + Vec3d(jitter(rng), jitter(rng), jitter(rng));
-            const Vec3d w = fixedLattice.world(ijk);
+        // The samples as drawn, then in the fixed image's memory order. The
+        // metric is a sum over them, so the order changes only its rounding;
+        // in drawing order every sample read both images far from the last
+        // one.
+        std::vector<std::pair<std::int64_t, Vec3d>> drawn(std::size_t(std::max(0, count)));
+        for (auto& d : drawn) {
+            d.second = ijkOf(candidates[pick(rng)]) + Vec3d(jitter(rng), jitter(rng), jitter(rng));
+            const Vec3i v = (d.second.array() + 0.5).floor().cast<int>(); // its voxel (the jitter is below half of one)
+            d.first = fixedLattice.index(v.x(), v.y(), v.z());
+        }
+        std::stable_sort(drawn.begin(), drawn.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        points->GetPoints()->Reserve(drawn.size());
+        for (std::size_t n = 0; n < drawn.size(); ++n) {
+            const Vec3d w = fixedLattice.world(drawn[n].second);
             PointSet::PointType p;
             for (unsigned a = 0; a < 3; ++a) p[a] = w[int(a)];
             points->SetPoint(PointSet::PointIdentifier(n), p);
@@ -362,44 +469,51 @@ struct MetricPair::Impl {
         m->SetFixedSampledPointSet(samples(s.samples, s.seed));
         m->SetUseSampledPointSet(true);
         m->SetVirtualDomainFromImage(fixed);
-        m->SetMaximumNumberOfWorkUnits(1); // and one thread for it (SerialMattes says why)
+        m->setWorkUnits(itk::ThreadIdType(workUnits)); // OrderedMattes: the same answer on every run
         m->Initialize();
         return m;
     }
 };
 
-MetricPair::MetricPair(const LevelImage& fixed, const LevelImage& moving, double marginMm, int movingCropVoxels)
+MetricPair::MetricPair(
+    const LevelImage& fixed, const LevelImage& moving, double marginMm, int workUnits, int movingCropVoxels)
     : mImpl(std::make_unique<Impl>())
 {
     Impl& p = *mImpl;
+    p.workUnits = std::max(1, workUnits);
     p.fixedLattice.geometry = fixed.geometry;
     p.fixedLattice.dims = fixed.dims;
-    p.fixed = toItk(fixed);
     auto voxels = [&](const LevelImage& l) {
         return std::max(1, int(std::lround(marginMm / l.geometry.spacing.minCoeff())));
     };
-    const auto fixedBody = grownBody(fixed, voxels(fixed));
-    const auto movingBody = grownBody(moving, voxels(moving));
-    p.moving = movingCropVoxels < 0 ? toItk(moving) : toItkCropped(moving, movingBody, movingCropVoxels);
-    p.movingMask = toMask(moving, movingBody);
-    // In index order, counted first: a torso's finest level holds millions.
-    p.candidates.reserve(
-        std::size_t(std::count_if(fixedBody.begin(), fixedBody.end(), [](std::uint8_t b) { return b != 0; })));
-    const std::uint8_t* body = fixedBody.data();
-    for (int k = 0; k < fixed.dims.z(); ++k) {
-        for (int j = 0; j < fixed.dims.y(); ++j) {
-            for (int i = 0; i < fixed.dims.x(); ++i, ++body) {
-                if (*body) p.candidates.emplace_back(i, j, k);
-            }
+    // The moving image's side on a task of its own; the fixed image's here.
+    tbb::task_group movingSide;
+    movingSide.run([&] {
+        const auto movingBody = grownBody(moving, voxels(moving));
+        p.moving = movingCropVoxels < 0 ? toItk(moving) : toItkCropped(moving, movingBody, movingCropVoxels);
+        p.movingMask = toMask(moving, movingBody);
+    });
+    try {
+        p.fixed = toItk(fixed);
+        const auto fixedBody = grownBody(fixed, voxels(fixed));
+        // In index order, counted first: a torso's finest level holds millions.
+        p.candidates.reserve(
+            std::size_t(std::count_if(fixedBody.begin(), fixedBody.end(), [](std::uint8_t b) { return b != 0; })));
+        for (std::size_t q = 0; q < fixedBody.size(); ++q) {
+            if (fixedBody[q]) p.candidates.push_back(std::int64_t(q));
         }
+        if (p.candidates.empty()) throw ValueError("registration: the CT has no body voxels at this level");
+        Vec3d sum = Vec3d::Zero();
+        for (const std::int64_t c : p.candidates) sum += fixed.world(p.ijkOf(c));
+        p.centroid = sum / double(p.candidates.size());
+        double r2 = 0.0;
+        for (const std::int64_t c : p.candidates) r2 += (fixed.world(p.ijkOf(c)) - p.centroid).squaredNorm();
+        p.radius = std::max(1.0, std::sqrt(r2 / double(p.candidates.size())));
+    } catch (...) {
+        movingSide.wait();
+        throw;
     }
-    if (p.candidates.empty()) throw ValueError("registration: the CT has no body voxels at this level");
-    Vec3d sum = Vec3d::Zero();
-    for (const Vec3d& c : p.candidates) sum += fixed.world(c);
-    p.centroid = sum / double(p.candidates.size());
-    double r2 = 0.0;
-    for (const Vec3d& c : p.candidates) r2 += (fixed.world(c) - p.centroid).squaredNorm();
-    p.radius = std::max(1.0, std::sqrt(r2 / double(p.candidates.size())));
+    movingSide.wait();
 }
 
 MetricPair::~MetricPair() = default;
@@ -408,6 +522,20 @@ double MetricPair::metricAt(const AffineMap& map, const Vec3d& centre, const Sta
 {
     try {
         return mImpl->prepare(map, centre, settings).metric->GetValue();
+    } catch (const itk::ExceptionObject& e) {
+        throw ValueError(std::string("registration: the metric cannot be evaluated here (") + e.GetDescription() + ")");
+    }
+}
+
+std::pair<double, std::vector<double>> MetricPair::metricAndDerivativeAt(
+    const AffineMap& map, const Vec3d& centre, const StageSettings& settings) const
+{
+    try {
+        const Metric::Pointer metric = mImpl->prepare(map, centre, settings).metric;
+        Metric::MeasureType value = 0;
+        Metric::DerivativeType derivative;
+        metric->GetValueAndDerivative(value, derivative);
+        return {value, std::vector<double>(derivative.begin(), derivative.end())};
     } catch (const itk::ExceptionObject& e) {
         throw ValueError(std::string("registration: the metric cannot be evaluated here (") + e.GetDescription() + ")");
     }

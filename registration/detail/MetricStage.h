@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace voxhap::registration::detail {
@@ -54,11 +55,14 @@ class MetricPair {
 public:
     /// @param marginMm the bodies grown by this much into the air around them
     ///        (within a voxel), so that the skin's edge is sampled
+    /// @param workUnits each metric evaluation's samples split in this many
+    ///        parts, run in parallel (the answer depends on the count, not on
+    ///        the threads' timing)
     /// @param movingCropVoxels the moving image handed to ITK is the box of its
     ///        mask grown by this many voxels (kMovingCropVoxels reads every voxel
     ///        the whole image would give); negative: the whole image
-    MetricPair(
-        const LevelImage& fixed, const LevelImage& moving, double marginMm, int movingCropVoxels = kMovingCropVoxels);
+    MetricPair(const LevelImage& fixed, const LevelImage& moving, double marginMm, int workUnits = 1,
+        int movingCropVoxels = kMovingCropVoxels);
     /// Half a voxel to the sample, one to its interpolation's far voxel, one to
     /// a central difference's: MetricStage.cpp, toItkCropped.
     static constexpr int kMovingCropVoxels = 3;
@@ -71,6 +75,10 @@ public:
     StageResult run(const AffineMap& start, const Vec3d& centre, const StageSettings& settings) const;
     /// @brief The metric at @p map without optimising (samples as in @p settings).
     double metricAt(const AffineMap& map, const Vec3d& centre, const StageSettings& settings) const;
+    /// @brief The metric and its derivative by the transform's parameters at
+    /// @p map (the optimiser's first step reads these).
+    std::pair<double, std::vector<double>> metricAndDerivativeAt(
+        const AffineMap& map, const Vec3d& centre, const StageSettings& settings) const;
 
 private:
     struct Impl;

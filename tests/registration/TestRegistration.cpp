@@ -254,7 +254,8 @@ TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
     clampValues(fixed, -1000.0f, 2000.0f);
     bodyAbove(fixed, -500.0f, 1);
     bodyAbove(moving, 0.2f * bodyQuantile(moving, 0.9), 1);
-    const detail::MetricPair cropped(fixed, moving, 3.0), whole(fixed, moving, 3.0, -1), bare(fixed, moving, 3.0, 0);
+    const detail::MetricPair cropped(fixed, moving, 3.0), whole(fixed, moving, 3.0, 1, -1),
+        bare(fixed, moving, 3.0, 1, 0);
     detail::StageSettings s;
     s.samples = 4000;
     const Vec3d centre = fixed.bodyCentroid();
@@ -267,6 +268,59 @@ TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
         changedByBareCrop += bare.metricAt(m, centre, s) != whole.metricAt(m, centre, s);
     }
     EXPECT_GT(changedByBareCrop, 0) << "control: without the margin the crop changes the metric";
+}
+
+// The metric's samples are split over two work units (MetricPair, OrderedMattes):
+// whatever order the threads finish in, every evaluation must give the same
+// bits, and the same sums as ITK's serial metric up to their grouping. Control:
+// the grouping is visible in the bits (two units do not give one unit's bits),
+// so a reduction whose order followed the threads would fail the repeat check;
+// with ITK's own reduction (OrderedMattes::giveEachUnitItsOwnSum returning at
+// once) this test failed at its first repeat in each of five runs.
+TEST(MetricPair, ItsWorkUnitsGiveOneAnswerWhateverTheThreadsTiming)
+{
+    const auto& table = volume::TissueTable::builtin();
+    volume::PhantomSpec spec;
+    spec.kind = "lumbar";
+    volume::GridSpec grid;
+    grid.spacing = Vec3d(2, 2, 2);
+    const volume::PhantomModel model = volume::phantomModel(spec, table);
+    const volume::Volume ct = volume::phantomCtScan(model, grid, table);
+    volume::PhantomMrScan scan;
+    scan.rotation = test::rotationDeg(Vec3d(5, -8, 12));
+    scan.translationMm = Vec3d(6, -4, 10);
+    scan.seed = 3;
+    volume::PhantomScanTruth truth;
+    const volume::Volume mr = volume::phantomMrScan(model, table, scan, &truth);
+    LevelImage fixed = blockAverage(ct, Channel::Hu, blockFactors(ct.geometry().spacing, 2.0));
+    LevelImage moving = blockAverage(mr, Channel::T1, blockFactors(mr.geometry().spacing, 2.0));
+    clampValues(fixed, -1000.0f, 2000.0f);
+    bodyAbove(fixed, -500.0f, 1);
+    bodyAbove(moving, 0.2f * bodyQuantile(moving, 0.9), 1);
+    const detail::MetricPair one(fixed, moving, 3.0, 1), two(fixed, moving, 3.0, 2);
+    detail::StageSettings s;
+    s.samples = 20000; // the finest level's count: each unit fills and empties its buffer many times
+    const Vec3d centre = fixed.bodyCentroid();
+    AffineMap m{truth.linear, truth.offset};
+    m.offset += Vec3d(3, -2, 4); // off the optimum, so that every derivative is far from zero
+    const auto serial = one.metricAndDerivativeAt(m, centre, s);
+    const auto first = two.metricAndDerivativeAt(m, centre, s);
+    ASSERT_EQ(first.second.size(), 6u);
+    for (int repeat = 0; repeat < 30; ++repeat) {
+        const auto again = two.metricAndDerivativeAt(m, centre, s);
+        ASSERT_EQ(again.first, first.first) << "repeat " << repeat;
+        ASSERT_EQ(again.second, first.second) << "repeat " << repeat;
+    }
+    // Up to grouping: 20000 samples' sums in double carry relative rounding
+    // of about 20000 · 2⁻⁵³ ≈ 2·10⁻¹², far below 10⁻⁹.
+    double norm = 0.0;
+    for (double d : serial.second) norm = std::max(norm, std::abs(d));
+    EXPECT_NEAR(first.first, serial.first, 1e-9 * std::abs(serial.first));
+    for (std::size_t i = 0; i < serial.second.size(); ++i) {
+        EXPECT_NEAR(first.second[i], serial.second[i], 1e-9 * norm) << "parameter " << i;
+    }
+    EXPECT_TRUE(first.first != serial.first || first.second != serial.second)
+        << "control: two units group the sums otherwise, and the bits show it";
 }
 
 TEST(Resample, AShiftByWholeVoxelsCopiesTheValuesExactly)
