@@ -230,11 +230,14 @@ TEST(LevelImage, BodyMaskIsItksLargestOpenedPartWithItsHolesFilled)
     }
 }
 
-// The moving image ITK is handed is cropped to its mask's box and a margin
-// (MetricPair, kMovingCropVoxels): the metric must be the whole image's to the
-// last bit, at the truth and at maps that put samples on the mask's edge and
-// past the crop. Control: a crop without its margin changes the metric.
-TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
+/// A lumbar phantom's CT and a turned, shifted MR of it as 2 mm level images
+/// with their bodies, and the true map: the metric tests' pair.
+struct LevelPair {
+    LevelImage fixed, moving;
+    AffineMap truth;
+};
+
+LevelPair lumbarLevelPair()
 {
     const auto& table = volume::TissueTable::builtin();
     volume::PhantomSpec spec;
@@ -249,17 +252,31 @@ TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
     scan.seed = 3;
     volume::PhantomScanTruth truth;
     const volume::Volume mr = volume::phantomMrScan(model, table, scan, &truth);
-    LevelImage fixed = blockAverage(ct, Channel::Hu, blockFactors(ct.geometry().spacing, 2.0));
-    LevelImage moving = blockAverage(mr, Channel::T1, blockFactors(mr.geometry().spacing, 2.0));
-    clampValues(fixed, -1000.0f, 2000.0f);
-    bodyAbove(fixed, -500.0f, 1);
-    bodyAbove(moving, 0.2f * bodyQuantile(moving, 0.9), 1);
+    LevelPair p;
+    p.fixed = blockAverage(ct, Channel::Hu, blockFactors(ct.geometry().spacing, 2.0));
+    p.moving = blockAverage(mr, Channel::T1, blockFactors(mr.geometry().spacing, 2.0));
+    clampValues(p.fixed, -1000.0f, 2000.0f);
+    bodyAbove(p.fixed, -500.0f, 1);
+    bodyAbove(p.moving, 0.2f * bodyQuantile(p.moving, 0.9), 1);
+    p.truth = AffineMap{truth.linear, truth.offset};
+    return p;
+}
+
+// The moving image ITK is handed is cropped to its mask's box and a margin
+// (MetricPair, kMovingCropVoxels): the metric must be the whole image's to the
+// last bit, at the truth and at maps that put samples on the mask's edge and
+// past the crop. Control: a crop without its margin changes the metric.
+TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
+{
+    const LevelPair pair = lumbarLevelPair();
+    const LevelImage& fixed = pair.fixed;
+    const LevelImage& moving = pair.moving;
     const detail::MetricPair cropped(fixed, moving, 3.0), whole(fixed, moving, 3.0, 1, -1),
         bare(fixed, moving, 3.0, 1, 0);
     detail::StageSettings s;
     s.samples = 4000;
     const Vec3d centre = fixed.bodyCentroid();
-    const AffineMap truthMap{truth.linear, truth.offset};
+    const AffineMap& truthMap = pair.truth;
     int changedByBareCrop = 0;
     for (const Vec3d& shift : {Vec3d(0, 0, 0), Vec3d(8, 0, 0), Vec3d(0, -12, 0), Vec3d(0, 0, 20), Vec3d(-15, 10, -6)}) {
         AffineMap m = truthMap;
@@ -279,29 +296,14 @@ TEST(MetricPair, TheCroppedMovingImageGivesTheWholeImagesMetric)
 // once) this test failed at its first repeat in each of five runs.
 TEST(MetricPair, ItsWorkUnitsGiveOneAnswerWhateverTheThreadsTiming)
 {
-    const auto& table = volume::TissueTable::builtin();
-    volume::PhantomSpec spec;
-    spec.kind = "lumbar";
-    volume::GridSpec grid;
-    grid.spacing = Vec3d(2, 2, 2);
-    const volume::PhantomModel model = volume::phantomModel(spec, table);
-    const volume::Volume ct = volume::phantomCtScan(model, grid, table);
-    volume::PhantomMrScan scan;
-    scan.rotation = test::rotationDeg(Vec3d(5, -8, 12));
-    scan.translationMm = Vec3d(6, -4, 10);
-    scan.seed = 3;
-    volume::PhantomScanTruth truth;
-    const volume::Volume mr = volume::phantomMrScan(model, table, scan, &truth);
-    LevelImage fixed = blockAverage(ct, Channel::Hu, blockFactors(ct.geometry().spacing, 2.0));
-    LevelImage moving = blockAverage(mr, Channel::T1, blockFactors(mr.geometry().spacing, 2.0));
-    clampValues(fixed, -1000.0f, 2000.0f);
-    bodyAbove(fixed, -500.0f, 1);
-    bodyAbove(moving, 0.2f * bodyQuantile(moving, 0.9), 1);
+    const LevelPair pair = lumbarLevelPair();
+    const LevelImage& fixed = pair.fixed;
+    const LevelImage& moving = pair.moving;
     const detail::MetricPair one(fixed, moving, 3.0, 1), two(fixed, moving, 3.0, 2);
     detail::StageSettings s;
     s.samples = 20000; // the finest level's count: each unit fills and empties its buffer many times
     const Vec3d centre = fixed.bodyCentroid();
-    AffineMap m{truth.linear, truth.offset};
+    AffineMap m = pair.truth;
     m.offset += Vec3d(3, -2, 4); // off the optimum, so that every derivative is far from zero
     const auto serial = one.metricAndDerivativeAt(m, centre, s);
     const auto first = two.metricAndDerivativeAt(m, centre, s);
