@@ -86,6 +86,16 @@ int openingVoxels(const LevelImage& l)
     return std::max(1, int(std::lround(kOpeningMm / l.geometry.spacing.minCoeff())));
 }
 
+/// The finest level samples the CT at its voxels' centres, the coarser
+/// levels anywhere within them (StageSettings::jittered). Measured over five
+/// sample seeds (RegistrationOptions::seed) against jittered samples at every
+/// level, the mean error over the body: lumbar phantom 0.04–0.25 mm (mean
+/// 0.14) against 0.26–0.33 (0.29), torso 0.08–0.27 (0.15) against 0.16–0.29
+/// (0.23). The porcine pair's distance from elastix's pinned run kept its
+/// spread over eight seeds (1.30–2.39 mm against 1.11–2.81; the mean of the
+/// eight maps 1.55 and 1.54 mm from it).
+constexpr bool kFinestAtCentres = true;
+
 /// The metric's masks: the bodies grown by this much, so that the skin's edge
 /// against the air (much of what aligns two scans) is sampled, while the air
 /// beyond it is not [chosen: a few finest voxels].
@@ -168,6 +178,7 @@ int samplesAt(const RegistrationOptions& o, std::size_t level)
 detail::StageSettings settingsAt(const RegistrationOptions& o, std::size_t level, const Level& l)
 {
     detail::StageSettings s;
+    s.jittered = !(kFinestAtCentres && level + 1 == std::size_t(std::max(1, o.levels)));
     s.iterations = o.iterations;
     s.samples = samplesAt(o, level);
     s.bins = o.bins;

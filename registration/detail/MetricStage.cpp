@@ -399,7 +399,7 @@ struct MetricPair::Impl {
     double radius = 1.0; ///< RMS distance of the fixed body from its centroid [mm]
     Vec3d centroid = Vec3d::Zero();
 
-    PointSet::Pointer samples(int count, std::uint32_t seed) const
+    PointSet::Pointer samples(int count, std::uint32_t seed, bool jittered) const
     {
         auto points = PointSet::New();
         points->Initialize();
@@ -412,9 +412,12 @@ struct MetricPair::Impl {
         // one.
         std::vector<std::pair<std::int64_t, Vec3d>> drawn(std::size_t(std::max(0, count)));
         for (auto& d : drawn) {
-            d.second = ijkOf(candidates[pick(rng)]) + Vec3d(jitter(rng), jitter(rng), jitter(rng));
-            const Vec3i v = (d.second.array() + 0.5).floor().cast<int>(); // its voxel (the jitter is below half of one)
-            d.first = fixedLattice.index(v.x(), v.y(), v.z());
+            // The jitter, then the voxel: the draws' order since samples were
+            // first drawn, so that a seed keeps its samples. Without jitter the
+            // same voxels are drawn, and their centres taken.
+            const double jz = jitter(rng), jy = jitter(rng), jx = jitter(rng);
+            d.first = candidates[pick(rng)];
+            d.second = jittered ? ijkOf(d.first) + Vec3d(jx, jy, jz) : ijkOf(d.first);
         }
         std::stable_sort(drawn.begin(), drawn.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
         points->GetPoints()->Reserve(drawn.size());
@@ -435,11 +438,11 @@ struct MetricPair::Impl {
         TransformBase::Pointer xform;
         Metric::Pointer metric;
     };
-    mutable std::map<std::tuple<int, int, int, std::uint32_t>, Prepared> prepared;
+    mutable std::map<std::tuple<int, int, int, std::uint32_t, bool>, Prepared> prepared;
 
     Prepared& prepare(const AffineMap& map, const Vec3d& centre, const StageSettings& s) const
     {
-        const auto key = std::make_tuple(int(s.kind), s.samples, s.bins, s.seed);
+        const auto key = std::make_tuple(int(s.kind), s.samples, s.bins, s.seed, s.jittered);
         auto it = prepared.find(key);
         if (it == prepared.end()) {
             Prepared p;
@@ -463,10 +466,11 @@ struct MetricPair::Impl {
         m->SetFixedImage(fixed);
         m->SetMovingImage(moving);
         // No fixed mask: the samples are drawn from the fixed body (grown by
-        // the margin) and jittered within their own voxel, so each is inside it.
+        // the margin), at its voxels' centres or jittered within them, so each
+        // is inside it.
         m->SetMovingImageMask(movingMask);
         m->SetMovingTransform(xform);
-        m->SetFixedSampledPointSet(samples(s.samples, s.seed));
+        m->SetFixedSampledPointSet(samples(s.samples, s.seed, s.jittered));
         m->SetUseSampledPointSet(true);
         m->SetVirtualDomainFromImage(fixed);
         m->setWorkUnits(itk::ThreadIdType(workUnits)); // OrderedMattes: the same answer on every run

@@ -37,6 +37,14 @@ struct StageSettings {
     /// to elastix's on every seed of elastix tried].
     double relaxation = 0.8;
     std::uint32_t seed = 20261127; ///< the samples' generator: the same run gives the same answer
+    /// Samples anywhere within their fixed voxel (true), or at its centre.
+    /// Coarse levels need the jitter: on a lattice of samples a few
+    /// millimetres apart the metric has ridges where the moving voxels line up
+    /// with it, and without it the lumbar phantom's orientation search followed
+    /// one into a wrong turn. At the finest level the centres read the CT's own
+    /// values, where a jittered sample reads it through linear interpolation
+    /// (Registration.cpp, kFinestAtCentres, says what that gained).
+    bool jittered = true;
 };
 
 struct StageResult {
