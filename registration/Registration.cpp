@@ -17,6 +17,7 @@
 #include <numeric>
 #include <sstream>
 
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
 
 namespace voxhap::registration {
@@ -136,31 +137,26 @@ void buildLevels(LevelImage Level::*member, std::vector<Level>& levels, const Vo
 std::vector<Level> buildPyramid(const Volume& ct, const Volume& mr, const RegistrationOptions& o)
 {
     std::vector<Level> levels(std::size_t(std::max(1, o.levels)));
-    // The two modalities' levels are independent: the CT's on a task of its
-    // own, the MR's on this thread.
-    tbb::task_group ctTask;
-    ctTask.run([&] {
-        // The CT's body by its calibrated numbers.
-        buildLevels(&Level::ct, levels, ct, Channel::Hu, o, [](LevelImage& fine) {
-            clampValues(fine, kHuLow, kHuHigh);
-            return kBodyHu;
+    // The two modalities' levels are independent: side by side.
+    tbb::parallel_invoke(
+        [&] {
+            // The CT's body by its calibrated numbers.
+            buildLevels(&Level::ct, levels, ct, Channel::Hu, o, [](LevelImage& fine) {
+                clampValues(fine, kHuLow, kHuHigh);
+                return kBodyHu;
+            });
+        },
+        [&] {
+            // The MR's relative to its own bright tissue (kMrTissueFraction),
+            // set once on the finest level.
+            buildLevels(&Level::mr, levels, mr, movingChannel(mr), o, [](LevelImage& fine) {
+                // Clamping keeps the values' order, so the bright quantile, below
+                // the window's, is the same before it as after it.
+                const std::vector<float> q = bodyQuantiles(fine, {kMrQuantile, kMrBrightQuantile});
+                clampValues(fine, 0.0f, q[0]);
+                return kMrTissueFraction * q[1];
+            });
         });
-    });
-    try {
-        // The MR's relative to its own bright tissue (kMrTissueFraction), set
-        // once on the finest level.
-        buildLevels(&Level::mr, levels, mr, movingChannel(mr), o, [](LevelImage& fine) {
-            // Clamping keeps the values' order, so the bright quantile, below
-            // the window's, is the same before it as after it.
-            const std::vector<float> q = bodyQuantiles(fine, {kMrQuantile, kMrBrightQuantile});
-            clampValues(fine, 0.0f, q[0]);
-            return kMrTissueFraction * q[1];
-        });
-    } catch (...) {
-        ctTask.wait();
-        throw;
-    }
-    ctTask.wait(); // and the CT's exception, if it threw
     for (Level& l : levels) {
         l.voxelMm = l.ct.geometry.spacing.maxCoeff();
         if (l.ct.bodyCount() == 0) throw ValueError("registration: the CT holds no body (every voxel is air)");

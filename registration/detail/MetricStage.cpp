@@ -24,7 +24,7 @@
 #include <random>
 #include <tuple>
 
-#include <tbb/task_group.h>
+#include <tbb/parallel_invoke.h>
 
 namespace voxhap::registration::detail {
 
@@ -58,12 +58,12 @@ public:
     itkTypeMacro(OrderedMattes, MattesMutualInformationImageToImageMetricv4);
     using SparseThreader = Superclass::MattesMutualInformationSparseGetValueAndDerivativeThreaderType;
 
-    /// @brief Use @p units work units (samples split in index order).
+    /// @brief Use @p units work units for the sampled points (split in index
+    /// order). The dense threader, which a sampled metric does not run, keeps one.
     void setWorkUnits(itk::ThreadIdType units)
     {
         this->SetMaximumNumberOfWorkUnits(units);
         this->m_SparseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(units);
-        this->m_DenseGetValueAndDerivativeThreader->SetNumberOfWorkUnits(units);
     }
 
     /// @brief Point each unit's derivative buffer at a sum of its own. Called
@@ -388,6 +388,9 @@ struct MetricPair::Impl {
     ImageF::Pointer fixed, moving;
     MaskObject::Pointer movingMask;
     std::vector<std::int64_t> candidates; ///< the fixed body's voxels (dilated), for sampling, as linear indices
+    int workUnits = 1;                    ///< of each metric evaluation
+    double radius = 1.0;                  ///< RMS distance of the fixed body from its centroid [mm]
+    Vec3d centroid = Vec3d::Zero();
 
     /// The index position of candidate voxel @p linear.
     Vec3d ijkOf(std::int64_t linear) const
@@ -395,9 +398,6 @@ struct MetricPair::Impl {
         const std::int64_t nx = fixedLattice.dims.x(), ny = fixedLattice.dims.y();
         return Vec3d(double(linear % nx), double((linear / nx) % ny), double(linear / (nx * ny)));
     }
-    int workUnits = 1;   ///< of each metric evaluation
-    double radius = 1.0; ///< RMS distance of the fixed body from its centroid [mm]
-    Vec3d centroid = Vec3d::Zero();
 
     PointSet::Pointer samples(int count, std::uint32_t seed, bool jittered) const
     {
@@ -490,34 +490,30 @@ MetricPair::MetricPair(
     auto voxels = [&](const LevelImage& l) {
         return std::max(1, int(std::lround(marginMm / l.geometry.spacing.minCoeff())));
     };
-    // The moving image's side on a task of its own; the fixed image's here.
-    tbb::task_group movingSide;
-    movingSide.run([&] {
-        const auto movingBody = grownBody(moving, voxels(moving));
-        p.moving = movingCropVoxels < 0 ? toItk(moving) : toItkCropped(moving, movingBody, movingCropVoxels);
-        p.movingMask = toMask(moving, movingBody);
-    });
-    try {
-        p.fixed = toItk(fixed);
-        const auto fixedBody = grownBody(fixed, voxels(fixed));
-        // In index order, counted first: a torso's finest level holds millions.
-        p.candidates.reserve(
-            std::size_t(std::count_if(fixedBody.begin(), fixedBody.end(), [](std::uint8_t b) { return b != 0; })));
-        for (std::size_t q = 0; q < fixedBody.size(); ++q) {
-            if (fixedBody[q]) p.candidates.push_back(std::int64_t(q));
-        }
-        if (p.candidates.empty()) throw ValueError("registration: the CT has no body voxels at this level");
-        Vec3d sum = Vec3d::Zero();
-        for (const std::int64_t c : p.candidates) sum += fixed.world(p.ijkOf(c));
-        p.centroid = sum / double(p.candidates.size());
-        double r2 = 0.0;
-        for (const std::int64_t c : p.candidates) r2 += (fixed.world(p.ijkOf(c)) - p.centroid).squaredNorm();
-        p.radius = std::max(1.0, std::sqrt(r2 / double(p.candidates.size())));
-    } catch (...) {
-        movingSide.wait();
-        throw;
-    }
-    movingSide.wait();
+    // The two images' sides are independent: side by side.
+    tbb::parallel_invoke(
+        [&] {
+            const auto movingBody = grownBody(moving, voxels(moving));
+            p.moving = movingCropVoxels < 0 ? toItk(moving) : toItkCropped(moving, movingBody, movingCropVoxels);
+            p.movingMask = toMask(moving, movingBody);
+        },
+        [&] {
+            p.fixed = toItk(fixed);
+            const auto fixedBody = grownBody(fixed, voxels(fixed));
+            // In index order, counted first: a torso's finest level holds millions.
+            p.candidates.reserve(
+                std::size_t(std::count_if(fixedBody.begin(), fixedBody.end(), [](std::uint8_t b) { return b != 0; })));
+            for (std::size_t q = 0; q < fixedBody.size(); ++q) {
+                if (fixedBody[q]) p.candidates.push_back(std::int64_t(q));
+            }
+            if (p.candidates.empty()) throw ValueError("registration: the CT has no body voxels at this level");
+            Vec3d sum = Vec3d::Zero();
+            for (const std::int64_t c : p.candidates) sum += fixed.world(p.ijkOf(c));
+            p.centroid = sum / double(p.candidates.size());
+            double r2 = 0.0;
+            for (const std::int64_t c : p.candidates) r2 += (fixed.world(p.ijkOf(c)) - p.centroid).squaredNorm();
+            p.radius = std::max(1.0, std::sqrt(r2 / double(p.candidates.size())));
+        });
 }
 
 MetricPair::~MetricPair() = default;
